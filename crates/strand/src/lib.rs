@@ -1,3 +1,4 @@
+pub mod dynamics;
 pub mod error;
 pub mod hair_type;
 pub mod helix;

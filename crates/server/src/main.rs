@@ -1,1 +1,52 @@
-fn main(){}
+//! `coiffure`: the command line of the Coiffure hair simulator.
+
+mod demo;
+mod strand_cmd;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Coiffure: a visuo-haptic hair simulator (local Super-Helix strands, global lattice layer).
+#[derive(Debug, Parser)]
+#[command(name = "coiffure", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Headless run of the built-in default scene: a few strands hanging from a moving root.
+    Demo(demo::DemoArgs),
+    /// Simulate or solve the statics of one strand described by a TOML spec file.
+    Strand(strand_cmd::StrandArgs),
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Demo(args) => demo::run(&args),
+        Command::Strand(args) => strand_cmd::run(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Creates the parent folder of `path` if needed.
+pub(crate) fn ensure_parent(path: &std::path::Path) -> anyhow::Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create folder {}: {e}", dir.display()))?;
+    }
+    Ok(())
+}

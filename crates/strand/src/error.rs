@@ -65,14 +65,3 @@ pub(crate) fn require_non_negative(field: &'static str, value: f64) -> Result<()
         })
     }
 }
-
-/// Check that every component is finite, naming `field` otherwise.
-pub(crate) fn require_finite(field: &'static str, values: &[f64]) -> Result<()> {
-    match values.iter().find(|v| !v.is_finite()) {
-        None => Ok(()),
-        Some(v) => Err(StrandError::InvalidParameter {
-            field,
-            reason: format!("must be finite, got {v}"),
-        }),
-    }
-}

@@ -1,0 +1,130 @@
+//! The `coiffure` binary end to end: real files in a temporary folder, real processes.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_coiffure"))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("coiffure-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const CANTILEVER: &str = r#"
+model = "reduced"
+length = 0.02
+segments = 16
+semi_axes = [46.55e-6, 34.23e-6]
+young_modulus = 5.18e9
+shear_modulus = 0.9e9
+density = 1300.0
+rest_twist = 0.0
+rest_bend = 0.0
+root_position = [0.0, 0.0, 0.0]
+root_tangent = [1.0, 0.0, 0.0]
+root_major_axis = [0.0, 1.0, 0.0]
+gravity = [0.0, 0.0, -9.81]
+air_drag = 1e-5
+damping = 0.02
+"#;
+
+fn parse_csv(text: &str) -> (String, Vec<Vec<f64>>) {
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().to_string();
+    let rows = lines.map(|l| l.split(',').map(|x| x.parse::<f64>().unwrap()).collect()).collect();
+    (header, rows)
+}
+
+#[test]
+fn static_cantilever_prints_the_centreline() {
+    // Small deflection: tip drop q L^4 / (8 EI) within 1 % (the library tests hold it tighter).
+    let dir = scratch("static");
+    let spec = dir.join("cantilever.toml");
+    std::fs::write(&spec, CANTILEVER).unwrap();
+    let out = bin().args(["strand", "--spec"]).arg(&spec).args(["--static", "--samples", "5"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (header, rows) = parse_csv(&String::from_utf8(out.stdout).unwrap());
+    assert_eq!(header, "s,x,y,z");
+    assert_eq!(rows.len(), 5);
+    assert_eq!(rows[0], vec![0.0, 0.0, 0.0, 0.0]);
+    let (a, b) = (46.55e-6f64, 34.23e-6f64);
+    let ei = 5.18e9 * std::f64::consts::PI * a * b.powi(3) / 4.0;
+    let q = 1300.0 * std::f64::consts::PI * a * b * 9.81;
+    let expected = q * 0.02f64.powi(4) / (8.0 * ei);
+    let tip = rows[4][3];
+    assert!((-tip - expected).abs() < 0.01 * expected, "tip {tip} vs {expected}");
+}
+
+#[test]
+fn dynamics_writes_a_trace() {
+    let dir = scratch("dynamic");
+    let spec = dir.join("cantilever.toml");
+    std::fs::write(&spec, CANTILEVER).unwrap();
+    let trace = dir.join("sub/trace.csv");
+    let out = bin()
+        .args(["strand", "--spec"])
+        .arg(&spec)
+        .args(["--duration", "0.05", "--dt", "0.001", "--samples", "3", "--trace"])
+        .arg(&trace)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (header, rows) = parse_csv(&std::fs::read_to_string(&trace).unwrap());
+    assert_eq!(header, "t,x,y,z");
+    assert_eq!(rows.len(), 51, "t = 0 and 50 steps");
+    assert!((rows[50][0] - 0.05).abs() < 1e-9);
+    // Released straight, the tip falls under gravity.
+    assert!(rows[50][3] < rows[0][3]);
+    let (_, centre) = parse_csv(&String::from_utf8(out.stdout).unwrap());
+    assert_eq!(centre.len(), 3);
+    for k in 1..4 {
+        // The trace prints 10 significant digits, the centreline 13.
+        assert!((centre[2][k] - rows[50][k]).abs() <= 1e-9 * centre[2][k].abs().max(1e-12), "printed tip equals last trace row");
+    }
+}
+
+#[test]
+fn bad_specs_are_reported_by_field() {
+    let dir = scratch("bad");
+    let cases = [
+        (CANTILEVER.replace("length = 0.02", "length = -1.0"), "length"),
+        (CANTILEVER.replace("segments = 16", "segments = 0"), "segments"),
+        (CANTILEVER.replace("young_modulus = 5.18e9", "young_modulus = nan"), "young_modulus"),
+        (CANTILEVER.replace("shear_modulus = 0.9e9", "shear_modulus = -3.0"), "shear_modulus"),
+        (CANTILEVER.replace("semi_axes = [46.55e-6, 34.23e-6]", "semi_axes = [0.0, 0.0]"), "semi_axes"),
+        (CANTILEVER.replace("rest_bend = 0.0", "rest_bend = [1.0, 2.0]"), "rest_bend"),
+        (CANTILEVER.replace("root_major_axis = [0.0, 1.0, 0.0]", "root_major_axis = [2.0, 0.0, 0.0]"), "root_major_axis"),
+        (CANTILEVER.replace("damping = 0.02", "dampin = 0.02"), "dampin"),
+        (CANTILEVER.replace("model = \"reduced\"", "model = \"cubic\""), "model"),
+        ("length = 0.1\nsegments = 4\nhair_type = \"martian\"\n".to_string(), "hair_type"),
+        ("length = [\n".to_string(), "malformed"),
+    ];
+    for (i, (text, word)) in cases.iter().enumerate() {
+        let spec = dir.join(format!("bad{i}.toml"));
+        std::fs::write(&spec, text).unwrap();
+        let out = bin().args(["strand", "--spec"]).arg(&spec).arg("--static").output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "case {i} should fail");
+        assert!(err.contains(word), "case {i}: error should name {word:?}: {err}");
+        assert!(!err.contains("panicked"), "case {i} panicked: {err}");
+    }
+    let out = bin().args(["strand", "--spec"]).arg(dir.join("missing.toml")).arg("--static").output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.toml"));
+}
+
+#[test]
+fn demo_runs_and_writes_its_trace() {
+    let dir = scratch("demo");
+    let out = bin().args(["demo", "--duration", "0.2", "--strands", "2", "--out"]).arg(&dir).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let summary = String::from_utf8(out.stdout).unwrap();
+    assert!(summary.contains("strand steps") && summary.contains("400"), "{summary}");
+    let (header, rows) = parse_csv(&std::fs::read_to_string(dir.join("trace.csv")).unwrap());
+    assert_eq!(header, "t,x0,y0,z0,x1,y1,z1");
+    assert_eq!(rows.len(), 200);
+    assert!(rows.iter().all(|r| r.iter().all(|x| x.is_finite())));
+}

@@ -1,29 +1,29 @@
 //! Lagrangian dynamics of a strand: mass matrix, generalized forces and energies at one state.
 //!
-//! Pipeline of [`Dynamics::evaluate`] (all in world axes, spatial quantities about the root position):
-//! 1. Forward pass with second-order dual numbers in time (`q + t qdot`, root pose to second order):
-//!    segment frames, and at each Gauss point its position, velocity and velocity-product acceleration
-//!    (the acceleration it would have with `qddot = 0`), its rotation, angular velocity and acceleration.
-//! 2. Motion subspaces `S_Q` (spatial twists that unit `qdot_Q` gives to everything beyond segment Q) and
-//!    each Gauss point's own twists `Psi` (closed-form derivatives of the helix, [`crate::helix`]).
-//! 3. One sweep from tip to root accumulates composite spatial inertias and wrenches (suffix sums):
-//!    `M[P,Q] = S_P^T (I^C_Q+1 S_Q + sum_k I_k Psi_k)` for `P < Q`, the diagonal blocks, and the generalized
-//!    forces `Q_P = sum_k Psi_k^T w_k + S_P^T W_P+1`. Assembly is O(N^2) (O(N) for the forces).
-//! 4. Elastic `-K (q - q_rest)` and internal damping `-tau K qdot` are added (K diagonal).
+//! Pipeline of [`Dynamics::evaluate`] (world axes; spatial quantities about the root position):
+//! 1. Root-to-tip sweep. For each segment the start frame's pose, velocity and velocity-product
+//!    acceleration (the acceleration with `qddot = 0`) are known; each Gauss point of the segment gets its
+//!    pose from the closed-form helix ([`crate::helix`]) and its velocity and velocity-product acceleration
+//!    from the segment's derivatives `dE/dOmega`, `dp/dOmega` evaluated with dual numbers along `qdot`
+//!    (which also gives their rates of change). Each point carries the mass `rho A w` and the rotary inertia
+//!    of its slice of section, and a force (gravity, air drag, minus the velocity-product inertial force)
+//!    and torque. Per segment this gathers: its own generalized forces, its own mass-matrix block, the
+//!    momentum of its own motion, its total wrench and its rigid inertia; the motion subspace `S_Q` (spatial
+//!    twists that unit `qdot_Q` gives to everything beyond) comes from the derivatives at the segment's end.
+//! 2. Tip-to-root sweep with suffix sums (composite inertia `I^C`, wrench `W`):
+//!    `Q_Q = own_Q + S_Q^T W_Q+1`, `F_Q = I^C_Q+1 S_Q + own momentum`, `M[Q,Q] = S_Q^T I^C_Q+1 S_Q + own block`.
+//! 3. Off-diagonal blocks `M[P,Q] = S_P^T F_Q` for `P < Q` (O(N^2); everything else is O(N)).
+//! 4. Elastic `-K (q - q_rest)` and internal damping `-tau K qdot` (K diagonal).
 //!
-//! The wrench `w_k` of a Gauss point gathers gravity `m g`, air drag `-nu w rdot` (and a matching rotary drag
-//! `-(nu / rho A) I_c omega`), and minus the velocity-product inertial force (Coriolis and centrifugal terms,
-//! including those from the root's motion). Each Gauss point carries its mass `rho A w` and the rotary inertia
-//! of its slice of cross-section, so twisting a straight segment is not massless.
+//! Air drag acts on each point as `-nu w rdot`, with a matching rotary drag `-(nu / rho A) I_c omega`, so the
+//! drag matrix is `(nu / rho A) M` and the integrator can treat it implicitly.
 
-use crate::helix::segment_transform;
-use crate::kinematics::{darboux, own_twists, Frame, Twists};
+use crate::helix::segment_kinematics;
+use crate::kinematics::{darboux, Frame, Twists};
 use crate::model::{gauss_legendre, StrandModel};
 use crate::state::StrandState;
-use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, SVector, Vector3};
-use num_dual::Dual2_64;
+use nalgebra::{DMatrix, DVector, Matrix3, SVector, Vector3};
 
-type Jet = Dual2_64;
 type Vector6 = SVector<f64, 6>;
 
 /// A force applied to the centreline at arc length `s` (m from the root), in N (world axes).
@@ -35,21 +35,106 @@ pub struct PointForce {
     pub force: Vector3<f64>,
 }
 
-/// What one evaluation knows about a Gauss point.
+/// Rigid inertia about the root origin of a set of points: mass, first moment, rotational inertia.
 #[derive(Debug, Clone, Copy)]
-struct Sample {
-    /// Position relative to the root, m.
-    x: Vector3<f64>,
-    /// Velocity, m/s.
-    v: Vector3<f64>,
-    /// Velocity-product acceleration, m/s^2.
-    a: Vector3<f64>,
-    /// Material frame.
+struct Inertia {
+    /// Mass, kg.
+    m: f64,
+    /// First moment `sum m x`, kg m.
+    c: Vector3<f64>,
+    /// Rotational inertia about the origin `sum (I_c - m [x]^2)`, kg m^2.
+    j: Matrix3<f64>,
+}
+
+impl Inertia {
+    fn zero() -> Self {
+        Self { m: 0.0, c: Vector3::zeros(), j: Matrix3::zeros() }
+    }
+
+    /// Momentum (angular about the origin; linear) of a rigid motion with spatial twist `t = (omega; v)`.
+    fn apply(&self, t: &Vector6) -> Vector6 {
+        let w = Vector3::new(t[0], t[1], t[2]);
+        let v = Vector3::new(t[3], t[4], t[5]);
+        let a = self.j * w + self.c.cross(&v);
+        let l = v * self.m - self.c.cross(&w);
+        Vector6::new(a.x, a.y, a.z, l.x, l.y, l.z)
+    }
+
+    fn add_point(&mut self, m: f64, ic: &Matrix3<f64>, x: &Vector3<f64>) {
+        let xc = x.cross_matrix();
+        self.m += m;
+        self.c += x * m;
+        self.j += ic - xc * xc * m;
+    }
+
+    fn add(&mut self, o: &Inertia) {
+        self.m += o.m;
+        self.c += o.c;
+        self.j += o.j;
+    }
+}
+
+/// Kinematics of a frame: pose relative to the root origin, velocity and velocity-product acceleration.
+#[derive(Debug, Clone, Copy)]
+struct Motion {
     rot: Matrix3<f64>,
-    /// Angular velocity, rad/s.
+    x: Vector3<f64>,
+    v: Vector3<f64>,
+    a: Vector3<f64>,
     w: Vector3<f64>,
-    /// Velocity-product angular acceleration, rad/s^2.
     alpha: Vector3<f64>,
+}
+
+/// A point inside segment `i` at arc length `sigma`: its motion and its own Jacobian columns
+/// (angular `w_k` and linear `u_k` velocity per unit `qdot_k` of that segment).
+struct PointKinematics {
+    motion: Motion,
+    w_cols: Matrix3<f64>,
+    u_cols: Matrix3<f64>,
+}
+
+/// Pose, velocity and acceleration of the point at `sigma` in a segment starting at `start`.
+fn point_kinematics(start: &Motion, q: &Vector3<f64>, qdot: &Vector3<f64>, sigma: f64) -> PointKinematics {
+    let sp = segment_kinematics(q, qdot, sigma);
+    let r = start.rot * sp.offset;
+    let w_loc = start.rot * (sp.angular * qdot);
+    let v_loc = start.rot * (sp.linear * qdot);
+    let motion = Motion {
+        rot: start.rot * sp.rotation,
+        x: start.x + r,
+        v: start.v + start.w.cross(&r) + v_loc,
+        a: start.a + start.alpha.cross(&r) + start.w.cross(&start.w.cross(&r)) + start.w.cross(&v_loc) * 2.0 + start.rot * sp.linear_bias,
+        w: start.w + w_loc,
+        alpha: start.alpha + start.w.cross(&w_loc) + start.rot * sp.angular_bias,
+    };
+    PointKinematics { motion, w_cols: start.rot * sp.angular, u_cols: start.rot * sp.linear }
+}
+
+/// Spatial twists (about the origin) of the columns `(w_k, u_k)` given at the point `x`.
+fn twists_at(w_cols: &Matrix3<f64>, u_cols: &Matrix3<f64>, x: &Vector3<f64>) -> Twists {
+    let mut t = Twists::zeros();
+    for k in 0..3 {
+        let w = w_cols.column(k).into_owned();
+        let v = u_cols.column(k) - w.cross(x);
+        t.fixed_view_mut::<3, 1>(0, k).copy_from(&w);
+        t.fixed_view_mut::<3, 1>(3, k).copy_from(&v);
+    }
+    t
+}
+
+/// What the root-to-tip sweep gathers about one segment.
+#[derive(Debug, Clone, Copy)]
+struct SegmentSums {
+    /// Generalized forces from the segment's own points.
+    q_own: Vector3<f64>,
+    /// Momentum wrenches of the segment's own motion, one column per coordinate.
+    f_own: Twists,
+    /// The segment's own mass-matrix block.
+    m_own: Matrix3<f64>,
+    /// Total wrench of the segment's points about the origin.
+    wrench: Vector6,
+    /// Rigid inertia of the segment's points.
+    inertia: Inertia,
 }
 
 /// Reusable workspace and results of a dynamics evaluation (allocated once per strand).
@@ -57,17 +142,18 @@ struct Sample {
 pub struct Dynamics {
     /// Gauss points of a segment: (arc length from segment start in m, weight in m).
     nodes: Vec<(f64, f64)>,
-    samples: Vec<Sample>,
     /// Segment start frames and the tip frame (N + 1), world coordinates.
     pub frames: Vec<Frame>,
     /// Motion subspace S_Q of each segment (twists about the root position).
     motion: Vec<Twists>,
-    /// Coupling blocks F_Q = I^C_Q+1 S_Q + sum_k I_k Psi_k.
+    /// Per-segment sums of the root-to-tip sweep.
+    sums: Vec<SegmentSums>,
+    /// Coupling blocks F_Q = I^C_Q+1 S_Q + own momentum.
     coupling: Vec<Twists>,
-    /// Mass matrix M(q), kg m^2 per (rad/m)^2 ... i.e. kinetic energy is `qdot^T M qdot / 2` in J.
+    /// Mass matrix M(q): the kinetic energy (with a fixed root) is `qdot^T M qdot / 2`, J.
     pub mass: DMatrix<f64>,
-    /// All generalized forces at the evaluated state (elastic, damping, gravity, drag, point forces and minus
-    /// the velocity-product terms), conjugate to q: N m^2 per ... so that `qdot^T forces` is a power in W.
+    /// All generalized forces at the evaluated state (elastic, damping, gravity, drag, point forces and
+    /// minus the velocity-product terms), conjugate to q, so that `qdot . forces` is a power in W.
     pub forces: DVector<f64>,
     /// Kinetic energy, J.
     pub kinetic_energy: f64,
@@ -75,20 +161,6 @@ pub struct Dynamics {
     pub gravity_energy: f64,
     /// Elastic energy `(q - q_rest)^T K (q - q_rest) / 2`, J.
     pub elastic_energy: f64,
-}
-
-fn vee(m: &Matrix3<f64>) -> Vector3<f64> {
-    0.5 * Vector3::new(m[(2, 1)] - m[(1, 2)], m[(0, 2)] - m[(2, 0)], m[(1, 0)] - m[(0, 1)])
-}
-
-fn spatial_inertia(m: f64, ic: &Matrix3<f64>, x: &Vector3<f64>) -> Matrix6<f64> {
-    let xc = x.cross_matrix();
-    let mut i6 = Matrix6::zeros();
-    i6.fixed_view_mut::<3, 3>(0, 0).copy_from(&(ic - xc * xc * m));
-    i6.fixed_view_mut::<3, 3>(0, 3).copy_from(&(xc * m));
-    i6.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-xc * m));
-    i6.fixed_view_mut::<3, 3>(3, 3).copy_from(&(Matrix3::identity() * m));
-    i6
 }
 
 fn wrench(force: &Vector3<f64>, torque: &Vector3<f64>, x: &Vector3<f64>) -> Vector6 {
@@ -106,11 +178,18 @@ impl Dynamics {
             .collect::<Vec<_>>();
         let n = model.segments;
         let dofs = model.dofs();
+        let empty = SegmentSums {
+            q_own: Vector3::zeros(),
+            f_own: Twists::zeros(),
+            m_own: Matrix3::zeros(),
+            wrench: Vector6::zeros(),
+            inertia: Inertia::zero(),
+        };
         Self {
-            samples: Vec::with_capacity(n * nodes.len()),
             nodes,
             frames: Vec::with_capacity(n + 1),
             motion: vec![Twists::zeros(); n],
+            sums: vec![empty; n],
             coupling: vec![Twists::zeros(); n],
             mass: DMatrix::zeros(dofs, dofs),
             forces: DVector::zeros(dofs),
@@ -125,48 +204,6 @@ impl Dynamics {
         self.kinetic_energy + self.gravity_energy + self.elastic_energy
     }
 
-    /// Step 1: forward pass in second-order dual numbers (value, d/dt, d^2/dt^2 with qddot = 0).
-    fn forward_pass(&mut self, model: &StrandModel, state: &StrandState) {
-        let d = model.dofs_per_segment();
-        let l = model.segment_length();
-        let root = &state.root;
-        let wx = root.angular_velocity.cross_matrix();
-        let dr = wx * root.rotation;
-        let ddr = (root.angular_acceleration.cross_matrix() + wx * wx) * root.rotation;
-        let mut rot: Matrix3<Jet> = Matrix3::from_fn(|r, c| Jet::new(root.rotation[(r, c)], dr[(r, c)], ddr[(r, c)]));
-        let mut pos: Vector3<Jet> = Vector3::from_fn(|r, _| Jet::new(0.0, root.velocity[r], root.acceleration[r]));
-        self.samples.clear();
-        self.frames.clear();
-        let re_frame = |rot: &Matrix3<Jet>, pos: &Vector3<Jet>| Frame {
-            rotation: rot.map(|x| x.re),
-            position: pos.map(|x| x.re) + root.position,
-        };
-        for i in 0..model.segments {
-            self.frames.push(re_frame(&rot, &pos));
-            let omega: Vector3<Jet> = Vector3::from_fn(|k, _| {
-                if k < d { Jet::new(state.q[i * d + k], state.qdot[i * d + k], 0.0) } else { Jet::from(0.0) }
-            });
-            for &(sigma, _) in &self.nodes {
-                let (e, p) = segment_transform(&omega, sigma);
-                let r = rot * e;
-                let x = pos + rot * p;
-                let (r0, r1, r2) = (r.map(|v| v.re), r.map(|v| v.v1), r.map(|v| v.v2));
-                self.samples.push(Sample {
-                    x: x.map(|v| v.re),
-                    v: x.map(|v| v.v1),
-                    a: x.map(|v| v.v2),
-                    rot: r0,
-                    w: vee(&(r1 * r0.transpose())),
-                    alpha: vee(&(r2 * r0.transpose() + r1 * r1.transpose())),
-                });
-            }
-            let (e, p) = segment_transform(&omega, l);
-            pos += rot * p;
-            rot *= e;
-        }
-        self.frames.push(re_frame(&rot, &pos));
-    }
-
     /// Evaluates energies and generalized forces at `state` (and the mass matrix if `with_mass`),
     /// with `external` point forces applied. See the module documentation for the pipeline.
     pub fn evaluate(&mut self, model: &StrandModel, state: &StrandState, external: &[PointForce], with_mass: bool) {
@@ -178,75 +215,98 @@ impl Dynamics {
         let rot_inertia = model.rotary_inertia();
         let drag_rate = model.air_drag / rho_a;
         let g = model.gravity;
-
-        self.forward_pass(model, state);
-        self.forces.fill(0.0);
-        if with_mass {
-            self.mass.fill(0.0);
-        }
+        let root = &state.root;
+        let mut start = Motion {
+            rot: root.rotation,
+            x: Vector3::zeros(),
+            v: root.velocity,
+            a: root.acceleration,
+            w: root.angular_velocity,
+            alpha: root.angular_acceleration,
+        };
+        self.frames.clear();
         self.kinetic_energy = 0.0;
         self.gravity_energy = 0.0;
 
-        // Step 3: sweep from the tip, with suffix sums of wrenches and composite inertias.
-        let mut suffix_wrench = Vector6::zeros();
-        let mut suffix_inertia = Matrix6::zeros();
-        let nq = self.nodes.len();
-        for i in (0..n).rev() {
-            let start = self.frames[i];
-            let omega = darboux(model, &state.q, i);
-            let (s_i, _) = own_twists(&start, &omega, l, &origin);
-            self.motion[i] = s_i;
-            let mut q_block = s_i.transpose() * suffix_wrench;
-            let mut couple = suffix_inertia * s_i;
-            let mut diag = s_i.transpose() * couple;
-            let mut seg_wrench = Vector6::zeros();
-            let mut seg_inertia = Matrix6::zeros();
-            for (g_idx, &(sigma, weight)) in self.nodes.iter().enumerate() {
-                let smp = self.samples[i * nq + g_idx];
-                let (psi, _) = own_twists(&start, &omega, sigma, &origin);
+        // Step 1: root-to-tip sweep.
+        for i in 0..n {
+            self.frames.push(Frame { rotation: start.rot, position: start.x + origin });
+            let q = darboux(model, &state.q, i);
+            let qdot = darboux(model, &state.qdot, i);
+            let mut sums = SegmentSums {
+                q_own: Vector3::zeros(),
+                f_own: Twists::zeros(),
+                m_own: Matrix3::zeros(),
+                wrench: Vector6::zeros(),
+                inertia: Inertia::zero(),
+            };
+            for &(sigma, weight) in &self.nodes {
+                let pk = point_kinematics(&start, &q, &qdot, sigma);
+                let p = &pk.motion;
                 let m = rho_a * weight;
-                let ic = smp.rot * Matrix3::from_diagonal(&(rot_inertia * weight)) * smp.rot.transpose();
-                let icw = ic * smp.w;
-                // Gravity, air drag and minus the velocity-product inertial force.
-                let f = g * m - smp.v * (drag_rate * m) - smp.a * m;
-                let tau = -icw * drag_rate - (ic * smp.alpha + smp.w.cross(&icw));
-                let wr = wrench(&f, &tau, &smp.x);
-                q_block += psi.transpose() * wr;
-                seg_wrench += wr;
-                self.kinetic_energy += 0.5 * (m * smp.v.norm_squared() + smp.w.dot(&icw));
-                self.gravity_energy -= m * g.dot(&(smp.x + origin));
+                let ic = p.rot * Matrix3::from_diagonal(&(rot_inertia * weight)) * p.rot.transpose();
+                let icw = ic * p.w;
+                // Gravity, air drag and minus the velocity-product inertial force; torque about the point.
+                let f = g * m - p.v * (drag_rate * m) - p.a * m;
+                let tau = -icw * drag_rate - (ic * p.alpha + p.w.cross(&icw));
+                sums.q_own += pk.u_cols.transpose() * f + pk.w_cols.transpose() * tau;
+                sums.wrench += wrench(&f, &tau, &p.x);
+                self.kinetic_energy += 0.5 * (m * p.v.norm_squared() + p.w.dot(&icw));
+                self.gravity_energy -= m * g.dot(&(p.x + origin));
                 if with_mass {
-                    let i6 = spatial_inertia(m, &ic, &smp.x);
-                    let i_psi = i6 * psi;
-                    couple += i_psi;
-                    diag += psi.transpose() * i_psi;
-                    seg_inertia += i6;
+                    for k in 0..d {
+                        let u = pk.u_cols.column(k) * m;
+                        let ang = ic * pk.w_cols.column(k) + p.x.cross(&u);
+                        let col = sums.f_own.column(k) + Vector6::new(ang.x, ang.y, ang.z, u.x, u.y, u.z);
+                        sums.f_own.set_column(k, &col);
+                    }
+                    sums.m_own += pk.u_cols.transpose() * pk.u_cols * m + pk.w_cols.transpose() * ic * pk.w_cols;
+                    sums.inertia.add_point(m, &ic, &p.x);
                 }
             }
             for pf in external {
                 let (j, sigma) = crate::kinematics::locate(model, pf.s);
-                if j != i {
-                    continue;
+                if j == i {
+                    let pk = point_kinematics(&start, &q, &qdot, sigma);
+                    sums.q_own += pk.u_cols.transpose() * pf.force;
+                    sums.wrench += wrench(&pf.force, &Vector3::zeros(), &pk.motion.x);
                 }
-                let (psi, f) = own_twists(&start, &omega, sigma, &origin);
-                let wr = wrench(&pf.force, &Vector3::zeros(), &(f.position - origin));
-                q_block += psi.transpose() * wr;
-                seg_wrench += wr;
             }
+            let end = point_kinematics(&start, &q, &qdot, l);
+            self.motion[i] = twists_at(&end.w_cols, &end.u_cols, &end.motion.x);
+            self.sums[i] = sums;
+            start = end.motion;
+        }
+        self.frames.push(Frame { rotation: start.rot, position: start.x + origin });
+
+        // Step 2: tip-to-root sweep with suffix sums.
+        let mut suffix_wrench = Vector6::zeros();
+        let mut suffix_inertia = Inertia::zero();
+        for i in (0..n).rev() {
+            let s_i = self.motion[i];
+            let sums = &self.sums[i];
+            let q_block = sums.q_own + s_i.transpose() * suffix_wrench;
             for k in 0..d {
                 self.forces[i * d + k] = q_block[k];
             }
-            suffix_wrench += seg_wrench;
             if with_mass {
-                self.coupling[i] = couple;
+                let mut couple = sums.f_own;
+                for k in 0..d {
+                    let c = suffix_inertia.apply(&s_i.column(k).into_owned());
+                    couple.set_column(k, &(couple.column(k) + c));
+                }
+                let diag = sums.m_own + s_i.transpose() * (couple - sums.f_own);
                 for a in 0..d {
                     for b in 0..d {
                         self.mass[(i * d + a, i * d + b)] = diag[(a, b)];
                     }
                 }
-                suffix_inertia += seg_inertia;
+                self.coupling[i] = couple;
+                suffix_inertia.add(&sums.inertia);
             }
+            suffix_wrench += sums.wrench;
         }
+        // Step 3: off-diagonal blocks.
         if with_mass {
             for i in 0..n {
                 for j in 0..i {
@@ -261,11 +321,15 @@ impl Dynamics {
             }
         }
         // Step 4: elasticity and internal damping (K diagonal).
-        let k = model.stiffness();
-        let dq = &state.q - model.rest_coordinates();
-        self.elastic_energy = 0.5 * dq.component_mul(&k).dot(&dq);
-        for j in 0..model.dofs() {
-            self.forces[j] -= k[j] * (dq[j] + model.damping * state.qdot[j]);
+        let rig = model.rigidities() * l;
+        self.elastic_energy = 0.0;
+        for i in 0..n {
+            for k in 0..d {
+                let j = i * d + k;
+                let dq = state.q[j] - model.rest[i][k];
+                self.elastic_energy += 0.5 * rig[k] * dq * dq;
+                self.forces[j] -= rig[k] * (dq + model.damping * state.qdot[j]);
+            }
         }
     }
 }

@@ -30,16 +30,17 @@ pub fn coefficients<T: RealField + Copy>(u: T) -> (T, T, T) {
 }
 
 /// Derivatives `(db/du, dc/du)` of the coefficients `b` and `c` of [`coefficients`].
-pub fn coefficient_derivatives(u: f64) -> (f64, f64) {
-    if u < SERIES_BELOW {
-        let db = -1.0 / 24.0 + u * (2.0 / 720.0 - u * (3.0 / 40320.0 - u * (4.0 / 3628800.0 - u * 5.0 / 479001600.0)));
-        let dc = -1.0 / 120.0 + u * (2.0 / 5040.0 - u * (3.0 / 362880.0 - u * (4.0 / 39916800.0 - u * 5.0 / 6227020800.0)));
+pub fn coefficient_derivatives<T: RealField + Copy>(u: T) -> (T, T) {
+    let f = |x: f64| T::from_f64(x).unwrap();
+    if u < f(SERIES_BELOW) {
+        let db = f(-1.0 / 24.0) + u * (f(2.0 / 720.0) - u * (f(3.0 / 40320.0) - u * (f(4.0 / 3628800.0) - u * f(5.0 / 479001600.0))));
+        let dc = f(-1.0 / 120.0) + u * (f(2.0 / 5040.0) - u * (f(3.0 / 362880.0) - u * (f(4.0 / 39916800.0) - u * f(5.0 / 6227020800.0))));
         (db, dc)
     } else {
         let t = u.sqrt();
         let (s, co) = (t.sin(), t.cos());
-        let db = (t * s - 2.0 * (1.0 - co)) / (2.0 * u * u);
-        let dc = (t * (1.0 - co) - 3.0 * (t - s)) / (2.0 * u * u * t);
+        let db = (t * s - (T::one() - co) * f(2.0)) / (u * u * f(2.0));
+        let dc = (t * (T::one() - co) - (t - s) * f(3.0)) / (u * u * t * f(2.0));
         (db, dc)
     }
 }
@@ -62,27 +63,92 @@ pub fn segment_transform<T: RealField + Copy>(omega: &Vector3<T>, sigma: f64) ->
 ///
 /// Column `k` of `angular` is the rotation vector `w_k` with `dE/dOmega_k = [w_k]x E`, and column `k` of
 /// `linear` is `dp/dOmega_k`, both after arc length `sigma` (units: m rad per (rad/m), and m^2).
-pub fn segment_derivatives(omega: &Vector3<f64>, sigma: f64) -> (Matrix3<f64>, Matrix3<f64>) {
-    let phi = omega * sigma;
+/// Generic so that dual numbers give their rates of change along a direction (used for the velocity-product
+/// terms of the dynamics).
+pub fn segment_derivatives<T: RealField + Copy>(omega: &Vector3<T>, sigma: f64) -> (Matrix3<T>, Matrix3<T>) {
+    let sg = T::from_f64(sigma).unwrap();
+    let two = T::from_f64(2.0).unwrap();
+    let phi = omega * sg;
     let u = phi.norm_squared();
     let (_, b, c) = coefficients(u);
     let (db, dc) = coefficient_derivatives(u);
-    let e0 = Vector3::x();
+    let e0: Vector3<T> = Vector3::x();
     let pe = phi.cross(&e0);
     let ppe = phi.cross(&pe);
     let mut angular = Matrix3::zeros();
     let mut linear = Matrix3::zeros();
     for k in 0..3 {
-        let ek = Vector3::ith(k, 1.0);
+        let ek: Vector3<T> = Vector3::ith(k, T::one());
         let pk = phi.cross(&ek);
-        angular.set_column(k, &((ek + pk * b + phi.cross(&pk) * c) * sigma));
-        let d = pe * (2.0 * phi[k] * db)
-            + ek.cross(&e0) * b
-            + ppe * (2.0 * phi[k] * dc)
-            + (ek.cross(&pe) + phi.cross(&ek.cross(&e0))) * c;
-        linear.set_column(k, &(d * (sigma * sigma)));
+        angular.set_column(k, &((ek + pk * b + phi.cross(&pk) * c) * sg));
+        let eke0 = ek.cross(&e0);
+        let d = pe * (two * phi[k] * db) + eke0 * b + ppe * (two * phi[k] * dc) + (ek.cross(&pe) + phi.cross(&eke0)) * c;
+        linear.set_column(k, &(d * (sg * sg)));
     }
     (angular, linear)
+}
+
+/// Everything the dynamics needs about a point at arc length `sigma` of a segment whose Darboux vector
+/// `omega` changes at the rate `rate` (rad/(m s)); all in the segment's start frame. See [`segment_kinematics`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SegmentPoint {
+    /// Rotation `E` of the frame (as in [`segment_transform`]).
+    pub rotation: Matrix3<f64>,
+    /// Displacement `p` of the centreline, m.
+    pub offset: Vector3<f64>,
+    /// `dE/dOmega` as rotation vectors, one column per Darboux component (as in [`segment_derivatives`]).
+    pub angular: Matrix3<f64>,
+    /// `dp/dOmega`, one column per Darboux component, m^2.
+    pub linear: Matrix3<f64>,
+    /// `(d/dt angular) rate` at fixed `rate` (the velocity-product angular acceleration), rad/s^2.
+    pub angular_bias: Vector3<f64>,
+    /// `(d/dt linear) rate` at fixed `rate` (the velocity-product acceleration), m/s^2.
+    pub linear_bias: Vector3<f64>,
+}
+
+/// Transform, derivatives and velocity-product terms of a segment point in one pass (one set of
+/// trigonometric functions, evaluated in forward-mode dual numbers of `u = |sigma omega|^2` along time).
+/// Equal to [`segment_transform`], [`segment_derivatives`] and their directional derivatives along `rate`.
+pub fn segment_kinematics(omega: &Vector3<f64>, rate: &Vector3<f64>, sigma: f64) -> SegmentPoint {
+    use num_dual::Dual64;
+    let phi = omega * sigma;
+    let phi_dot = rate * sigma;
+    let nu = rate;
+    let u = phi.norm_squared();
+    let pn = phi.dot(nu);
+    let u_dot = 2.0 * sigma * pn;
+    let ud = Dual64::new(u, u_dot);
+    let (a, b, c) = coefficients(ud);
+    let (db, dc) = coefficient_derivatives(ud);
+    let (a, b_dot, b) = (a.re, b.eps, b.re);
+    let (c_dot, c) = (c.eps, c.re);
+    let (db_dot, db) = (db.eps, db.re);
+    let (dc_dot, dc) = (dc.eps, dc.re);
+    let k = phi.cross_matrix();
+    let k2 = k * k;
+    let e0 = Vector3::x();
+    let pe = phi.cross(&e0);
+    let ppe = phi.cross(&pe);
+    let rotation = Matrix3::identity() + k * a + k2 * b;
+    let offset = (e0 + pe * b + ppe * c) * sigma;
+    let angular = (Matrix3::identity() + k * b + k2 * c) * sigma;
+    let e0x = e0.cross_matrix();
+    let linear = ((pe * phi.transpose()) * (2.0 * db) - e0x * b + (ppe * phi.transpose()) * (2.0 * dc)
+        - (pe.cross_matrix() + k * e0x) * c)
+        * (sigma * sigma);
+    let pnu = phi.cross(nu);
+    let angular_bias = (pnu * b_dot + phi.cross(&pnu) * c_dot + nu.cross(&pnu) * (c * sigma)) * sigma;
+    let p_dot = sigma * nu.norm_squared();
+    let nue = nu.cross(&e0);
+    let linear_bias = (pe * (2.0 * (db_dot * pn + db * p_dot))
+        + phi_dot.cross(&e0) * (2.0 * db * pn)
+        + nue * b_dot
+        + ppe * (2.0 * (dc_dot * pn + dc * p_dot))
+        + (phi_dot.cross(&pe) + phi.cross(&phi_dot.cross(&e0))) * (2.0 * dc * pn)
+        + (nu.cross(&pe) + phi.cross(&nue)) * c_dot
+        + nu.cross(&nue) * (2.0 * c * sigma))
+        * (sigma * sigma);
+    SegmentPoint { rotation, offset, angular, linear, angular_bias, linear_bias }
 }
 
 #[cfg(test)]
@@ -127,8 +193,8 @@ mod tests {
         assert!((below.0 - above.0).abs() < 1e-13);
         assert!((below.1 - above.1).abs() < 1e-13);
         assert!((below.2 - above.2).abs() < 1e-13);
-        let d_below = coefficient_derivatives(SERIES_BELOW * (1.0 - 1e-12));
-        let d_above = coefficient_derivatives(SERIES_BELOW * (1.0 + 1e-12));
+        let d_below = coefficient_derivatives::<f64>(SERIES_BELOW * (1.0 - 1e-12));
+        let d_above = coefficient_derivatives::<f64>(SERIES_BELOW * (1.0 + 1e-12));
         assert!((d_below.0 - d_above.0).abs() < 1e-12);
         assert!((d_below.1 - d_above.1).abs() < 1e-12);
     }
@@ -138,7 +204,7 @@ mod tests {
         // Forward-mode dual numbers differentiate the closed form exactly; agreement to 1e-12 (relative).
         for omega in [Vector3::new(0.0, 0.0, 0.0), Vector3::new(1e-3, 2e-3, 0.0), Vector3::new(30.0, 80.0, -10.0), Vector3::new(-300.0, 25.0, 90.0)] {
             let sigma = 0.013;
-            let (ang, lin) = segment_derivatives(&omega, sigma);
+            let (ang, lin) = segment_derivatives::<f64>(&omega, sigma);
             for k in 0..3 {
                 let om: Vector3<Dual64> = Vector3::from_fn(|i, _| {
                     let x = Dual64::from_re(omega[i]);
@@ -154,6 +220,32 @@ mod tests {
                 assert!((lin.column(k) - dp).norm() < 1e-12 * scale, "linear k={k} omega={omega:?}");
                 assert!((ang.column(k) - w).norm() < 1e-12 * (1.0 + w.norm()), "angular k={k}");
             }
+        }
+    }
+
+    #[test]
+    fn fused_kinematics_match_the_separate_functions() {
+        // segment_kinematics = transform + derivatives + their directional derivatives along the rate
+        // (computed here with dual numbers through the generic functions): 1e-12 relative.
+        for (omega, rate) in [
+            (Vector3::new(0.0, 0.0, 0.0), Vector3::new(3.0, -2.0, 1.0)),
+            (Vector3::new(1e-3, 2e-3, 0.0), Vector3::new(50.0, 10.0, 0.0)),
+            (Vector3::new(30.0, 80.0, -10.0), Vector3::new(-40.0, 7.0, 20.0)),
+            (Vector3::new(-300.0, 25.0, 90.0), Vector3::new(100.0, 300.0, -50.0)),
+        ] {
+            let sigma = 0.013;
+            let f = segment_kinematics(&omega, &rate, sigma);
+            let (e, p) = segment_transform(&omega, sigma);
+            let (ang, lin) = segment_derivatives::<f64>(&omega, sigma);
+            assert!((f.rotation - e).norm() < 1e-14 && (f.offset - p).norm() < 1e-15);
+            assert!((f.angular - ang).norm() < 1e-12 * (1.0 + ang.norm()));
+            assert!((f.linear - lin).norm() < 1e-12 * (1.0 + lin.norm()));
+            let dual: Vector3<Dual64> = Vector3::from_fn(|k, _| Dual64::new(omega[k], rate[k]));
+            let (da, dl) = segment_derivatives(&dual, sigma);
+            let ab = da.map(|x| x.eps) * rate;
+            let lb = dl.map(|x| x.eps) * rate;
+            assert!((f.angular_bias - ab).norm() < 1e-12 * (1.0 + ab.norm()), "{} vs {}", f.angular_bias, ab);
+            assert!((f.linear_bias - lb).norm() < 1e-12 * (1.0 + lb.norm()), "{} vs {}", f.linear_bias, lb);
         }
     }
 }

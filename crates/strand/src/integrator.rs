@@ -47,6 +47,10 @@ pub struct Strand {
     pub integrator: Integrator,
     /// Workspace and results of the last evaluation.
     pub dynamics: Dynamics,
+    /// Workspace: the step's system matrix, factorized in place.
+    system: DMatrix<f64>,
+    /// Workspace: right-hand side, then solution, of the step's linear system.
+    rhs: DVector<f64>,
 }
 
 impl Strand {
@@ -56,7 +60,8 @@ impl Strand {
         root.validate()?;
         let state = StrandState::at_rest(&model, root);
         let dynamics = Dynamics::new(&model);
-        Ok(Self { model, state, integrator: Integrator::default(), dynamics })
+        let n = model.dofs();
+        Ok(Self { model, state, integrator: Integrator::default(), dynamics, system: DMatrix::zeros(n, n), rhs: DVector::zeros(n) })
     }
 
     /// Total energy (kinetic + gravity + elastic) at the current state, J.
@@ -95,28 +100,37 @@ impl Strand {
         Ok(())
     }
 
-    /// System matrix `M (1 + a c) + (a tau + b) K` with `c = nu / rho A`: the step's Jacobian.
-    fn system_matrix(&self, a: f64, b: f64) -> DMatrix<f64> {
+    /// Builds the step's matrix `M (1 + a c) + (a tau + b) K` (with `c = nu / rho A`) into the workspace and
+    /// factorizes it in place (Cholesky).
+    fn factorize(&mut self, a: f64, b: f64) -> Result<()> {
         let c = self.model.air_drag / self.model.linear_density();
-        let k = self.model.stiffness();
-        let mut sys = &self.dynamics.mass * (1.0 + a * c);
-        for j in 0..k.len() {
-            sys[(j, j)] += (a * self.model.damping + b) * k[j];
+        let d = self.model.dofs_per_segment();
+        let rig = self.model.rigidities() * self.model.segment_length();
+        self.system.copy_from(&self.dynamics.mass);
+        self.system.scale_mut(1.0 + a * c);
+        for j in 0..self.system.nrows() {
+            self.system[(j, j)] += (a * self.model.damping + b) * rig[j % d];
         }
-        sys
-    }
-
-    fn solve(sys: DMatrix<f64>, rhs: &DVector<f64>) -> Result<DVector<f64>> {
-        let chol = sys.cholesky().ok_or(StrandError::NotPositiveDefinite { what: "step matrix" })?;
-        Ok(chol.solve(rhs))
+        if crate::linalg::cholesky_in_place(&mut self.system) {
+            Ok(())
+        } else {
+            Err(StrandError::NotPositiveDefinite { what: "step matrix" })
+        }
     }
 
     fn linearly_implicit_velocity(&mut self, h: f64, external: &[PointForce]) -> Result<DVector<f64>> {
         self.dynamics.evaluate(&self.model, &self.state, external, true);
-        let sys = self.system_matrix(h, h * h);
-        // (M + hD) qdot + h F, with D = c M + tau K.
-        let rhs = self.system_matrix(h, 0.0) * &self.state.qdot + &self.dynamics.forces * h;
-        Self::solve(sys, &rhs)
+        // rhs = (M + h D) qdot + h F with D = c M + tau K.
+        let c = self.model.air_drag / self.model.linear_density();
+        let d = self.model.dofs_per_segment();
+        let rig = self.model.rigidities() * self.model.segment_length();
+        self.rhs.gemv(1.0 + h * c, &self.dynamics.mass, &self.state.qdot, 0.0);
+        for j in 0..self.rhs.len() {
+            self.rhs[j] += h * (self.model.damping * rig[j % d] * self.state.qdot[j] + self.dynamics.forces[j]);
+        }
+        self.factorize(h, h * h)?;
+        crate::linalg::cholesky_solve_in_place(&self.system, &mut self.rhs);
+        Ok(self.rhs.clone())
     }
 
     fn midpoint_velocity(&mut self, h: f64, external: &[PointForce]) -> Result<DVector<f64>> {
@@ -129,8 +143,9 @@ impl Strand {
             mid.qdot = (&v0 + &v1) * 0.5;
             mid.q = &self.state.q + &mid.qdot * (0.5 * h);
             self.dynamics.evaluate(&self.model, &mid, external, true);
-            let residual = &self.dynamics.mass * (&v1 - &v0) - &self.dynamics.forces * h;
-            let delta = Self::solve(self.system_matrix(0.5 * h, 0.25 * h * h), &residual)?;
+            let mut delta = &self.dynamics.mass * (&v1 - &v0) - &self.dynamics.forces * h;
+            self.factorize(0.5 * h, 0.25 * h * h)?;
+            crate::linalg::cholesky_solve_in_place(&self.system, &mut delta);
             v1 -= &delta;
             let size = delta.amax();
             let scale = 1.0 + v1.amax();

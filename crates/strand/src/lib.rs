@@ -24,12 +24,14 @@
 //! assert!(strand.state.time > 0.099);
 //! ```
 
+pub mod analytic;
 pub mod dynamics;
 pub mod error;
 pub mod hair_type;
 pub mod helix;
 pub mod integrator;
 pub mod kinematics;
+pub mod linalg;
 pub mod material;
 pub mod model;
 pub mod section;

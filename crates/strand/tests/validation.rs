@@ -2,6 +2,7 @@
 //! (DESIGN.md section 8). Every tolerance is stated next to its assertion; the figures are in docs/physics.md.
 
 use nalgebra::{DMatrix, DVector, Vector3};
+use strand::analytic::{cantilever_frequency, cantilever_tip_deflection, elastica_cantilever_tip, greenhill_critical_length};
 use strand::dynamics::Dynamics;
 use strand::hair_type::HairType;
 use strand::helix::segment_transform;
@@ -26,35 +27,8 @@ fn ei_q(m: &StrandModel) -> (f64, f64) {
     (m.rigidities()[1], m.linear_density() * 9.81)
 }
 
-/// Independent shooting solution of EI theta'' + q (L - s) cos theta = 0, theta(0) = 0, theta'(L) = 0
-/// (theta: angle below the horizontal), RK4 with 20000 steps and bisection on theta'(0). Returns the tip (x, z).
 fn shooting_tip(ei: f64, q: f64, length: f64) -> (f64, f64) {
-    let steps = 20000;
-    let h = length / steps as f64;
-    let run = |c: f64| -> (f64, f64, f64) {
-        // y = (theta, theta', x, z)
-        let f = |s: f64, y: [f64; 4]| [y[1], -q * (length - s) * y[0].cos() / ei, y[0].cos(), -y[0].sin()];
-        let mut y = [0.0, c, 0.0, 0.0];
-        for i in 0..steps {
-            let s = i as f64 * h;
-            let k1 = f(s, y);
-            let a = |k: [f64; 4], t: f64| [y[0] + t * k[0], y[1] + t * k[1], y[2] + t * k[2], y[3] + t * k[3]];
-            let k2 = f(s + h / 2.0, a(k1, h / 2.0));
-            let k3 = f(s + h / 2.0, a(k2, h / 2.0));
-            let k4 = f(s + h, a(k3, h));
-            for j in 0..4 {
-                y[j] += h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
-            }
-        }
-        (y[1], y[2], y[3])
-    };
-    let (mut lo, mut hi) = (0.0, q * length * length / (2.0 * ei));
-    for _ in 0..80 {
-        let mid = 0.5 * (lo + hi);
-        if run(mid).0 > 0.0 { hi = mid } else { lo = mid }
-    }
-    let (_, x, z) = run(0.5 * (lo + hi));
-    (x, z)
+    elastica_cantilever_tip(ei, q, length, 20000)
 }
 
 #[test]
@@ -99,7 +73,7 @@ fn small_deflection_cantilever() {
         let eq = solve_equilibrium(&m, &st, &[], &StaticOptions::default()).unwrap();
         let t = tip(&m, &st, &eq.q);
         let (ei, q) = ei_q(&m);
-        let expected = q * m.length.powi(4) / (8.0 * ei);
+        let expected = cantilever_tip_deflection(q, m.length, ei);
         let rel = (-t.z - expected).abs() / expected;
         assert!(rel < 2e-3, "{kind:?}: tip {} vs {expected} ({rel})", -t.z);
         assert!(eq.stable);
@@ -139,7 +113,7 @@ fn dynamic_cantilever_settles_on_the_static_solution() {
 }
 
 /// Bending-mode eigenvalues (rad/s) of the straight strand: K v = w^2 M v restricted to the bend coordinates.
-fn bending_frequencies(m: &StrandModel) -> Vec<f64> {
+pub fn bending_frequencies(m: &StrandModel) -> Vec<f64> {
     let st = StrandState::at_rest(m, horizontal_root());
     let mut dynamics = Dynamics::new(m);
     dynamics.evaluate(m, &st, &[], true);
@@ -162,10 +136,9 @@ fn cantilever_natural_frequencies() {
     // 32 segments: tolerance 0.5 % on the first, 1 % on the second.
     let m = h1_model(ModelKind::Reduced, 0.05, 32);
     let (ei, _) = ei_q(&m);
-    let base = (ei / (m.linear_density() * m.length.powi(4))).sqrt();
     let w = bending_frequencies(&m);
-    for (n, (bl, tol)) in [(1.8751f64, 5e-3), (4.6941f64, 1e-2)].into_iter().enumerate() {
-        let exact = bl * bl * base;
+    for (n, tol) in [5e-3, 1e-2].into_iter().enumerate() {
+        let exact = cantilever_frequency(n, ei, m.linear_density(), m.length);
         assert!((w[n] - exact).abs() < tol * exact, "mode {}: {} vs {exact}", n + 1, w[n]);
     }
 }
@@ -179,7 +152,7 @@ fn simulated_oscillation_has_the_first_natural_period() {
     m.air_drag = 0.0;
     m.damping = 0.0;
     let (ei, _) = ei_q(&m);
-    let w1 = 1.8751f64.powi(2) * (ei / (m.linear_density() * m.length.powi(4))).sqrt();
+    let w1 = cantilever_frequency(0, ei, m.linear_density(), m.length);
     let mut strand = Strand::new(m.clone(), horizontal_root()).unwrap();
     strand.integrator = Integrator::ImplicitMidpoint;
     // First-mode-like initial shape: curvature proportional to (L - s)^2.
@@ -210,7 +183,7 @@ fn greenhill_buckling_of_a_standing_strand() {
     // and the equilibrium is visibly bent (tip off axis by more than 5 % of L).
     let probe = h1_model(ModelKind::Reduced, 0.1, 24);
     let (ei, q) = ei_q(&probe);
-    let lc = (7.837 * ei / q).cbrt();
+    let lc = greenhill_critical_length(ei, q);
     for (factor, should_stand) in [(0.9, true), (1.1, false)] {
         let m = h1_model(ModelKind::Reduced, factor * lc, 24);
         let root = RootFrame::new(Vector3::zeros(), Vector3::z(), Vector3::y()).unwrap();
@@ -362,7 +335,7 @@ fn sag_free_rest_reports_an_unstable_groom() {
     // shape with Q_gravity = 0, but not a stable one: the stability check must say so.
     let probe = h1_model(ModelKind::Reduced, 0.1, 16);
     let (ei, q) = ei_q(&probe);
-    let m = h1_model(ModelKind::Reduced, 1.5 * (7.837 * ei / q).cbrt(), 16);
+    let m = h1_model(ModelKind::Reduced, 1.5 * greenhill_critical_length(ei, q), 16);
     let root = RootFrame::new(Vector3::zeros(), Vector3::z(), Vector3::y()).unwrap();
     let groomed = StrandState::at_rest(&m, root);
     let (_, stable) = sag_free_rest(&m, &groomed, &[]).unwrap();

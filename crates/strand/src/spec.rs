@@ -11,7 +11,7 @@
 use crate::error::{Result, StrandError};
 use crate::hair_type::HairType;
 use crate::material::Material;
-use crate::model::{ModelKind, StrandModel, DEFAULT_AIR_DRAG, DEFAULT_DAMPING};
+use crate::model::{ModelKind, StrandModel, DEFAULT_AIR_DRAG, DEFAULT_DAMPING, DEFAULT_QUADRATURE_POINTS};
 use crate::state::RootFrame;
 use nalgebra::Vector3;
 use serde::Deserialize;
@@ -80,7 +80,7 @@ pub struct StrandSpec {
     pub air_drag: Option<f64>,
     /// Internal damping relaxation time, s (default 0.02).
     pub damping: Option<f64>,
-    /// Gauss points per segment (default 3).
+    /// Gauss points per segment (default 2).
     pub quadrature_points: Option<usize>,
 }
 
@@ -127,7 +127,7 @@ impl StrandSpec {
         }
         model.air_drag = self.air_drag.unwrap_or(DEFAULT_AIR_DRAG);
         model.damping = self.damping.unwrap_or(DEFAULT_DAMPING);
-        model.quadrature_points = self.quadrature_points.unwrap_or(3);
+        model.quadrature_points = self.quadrature_points.unwrap_or(DEFAULT_QUADRATURE_POINTS);
         model.validate()?;
         let root = RootFrame::new(
             Vector3::from(self.root_position),

@@ -34,6 +34,8 @@ pub mod kinematics;
 pub mod linalg;
 pub mod material;
 pub mod model;
+#[cfg(feature = "reference")]
+pub mod reference;
 pub mod section;
 pub mod spec;
 pub mod state;

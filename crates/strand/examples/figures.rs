@@ -1,12 +1,11 @@
 //! Prints the validation figures of docs/physics.md (errors against analytic and independent answers,
 //! against the number of segments). Run: `cargo run --release -p coiffure-strand --example figures`.
 
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::Vector3;
 use strand::analytic::{cantilever_frequency, cantilever_tip_deflection, elastica_cantilever_tip, greenhill_critical_length};
-use strand::dynamics::Dynamics;
 use strand::integrator::{Integrator, Strand};
 use strand::kinematics::segment_frames;
-use strand::statics::{solve_equilibrium, tip, StaticOptions};
+use strand::statics::{natural_frequencies, solve_equilibrium, tip, StaticOptions};
 use strand::{HairType, ModelKind, RootFrame, StrandModel, StrandState};
 
 fn h1(kind: ModelKind, length: f64, n: usize) -> StrandModel {
@@ -22,21 +21,6 @@ fn static_tip(m: &StrandModel, root: RootFrame) -> Vector3<f64> {
     let st = StrandState::at_rest(m, root);
     let eq = solve_equilibrium(m, &st, &[], &StaticOptions::default()).unwrap();
     tip(m, &st, &eq.q) - st.root.position
-}
-
-fn frequencies(m: &StrandModel) -> Vec<f64> {
-    let st = StrandState::at_rest(m, horizontal());
-    let mut dy = Dynamics::new(m);
-    dy.evaluate(m, &st, &[], true);
-    let d = m.dofs_per_segment();
-    let idx: Vec<usize> = (0..m.segments).map(|i| i * d + 1).collect();
-    let mass = DMatrix::from_fn(idx.len(), idx.len(), |a, b| dy.mass[(idx[a], idx[b])]);
-    let k = m.stiffness();
-    let linv = mass.cholesky().unwrap().l().try_inverse().unwrap();
-    let kk = DMatrix::from_fn(idx.len(), idx.len(), |a, b| if a == b { k[idx[a]] } else { 0.0 });
-    let mut w: Vec<f64> = (&linv * kk * linv.transpose()).symmetric_eigen().eigenvalues.iter().map(|x| x.sqrt()).collect();
-    w.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    w
 }
 
 /// Smallest length at which the upright straight strand is unstable (bisection on the Hessian's definiteness).
@@ -68,8 +52,9 @@ fn main() {
         let (xs, zs) = elastica_cantilever_tip(ei, q, m.length, 20000);
         let t = static_tip(&m, horizontal());
         let large = ((t.x - xs).powi(2) + (t.z - zs).powi(2)).sqrt() / m.length;
-        let m = h1(ModelKind::Reduced, 0.05, n);
-        let w = frequencies(&m);
+        let mut m = h1(ModelKind::Reduced, 0.05, n);
+        m.gravity = Vector3::zeros();
+        let w = natural_frequencies(&m, &StrandState::at_rest(&m, horizontal())).unwrap();
         let e1 = (w[0] / cantilever_frequency(0, ei, m.linear_density(), m.length) - 1.0).abs();
         let e2 = if w.len() > 1 { (w[1] / cantilever_frequency(1, ei, m.linear_density(), m.length) - 1.0).abs() } else { f64::NAN };
         let lc = (model_critical_length(n) / greenhill_critical_length(ei, q) - 1.0).abs();

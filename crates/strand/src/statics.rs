@@ -175,6 +175,34 @@ pub fn sag_free_rest(model: &StrandModel, groomed: &StrandState, external: &[Poi
     Ok((sag_free, stable))
 }
 
+/// Natural angular frequencies (rad/s, ascending) of small oscillations about the state `at` (which should be an
+/// equilibrium): square roots of the generalized eigenvalues of `H v = w^2 M v`, with H the Hessian of the
+/// potential (gravity and elasticity) and M the mass matrix. Modes of an unstable equilibrium (negative
+/// eigenvalues) are returned as negative numbers `-sqrt(|lambda|)`.
+pub fn natural_frequencies(model: &StrandModel, at: &StrandState) -> Result<Vec<f64>> {
+    model.validate()?;
+    let mut state = at.clone();
+    state.qdot.fill(0.0);
+    let mut dynamics = Dynamics::new(model);
+    dynamics.evaluate(model, &state, &[], true);
+    let l_inv = dynamics
+        .mass
+        .clone()
+        .cholesky()
+        .ok_or(StrandError::NotPositiveDefinite { what: "mass matrix" })?
+        .l()
+        .try_inverse()
+        .ok_or(StrandError::NotPositiveDefinite { what: "mass matrix" })?;
+    let q = state.q.clone();
+    let mut pot = Potential { model, state, external: &[], dynamics };
+    let h = pot.hessian(&q);
+    let a = &l_inv * h * l_inv.transpose();
+    let a = (&a + a.transpose()) * 0.5;
+    let mut w: Vec<f64> = a.symmetric_eigen().eigenvalues.iter().map(|&x| x.signum() * x.abs().sqrt()).collect();
+    w.sort_by(|a, b| a.total_cmp(b));
+    Ok(w)
+}
+
 /// Tip position (m) of `model` at coordinates `q` with the root of `state`.
 pub fn tip(model: &StrandModel, state: &StrandState, q: &DVector<f64>) -> Vector3<f64> {
     let mut s = state.clone();

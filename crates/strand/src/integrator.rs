@@ -74,6 +74,16 @@ impl Strand {
     /// constant over the step). The root moves with its own velocity and acceleration. On failure the state
     /// is left unchanged and the error says why.
     pub fn step(&mut self, h: f64, external: &[PointForce]) -> Result<()> {
+        self.check_step_input(h, external)?;
+        let qdot_new = match self.integrator {
+            Integrator::LinearlyImplicitEuler => self.linearly_implicit_velocity(h, external)?,
+            Integrator::ImplicitMidpoint => self.midpoint_velocity(h, external)?,
+        };
+        self.commit_step(h, qdot_new)
+    }
+
+    /// Checks the time step and point forces of a step.
+    pub(crate) fn check_step_input(&self, h: f64, external: &[PointForce]) -> Result<()> {
         if !(h.is_finite() && h > 0.0) {
             return Err(StrandError::InvalidParameter { field: "dt", reason: format!("must be a finite positive time step, got {h}") });
         }
@@ -82,10 +92,12 @@ impl Strand {
                 return Err(StrandError::InvalidParameter { field: "point force", reason: format!("must be finite, got {pf:?}") });
             }
         }
-        let qdot_new = match self.integrator {
-            Integrator::LinearlyImplicitEuler => self.linearly_implicit_velocity(h, external)?,
-            Integrator::ImplicitMidpoint => self.midpoint_velocity(h, external)?,
-        };
+        Ok(())
+    }
+
+    /// Applies the new velocities: positions by the integrator's rule, root motion, time. Rejects (and keeps the
+    /// old state) if anything is non-finite.
+    pub(crate) fn commit_step(&mut self, h: f64, qdot_new: DVector<f64>) -> Result<()> {
         let q_new = match self.integrator {
             Integrator::LinearlyImplicitEuler => &self.state.q + &qdot_new * h,
             Integrator::ImplicitMidpoint => &self.state.q + (&self.state.qdot + &qdot_new) * (0.5 * h),
@@ -98,6 +110,11 @@ impl Strand {
         self.state.root.advance(h);
         self.state.time += h;
         Ok(())
+    }
+
+    /// The Cholesky factor of the last step's matrix (lower triangle).
+    pub(crate) fn system_factor(&self) -> &DMatrix<f64> {
+        &self.system
     }
 
     /// Builds the step's matrix `M (1 + a c) + (a tau + b) K` (with `c = nu / rho A`) into the workspace and
@@ -118,7 +135,7 @@ impl Strand {
         }
     }
 
-    fn linearly_implicit_velocity(&mut self, h: f64, external: &[PointForce]) -> Result<DVector<f64>> {
+    pub(crate) fn linearly_implicit_velocity(&mut self, h: f64, external: &[PointForce]) -> Result<DVector<f64>> {
         self.dynamics.evaluate(&self.model, &self.state, external, true);
         // rhs = (M + h D) qdot + h F with D = c M + tau K.
         let c = self.model.air_drag / self.model.linear_density();

@@ -25,6 +25,7 @@
 //! ```
 
 pub mod analytic;
+pub mod constraint;
 pub mod dynamics;
 pub mod error;
 pub mod hair_type;

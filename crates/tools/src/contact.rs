@@ -2,9 +2,8 @@
 //!
 //! Over one step the tool moves from `previous` to `current` pose. Each capsule's motion is cut into
 //! sub-steps no longer than half the smallest tool radius; the first sub-pose (from the start of the step) at
-//! which a strand piece comes
-//! within `capsule radius + hair radius` fixes the contact normal (the side the strand was approached
-//! from), and the depth is measured along that normal at the current pose. A strand that a thin tooth would
+//! which a strand piece comes within `capsule radius + hair radius` fixes the contact normal (the side the
+//! strand was approached from), and the depth is measured along that normal at the current pose. A strand that a thin tooth would
 //! have crossed within one step is therefore still reported, with a depth larger than the contact distance,
 //! and the response pushes it back to the side it came from.
 

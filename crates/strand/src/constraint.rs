@@ -1,0 +1,223 @@
+//! Point constraints solved inside the linearly implicit step: unilateral contacts with Coulomb friction
+//! (a tool's surface touching the strand) and bilateral pins (a clip holding a point of the strand).
+//!
+//! The step solves `A qdot+ = b + J^T p` with `A = M + hD + h^2 K` (already factorized), `J` the Jacobians
+//! of the constrained points and `p` their impulses (N s, over the step). With `Y = A^-1 J^T` the point
+//! velocities after the step are `u = u_free + W p`, `W = J Y` (the Delassus operator). Impulses come from
+//! projected Gauss-Seidel sweeps: for a contact the normal impulse is >= 0 and brings the normal velocity to
+//! `stabilization * depth / h` (or more), the tangential impulse is clamped to the Coulomb cone
+//! `|p_t| <= mu p_n`; a pin's impulse brings the point to its target velocity plus
+//! `stabilization * error / h`, and after the step the positions are projected back onto the pins
+//! (post-stabilization), so a pinned point does not drift. The force on the strand is `p / h`; the obstacle
+//! receives `-p / h`.
+
+use crate::error::{Result, StrandError};
+use crate::integrator::{Integrator, Strand};
+use crate::kinematics::{frame_at, jacobian, segment_frames};
+use crate::linalg::cholesky_solve_in_place;
+use nalgebra::{DVector, Matrix3, Matrix3xX, Vector3};
+
+/// What a point constraint does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ConstraintKind {
+    /// Unilateral contact along `normal` (from the obstacle to the strand) with Coulomb friction coefficient
+    /// `friction` (dimensionless, >= 0).
+    Contact {
+        /// Unit normal from the obstacle towards the strand.
+        normal: Vector3<f64>,
+        /// Penetration depth along the normal, m (>= 0).
+        depth: f64,
+        /// Coulomb friction coefficient.
+        friction: f64,
+    },
+    /// The strand point at `s` is held at `target` (m, world), moving with the constraint's velocity.
+    Pin {
+        /// Where the point must be, m.
+        target: Vector3<f64>,
+    },
+}
+
+/// A constraint on the centreline point at arc length `s`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointConstraint {
+    /// Arc length from the root, m.
+    pub s: f64,
+    /// Contact or pin.
+    pub kind: ConstraintKind,
+    /// Velocity of the obstacle's surface (contact) or of the pin (m/s).
+    pub velocity: Vector3<f64>,
+}
+
+/// Options of the constraint solver.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConstraintOptions {
+    /// Fraction of the position error (penetration, pin offset) corrected per step (0..1). Default 0.5.
+    pub stabilization: f64,
+    /// Projected Gauss-Seidel sweeps. Default 30.
+    pub iterations: usize,
+}
+
+impl Default for ConstraintOptions {
+    fn default() -> Self {
+        Self { stabilization: 0.5, iterations: 30 }
+    }
+}
+
+impl PointConstraint {
+    fn validate(&self) -> Result<()> {
+        let bad = |what: &str| Err(StrandError::InvalidParameter { field: "constraint", reason: format!("{what} in {self:?}") });
+        if !self.s.is_finite() || !self.velocity.iter().all(|x| x.is_finite()) {
+            return bad("non-finite arc length or velocity");
+        }
+        match self.kind {
+            ConstraintKind::Contact { normal, depth, friction } => {
+                if !normal.iter().all(|x| x.is_finite()) || (normal.norm() - 1.0).abs() > 1e-6 {
+                    return bad("contact normal must be a unit vector");
+                }
+                if !(depth.is_finite() && depth >= 0.0) || !(friction.is_finite() && friction >= 0.0) {
+                    return bad("depth and friction must be finite and >= 0");
+                }
+            }
+            ConstraintKind::Pin { target } => {
+                if !target.iter().all(|x| x.is_finite()) {
+                    return bad("non-finite pin target");
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Two unit vectors orthogonal to `n` and to each other.
+fn tangents(n: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let helper = if n.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    let t1 = n.cross(&helper).normalize();
+    (t1, n.cross(&t1))
+}
+
+impl Strand {
+    /// One linearly implicit Euler step of `h` seconds with point forces `external` and point `constraints`.
+    /// Returns the impulse (N s) each constraint gave the strand over the step (the force is impulse / h; the
+    /// obstacle receives the opposite). On failure the state is left unchanged.
+    pub fn step_constrained(
+        &mut self,
+        h: f64,
+        external: &[crate::dynamics::PointForce],
+        constraints: &[PointConstraint],
+        opts: &ConstraintOptions,
+    ) -> Result<Vec<Vector3<f64>>> {
+        if constraints.is_empty() {
+            return self.step(h, external).map(|_| vec![]);
+        }
+        if self.integrator != Integrator::LinearlyImplicitEuler {
+            return Err(StrandError::InvalidParameter { field: "integrator", reason: "constraints need the linearly implicit Euler integrator".into() });
+        }
+        for c in constraints {
+            c.validate()?;
+        }
+        self.check_step_input(h, external)?;
+        let mut v = self.linearly_implicit_velocity(h, external)?;
+        // Jacobians, free velocities (including the root's motion) and Y = A^-1 J^T per constraint.
+        let frames = segment_frames(&self.model, &self.state);
+        let root = &self.state.root;
+        let mut jac: Vec<Matrix3xX<f64>> = Vec::with_capacity(constraints.len());
+        let mut y: Vec<Matrix3xX<f64>> = Vec::with_capacity(constraints.len());
+        let mut bias: Vec<Vector3<f64>> = Vec::with_capacity(constraints.len());
+        let mut position: Vec<Vector3<f64>> = Vec::with_capacity(constraints.len());
+        for c in constraints {
+            let j = jacobian(&self.model, &self.state, c.s);
+            let x = frame_at(&self.model, &self.state.q, &frames, c.s).position;
+            bias.push(root.velocity + root.angular_velocity.cross(&(x - root.position)));
+            position.push(x);
+            let mut yc = Matrix3xX::zeros(self.model.dofs());
+            for k in 0..3 {
+                let mut col: DVector<f64> = j.row(k).transpose();
+                cholesky_solve_in_place(self.system_factor(), &mut col);
+                yc.set_row(k, &col.transpose());
+            }
+            jac.push(j);
+            y.push(yc);
+        }
+        let n = constraints.len();
+        // Delassus blocks W[c][d] = J_c Y_d^T (3 x 3).
+        let w: Vec<Vec<Matrix3<f64>>> = (0..n).map(|c| (0..n).map(|d| &jac[c] * y[d].transpose()).collect()).collect();
+        let u_free: Vec<Vector3<f64>> = (0..n).map(|c| &jac[c] * &v + bias[c]).collect();
+        let mut p = vec![Vector3::zeros(); n];
+        let beta = opts.stabilization / h;
+        for _ in 0..opts.iterations.max(1) {
+            for c in 0..n {
+                let mut u = u_free[c];
+                for d in 0..n {
+                    u += w[c][d] * p[d];
+                }
+                let rel = u - constraints[c].velocity;
+                match constraints[c].kind {
+                    ConstraintKind::Pin { target } => {
+                        let want = (target - position[c]) * beta;
+                        let dp = w[c][c].try_inverse().unwrap_or_else(Matrix3::zeros) * (want - rel);
+                        p[c] += dp;
+                    }
+                    ConstraintKind::Contact { normal, depth, friction } => {
+                        let (t1, t2) = tangents(&normal);
+                        let wnn = normal.dot(&(w[c][c] * normal)).max(1e-300);
+                        let want_n = beta * depth;
+                        let mut pn = (p[c].dot(&normal) + (want_n - rel.dot(&normal)) / wnn).max(0.0);
+                        // Tangential: aim for zero slip, then clamp to the cone.
+                        let wt = Matrix3::from_columns(&[t1, t2, normal]).transpose() * w[c][c] * Matrix3::from_columns(&[t1, t2, normal]);
+                        let wt2 = nalgebra::Matrix2::new(wt[(0, 0)], wt[(0, 1)], wt[(1, 0)], wt[(1, 1)]);
+                        let rt = nalgebra::Vector2::new(rel.dot(&t1), rel.dot(&t2));
+                        let pt_old = nalgebra::Vector2::new(p[c].dot(&t1), p[c].dot(&t2));
+                        let mut pt = pt_old - wt2.try_inverse().unwrap_or_else(nalgebra::Matrix2::zeros) * rt;
+                        let limit = friction * pn;
+                        if pt.norm() > limit {
+                            pt *= limit / pt.norm();
+                        }
+                        if !pn.is_finite() {
+                            pn = 0.0;
+                        }
+                        p[c] = normal * pn + t1 * pt.x + t2 * pt.y;
+                    }
+                }
+            }
+        }
+        for c in 0..n {
+            v += y[c].transpose() * p[c];
+        }
+        let saved = self.state.clone();
+        self.commit_step(h, v)?;
+        // Post-stabilization of pins (Cline and Pai 2003): project the positions back onto the pins with the
+        // same metric, dq = A^-1 J^T lambda with W lambda = error; two Gauss-Seidel passes per projection.
+        let pins: Vec<usize> = (0..n).filter(|&c| matches!(constraints[c].kind, ConstraintKind::Pin { .. })).collect();
+        for _ in 0..2 {
+            if pins.is_empty() {
+                break;
+            }
+            let frames = segment_frames(&self.model, &self.state);
+            let mut lambda = vec![Vector3::zeros(); n];
+            let error: Vec<Vector3<f64>> = pins
+                .iter()
+                .map(|&c| match constraints[c].kind {
+                    ConstraintKind::Pin { target } => target - frame_at(&self.model, &self.state.q, &frames, constraints[c].s).position,
+                    ConstraintKind::Contact { .. } => Vector3::zeros(),
+                })
+                .collect();
+            for _ in 0..opts.iterations.max(1) {
+                for (k, &c) in pins.iter().enumerate() {
+                    let mut r = error[k];
+                    for &d in &pins {
+                        r -= w[c][d] * lambda[d];
+                    }
+                    lambda[c] += w[c][c].try_inverse().unwrap_or_else(Matrix3::zeros) * r;
+                }
+            }
+            for &c in &pins {
+                self.state.q += y[c].transpose() * lambda[c];
+            }
+        }
+        if !self.state.q.iter().all(|x| x.is_finite()) {
+            self.state = saved;
+            return Err(StrandError::NonFinite { what: "pin projection", time: self.state.time });
+        }
+        Ok(p)
+    }
+}

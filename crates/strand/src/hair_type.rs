@@ -154,6 +154,17 @@ impl HairType {
         Self::ALL.into_iter().find(|h| h.name.eq_ignore_ascii_case(name))
     }
 
+    /// Coulomb friction coefficient of the fibre against a tool (dimensionless). The single-fibre frictional
+    /// forces of Table 1 (0.64-0.79 cN) come from a test whose normal load the paper does not give, so they are
+    /// used as relative values: mu = 0.2 x (friction force / 0.7 cN), 0.2 being a typical dry hair-on-comb
+    /// coefficient (Robbins 2002 reports 0.1-0.3). Types without a measurement get 0.2.
+    pub fn friction_coefficient(&self) -> f64 {
+        match self.friction_force {
+            Some(f) => 0.2 * f / 0.7e-2,
+            None => 0.2,
+        }
+    }
+
     /// The fibre's elliptical cross-section.
     pub fn section(&self) -> Result<CrossSection> {
         CrossSection::from_diameter(self.major_diameter, self.ellipticity)

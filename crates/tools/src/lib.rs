@@ -8,4 +8,5 @@
 pub mod bvh;
 pub mod contact;
 pub mod geometry;
+pub mod interaction;
 pub mod shape;

@@ -144,8 +144,13 @@ impl Strand {
         let u_free: Vec<Vector3<f64>> = (0..n).map(|c| &jac[c] * &v + bias[c]).collect();
         let mut p = vec![Vector3::zeros(); n];
         let beta = opts.stabilization / h;
+        // A point that (almost) cannot move, such as the clamped root, is left out: its constraint could only
+        // produce an unbounded impulse.
+        let mobility = |c: usize| w[c][c].trace();
+        let max_mobility = (0..n).map(mobility).fold(0.0, f64::max);
+        let active: Vec<bool> = (0..n).map(|c| mobility(c).is_finite() && mobility(c) > 1e-9 * max_mobility).collect();
         for _ in 0..opts.iterations.max(1) {
-            for c in 0..n {
+            for c in (0..n).filter(|&c| active[c]) {
                 let mut u = u_free[c];
                 for d in 0..n {
                     u += w[c][d] * p[d];
@@ -178,6 +183,9 @@ impl Strand {
                         p[c] = normal * pn + t1 * pt.x + t2 * pt.y;
                     }
                 }
+                if !p[c].iter().all(|x| x.is_finite()) {
+                    p[c] = Vector3::zeros();
+                }
             }
         }
         for c in 0..n {
@@ -202,7 +210,7 @@ impl Strand {
                 })
                 .collect();
             for _ in 0..opts.iterations.max(1) {
-                for (k, &c) in pins.iter().enumerate() {
+                for (k, &c) in pins.iter().enumerate().filter(|(_, &c)| active[c]) {
                     let mut r = error[k];
                     for &d in &pins {
                         r -= w[c][d] * lambda[d];

@@ -15,6 +15,9 @@ use crate::model::StrandModel;
 use crate::state::{RootFrame, StrandState};
 use nalgebra::{DMatrix, DVector, Rotation3};
 
+/// Largest rotation (rad) any segment's coordinates may add in one step: `|qdot_j| h l`.
+pub const MAX_STEP_ROTATION: f64 = 0.5;
+
 /// Time-stepping scheme.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Integrator {
@@ -47,6 +50,8 @@ pub struct Strand {
     pub integrator: Integrator,
     /// Workspace and results of the last evaluation.
     pub dynamics: Dynamics,
+    /// Number of steps whose velocities were scaled down by the safety net (see [`MAX_STEP_ROTATION`]).
+    pub clamped_steps: u64,
     /// Workspace: the step's system matrix, factorized in place.
     system: DMatrix<f64>,
     /// Workspace: right-hand side, then solution, of the step's linear system.
@@ -61,7 +66,7 @@ impl Strand {
         let state = StrandState::at_rest(&model, root);
         let dynamics = Dynamics::new(&model);
         let n = model.dofs();
-        Ok(Self { model, state, integrator: Integrator::default(), dynamics, system: DMatrix::zeros(n, n), rhs: DVector::zeros(n) })
+        Ok(Self { model, state, integrator: Integrator::default(), dynamics, clamped_steps: 0, system: DMatrix::zeros(n, n), rhs: DVector::zeros(n) })
     }
 
     /// Total energy (kinetic + gravity + elastic) at the current state, J.
@@ -97,7 +102,15 @@ impl Strand {
 
     /// Applies the new velocities: positions by the integrator's rule, root motion, time. Rejects (and keeps the
     /// old state) if anything is non-finite.
-    pub(crate) fn commit_step(&mut self, h: f64, qdot_new: DVector<f64>) -> Result<()> {
+    pub(crate) fn commit_step(&mut self, h: f64, mut qdot_new: DVector<f64>) -> Result<()> {
+        // Safety net: a segment may turn by at most MAX_STEP_ROTATION per step. Beyond that the linearized step
+        // is meaningless (it happens when a contact drives the nearly massless twist of the reduced model); the
+        // velocities are scaled down and the event counted in `clamped_steps`.
+        let turn = qdot_new.amax() * h * self.model.segment_length();
+        if turn > MAX_STEP_ROTATION {
+            qdot_new *= MAX_STEP_ROTATION / turn;
+            self.clamped_steps += 1;
+        }
         let q_new = match self.integrator {
             Integrator::LinearlyImplicitEuler => &self.state.q + &qdot_new * h,
             Integrator::ImplicitMidpoint => &self.state.q + (&self.state.qdot + &qdot_new) * (0.5 * h),

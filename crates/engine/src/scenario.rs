@@ -77,6 +77,8 @@ pub struct PatchSpec {
     /// Real hairs each simulated strand stands for: forces are multiplied by it (default 1).
     #[serde(default = "default_represents")]
     pub represents: f64,
+    /// Or: mass of the real tress, kg; sets `represents` to tress_mass / (strands x strand mass).
+    pub tress_mass: Option<f64>,
 }
 
 fn default_hair() -> String {
@@ -168,6 +170,10 @@ pub struct Summary {
     pub steps: usize,
     /// Mass of the real tress represented, kg.
     pub tress_mass: f64,
+    /// Real hairs per simulated strand (the force scale).
+    pub represents: f64,
+    /// Steps in which some strand's velocities were scaled down by the safety net.
+    pub clamped_steps: u64,
 }
 
 /// Why a scenario could not run.
@@ -220,6 +226,14 @@ impl Scenario {
         }
         if !(p.represents.is_finite() && p.represents > 0.0) {
             return bad(format!("patch.represents must be > 0, got {}", p.represents));
+        }
+        if let Some(m) = p.tress_mass {
+            if !(m.is_finite() && m > 0.0) {
+                return bad(format!("patch.tress_mass must be > 0 kg, got {m}"));
+            }
+            if p.represents != 1.0 {
+                return bad("give patch.represents or patch.tress_mass, not both".into());
+            }
         }
         if !p.root.iter().chain(p.extent.iter()).all(|x| x.is_finite()) || p.extent.iter().any(|x| *x < 0.0) {
             return bad("patch.root and patch.extent must be finite (extent >= 0)".into());
@@ -276,11 +290,15 @@ impl Scenario {
             "paper" => ForceModel::Paper { gain: self.tool.gain },
             _ => ForceModel::Constraint { friction: self.tool.friction.unwrap_or(hair.friction_coefficient()), options: ConstraintOptions::default() },
         };
-        let tress_mass = strands.iter().map(|s| s.model.mass()).sum::<f64>() * self.patch.represents;
+        let simulated_mass = strands.iter().map(|s| s.model.mass()).sum::<f64>();
+        let k = match self.patch.tress_mass {
+            Some(m) => m / simulated_mass,
+            None => self.patch.represents,
+        };
+        let tress_mass = simulated_mass * k;
         let mut it = LocalInteraction::new(strands, shape, path.pose(0.0), model);
         let duration = self.duration.unwrap_or(path.end_time() + 0.05);
         let steps = (duration / self.dt).round() as usize;
-        let k = self.patch.represents;
         let mut rows = Vec::with_capacity(steps);
         let (mut peak, mut sum, mut work, mut contact_steps) = (0.0f64, 0.0, 0.0, 0usize);
         let mut last = path.pose(0.0).position;
@@ -305,6 +323,8 @@ impl Scenario {
             contact_steps,
             steps,
             tress_mass,
+            represents: k,
+            clamped_steps: it.strands.iter().map(|s| s.clamped_steps).sum(),
         };
         Ok((rows, summary))
     }

@@ -1,6 +1,7 @@
 //! `coiffure`: the command line of the Coiffure hair simulator.
 
 mod demo;
+mod run_cmd;
 mod strand_cmd;
 
 use clap::{Parser, Subcommand};
@@ -20,6 +21,8 @@ enum Command {
     Demo(demo::DemoArgs),
     /// Simulate or solve the statics of one strand described by a TOML spec file.
     Strand(strand_cmd::StrandArgs),
+    /// Run a scripted tool session (scenario TOML) headless: force trace and summary.
+    Run(run_cmd::RunArgs),
 }
 
 fn main() -> ExitCode {
@@ -33,6 +36,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Demo(args) => demo::run(&args),
         Command::Strand(args) => strand_cmd::run(&args),
+        Command::Run(args) => run_cmd::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -128,3 +128,44 @@ fn demo_runs_and_writes_its_trace() {
     assert_eq!(rows.len(), 200);
     assert!(rows.iter().all(|r| r.iter().all(|x| x.is_finite())));
 }
+
+#[test]
+fn run_writes_a_force_trace_and_a_summary() {
+    // A short comb stroke through 4 strands; the scenario refers to a tool path CSV beside it.
+    let dir = scratch("run");
+    std::fs::write(dir.join("stroke.csv"), "t,x,y,z,rx,ry,rz\n0.0,0.0004,-0.04,0.29,1.5707963,0,0\n0.1,0.0004,-0.012,0.29,1.5707963,0,0\n0.15,0.0004,-0.012,0.27,1.5707963,0,0\n").unwrap();
+    let scenario = r#"
+        settle = 0.05
+        [patch]
+        hair_type = "GA1"
+        strands = 4
+        length = 0.05
+        segments = 6
+        [tool]
+        shape = "comb"
+        path_file = "stroke.csv"
+    "#;
+    std::fs::write(dir.join("short.toml"), scenario).unwrap();
+    let out = dir.join("result");
+    let run = |out: &std::path::Path| bin().arg("run").arg(dir.join("short.toml")).arg("--out").arg(out).output().unwrap();
+    let o = run(&out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = String::from_utf8(o.stdout).unwrap();
+    assert!(summary.contains("peak force") && summary.contains("work"), "{summary}");
+    let trace = std::fs::read_to_string(out.join("force.csv")).unwrap();
+    assert!(trace.starts_with("t,fx,fy,fz,"));
+    assert_eq!(trace.lines().count(), 1 + 200, "header + (0.15 s + 0.05 s) / 1 ms rows");
+    assert!(std::fs::read_to_string(out.join("summary.txt")).unwrap().contains("GA1"));
+    // Deterministic: the same trace twice.
+    let out2 = dir.join("again");
+    assert!(run(&out2).status.success());
+    assert_eq!(trace, std::fs::read_to_string(out2.join("force.csv")).unwrap());
+    // Bad inputs are named.
+    std::fs::write(dir.join("stroke.csv"), "t,x,y,z\n0.0,0,0,abc\n").unwrap();
+    let o = run(&dir.join("bad"));
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("line 2"), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::write(dir.join("short.toml"), scenario.replace("\"comb\"", "\"rake\"")).unwrap();
+    let o = run(&dir.join("bad"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("rake"));
+}

@@ -1,0 +1,9 @@
+//! # Coiffure haptics
+//!
+//! The device side of the haptic loop: a [`device::HapticDevice`] trait with backends, device profiles
+//! (force and force-rate limits), and the [`coupling::Coupling`] that turns a device pose into a tool proxy
+//! pose and the hair's reaction into a safe device force: virtual coupling, clamps, a time-domain passivity
+//! observer and controller, and rejection of NaN or teleporting input. SI units (m, s, N).
+
+pub mod coupling;
+pub mod device;

@@ -5,5 +5,7 @@
 //! pose and the hair's reaction into a safe device force: virtual coupling, clamps, a time-domain passivity
 //! observer and controller, and rejection of NaN or teleporting input. SI units (m, s, N).
 
+pub mod backends;
 pub mod coupling;
 pub mod device;
+pub mod udp;

@@ -8,4 +8,5 @@
 pub mod backends;
 pub mod coupling;
 pub mod device;
+pub mod haptic_loop;
 pub mod udp;

@@ -1,0 +1,44 @@
+//! Benchmark of the haptic loop: a comb drawn at 0.2 m/s through N hanging strands of 16 segments (full
+//! model, constraint contacts), 1 kHz, one haptic thread. Prints step-time mean, p99, p99.9, max and deadline
+//! misses. Run: `cargo run --release -p coiffure-engine --example haptic_loop_bench [-- N...]` (default 16 32 64).
+
+use engine::local_session::run_local_session;
+use haptics::backends::ScriptedDevice;
+use haptics::device::{DeviceProfile, DeviceReading};
+use nalgebra::{Matrix3, Vector3};
+use strand::{HairType, ModelKind, RootFrame, Strand, StrandModel};
+use tools::contact::ToolPose;
+use tools::interaction::{ForceModel, LocalInteraction};
+use tools::shape::ToolShape;
+
+fn main() {
+    let counts: Vec<usize> = std::env::args().skip(1).filter_map(|a| a.parse().ok()).collect();
+    let counts = if counts.is_empty() { vec![16, 32, 64] } else { counts };
+    println!("| strands x 16 segments | steps | step mean | p99 | p99.9 | max | misses | contact steps |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for n in counts {
+        let h = HairType::H1;
+        let m = StrandModel::new(ModelKind::Full, 0.15, 16, h.section().unwrap(), h.material().unwrap()).unwrap();
+        let strands: Vec<Strand> = (0..n)
+            .map(|i| {
+                let x = -0.03 + 0.06 * (i as f64 + 0.5) / n as f64;
+                Strand::new(m.clone(), RootFrame::new(Vector3::new(x, 0.0, 0.3), -Vector3::z(), Vector3::x()).unwrap()).unwrap()
+            })
+            .collect();
+        let pose = ToolPose { position: Vector3::new(0.0004, -0.02, 0.22), rotation: Matrix3::identity() };
+        let it = LocalInteraction::new(strands, ToolShape::builtin("comb").unwrap(), pose, ForceModel::Constraint { friction: h.friction_coefficient(), options: Default::default() });
+        let script = |t: f64| Some(DeviceReading { time: t, position: Vector3::new(0.0004, -0.02 + 0.2 * t, 0.22), rotation: Matrix3::identity(), buttons: 0 });
+        let steps = 2000;
+        let (s, _, c) = run_local_session(1000.0, ScriptedDevice::new(script), DeviceProfile::PHANTOM_DESKTOP, it, steps).unwrap();
+        println!(
+            "| {n} | {} | {:.0} us | {:.0} us | {:.0} us | {:.0} us | {} | {} |",
+            s.steps,
+            s.step_mean * 1e6,
+            s.step_p99 * 1e6,
+            s.step_p999 * 1e6,
+            s.step_max * 1e6,
+            s.misses,
+            c.contact_steps.load(std::sync::atomic::Ordering::Relaxed)
+        );
+    }
+}

@@ -88,6 +88,13 @@ impl PointConstraint {
     }
 }
 
+/// Pseudo-inverse of a 3 x 3 Delassus block: directions in which the point cannot move (e.g. along the
+/// tangent of a taut, inextensible strand) get no impulse instead of an unbounded one.
+fn pinv3(w: &Matrix3<f64>) -> Matrix3<f64> {
+    let tol = 1e-9 * w.norm();
+    w.pseudo_inverse(tol).unwrap_or_else(|_| Matrix3::zeros())
+}
+
 /// Two unit vectors orthogonal to `n` and to each other.
 fn tangents(n: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
     let helper = if n.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
@@ -159,7 +166,7 @@ impl Strand {
                 match constraints[c].kind {
                     ConstraintKind::Pin { target } => {
                         let want = (target - position[c]) * beta;
-                        let dp = w[c][c].try_inverse().unwrap_or_else(Matrix3::zeros) * (want - rel);
+                        let dp = pinv3(&w[c][c]) * (want - rel);
                         p[c] += dp;
                     }
                     ConstraintKind::Contact { normal, depth, friction } => {
@@ -215,7 +222,7 @@ impl Strand {
                     for &d in &pins {
                         r -= w[c][d] * lambda[d];
                     }
-                    lambda[c] += w[c][c].try_inverse().unwrap_or_else(Matrix3::zeros) * r;
+                    lambda[c] += pinv3(&w[c][c]) * r;
                 }
             }
             for &c in &pins {

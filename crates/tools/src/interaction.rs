@@ -6,6 +6,8 @@
 //! 3. respond with the chosen [`ForceModel`]: the paper's velocity-proportional force as explicit point
 //!    forces, or constraints (non-penetration and Coulomb friction) solved inside each strand's implicit step;
 //! 4. the tool receives the exact opposite of what the strands received: force and torque about its origin.
+//!
+//! A clip ([`LocalInteraction::clip`]) pins strand points to the tool: they follow it (constraint model only).
 
 use crate::bvh::{Bvh, Piece};
 use crate::contact::{detect, Contact, DetectReport, ToolPose};
@@ -59,6 +61,8 @@ pub struct LocalInteraction {
     pub pose: ToolPose,
     /// Contact response.
     pub model: ForceModel,
+    /// Strand points held by the tool (a clip): (strand, arc length in m, offset in the tool frame in m).
+    pub pins: Vec<(usize, f64, Vector3<f64>)>,
     pieces: Vec<Piece>,
     bvh: Bvh,
 }
@@ -69,7 +73,33 @@ impl LocalInteraction {
         let pieces = Self::sample(&strands);
         let margin = Self::hair_radius(&strands);
         let bvh = Bvh::build(&pieces, margin);
-        Self { strands, shape, pose, model, pieces, bvh }
+        Self { strands, shape, pose, model, pins: Vec::new(), pieces, bvh }
+    }
+
+    /// Closes a clip: pins the strand point nearest to the tool origin, if one is within `reach` (m); it then
+    /// moves with the tool (the paper's "interactively define a fixed strand's position"). Returns the pinned
+    /// (strand, arc length) or None.
+    pub fn clip(&mut self, reach: f64) -> Option<(usize, f64)> {
+        let origin = self.pose.position;
+        let mut best: Option<(f64, usize, f64, Vector3<f64>)> = None;
+        for p in Self::sample(&self.strands) {
+            let ab = p.b - p.a;
+            let t = ((origin - p.a).dot(&ab) / ab.norm_squared().max(1e-300)).clamp(0.0, 1.0);
+            let x = p.a + ab * t;
+            let d = (x - origin).norm();
+            if d <= reach && best.map_or(true, |b| d < b.0) {
+                best = Some((d, p.strand, p.s + t * p.length, x));
+            }
+        }
+        let (_, k, s, x) = best?;
+        let offset = self.pose.rotation.transpose() * (x - self.pose.position);
+        self.pins.push((k, s, offset));
+        Some((k, s))
+    }
+
+    /// Opens the clip: releases every pinned point.
+    pub fn release(&mut self) {
+        self.pins.clear();
     }
 
     /// Largest semi-major axis of the strands, m (the contact distance added to the tool's radius).
@@ -99,7 +129,9 @@ impl LocalInteraction {
         let mut result = StepResult { report, ..Default::default() };
         let mut first_error = None;
         for (k, strand) in self.strands.iter_mut().enumerate() {
-            let mine: Vec<&Contact> = contacts.iter().filter(|c| c.strand == k).collect();
+            // A clip's jaws hold the strands it pins rather than pushing them.
+            let held = self.shape.kind == crate::shape::ToolKind::Clip && self.pins.iter().any(|p| p.0 == k);
+            let mine: Vec<&Contact> = contacts.iter().filter(|c| c.strand == k && !held).collect();
             let forces: Vec<(Vector3<f64>, Vector3<f64>)> = match self.model {
                 ForceModel::Paper { gain } => {
                     let w = strand.model.material.density * strand.model.gravity.norm();
@@ -121,7 +153,7 @@ impl LocalInteraction {
                     applied.iter().zip(&mine).map(|(f, c)| (f.force, c.lever)).collect()
                 }
                 ForceModel::Constraint { friction, options } => {
-                    let cons: Vec<PointConstraint> = mine
+                    let mut cons: Vec<PointConstraint> = mine
                         .iter()
                         .map(|c| PointConstraint {
                             s: c.s,
@@ -129,8 +161,15 @@ impl LocalInteraction {
                             velocity: c.tool_velocity,
                         })
                         .collect();
+                    let mut levers: Vec<Vector3<f64>> = mine.iter().map(|c| c.lever).collect();
+                    for &(_, s, offset) in self.pins.iter().filter(|p| p.0 == k) {
+                        let target = pose.position + pose.rotation * offset;
+                        let before = self.pose.position + self.pose.rotation * offset;
+                        cons.push(PointConstraint { s, kind: ConstraintKind::Pin { target }, velocity: (target - before) / dt });
+                        levers.push(target - pose.position);
+                    }
                     match strand.step_constrained(dt, &[], &cons, &options) {
-                        Ok(p) => p.iter().zip(&mine).map(|(p, c)| (p / dt, c.lever)).collect(),
+                        Ok(p) => p.iter().zip(&levers).map(|(p, l)| (p / dt, *l)).collect(),
                         Err(e) => {
                             first_error.get_or_insert(e);
                             vec![]
@@ -235,5 +274,31 @@ mod tests {
             }
         }
         assert!(touching > 10, "strands never lay against the teeth ({touching})");
+    }
+
+    #[test]
+    fn a_clip_holds_a_strand_point_and_carries_it() {
+        // Close the clip on a hanging strand, then move the tool 2 cm sideways in 0.2 s: the clipped point
+        // follows the tool within 1e-6 m at every step, and the tool feels the strand's pull.
+        let mut strands = patch(1);
+        strands.truncate(1);
+        let x0 = strands[0].state.root.position.x;
+        let pose = |y: f64| ToolPose { position: Vector3::new(x0, y, 0.25), rotation: Matrix3::identity() };
+        let mut it = LocalInteraction::new(strands, ToolShape::builtin("clip").unwrap(), pose(0.0), ForceModel::Constraint { friction: 0.2, options: ConstraintOptions::default() });
+        let (k, s) = it.clip(0.002).expect("a strand within reach");
+        assert_eq!(k, 0);
+        assert!((s - 0.05).abs() < 1e-6, "clipped at s = {s}");
+        let mut felt = 0.0f64;
+        for n in 1..=200 {
+            let y = 0.02 * n as f64 / 200.0;
+            let r = it.step(1e-3, pose(y)).unwrap();
+            felt = felt.max(r.force.norm());
+            let st = &it.strands[0];
+            let p = frame_at(&st.model, &st.state.q, &segment_frames(&st.model, &st.state), s).position;
+            assert!((p - pose(y).position).norm() < 1e-6, "step {n}: {}", (p - pose(y).position).norm());
+        }
+        assert!(felt > 0.0);
+        it.release();
+        assert!(it.pins.is_empty());
     }
 }

@@ -89,9 +89,10 @@ impl PointConstraint {
 }
 
 /// Pseudo-inverse of a 3 x 3 Delassus block: directions in which the point cannot move (e.g. along the
-/// tangent of a taut, inextensible strand) get no impulse instead of an unbounded one.
+/// tangent of a taut, inextensible strand: relative mobility below 1e-4) get no impulse instead of an
+/// unbounded one.
 fn pinv3(w: &Matrix3<f64>) -> Matrix3<f64> {
-    let tol = 1e-9 * w.norm();
+    let tol = 1e-4 * w.norm();
     w.pseudo_inverse(tol).unwrap_or_else(|_| Matrix3::zeros())
 }
 

@@ -278,19 +278,21 @@ mod tests {
 
     #[test]
     fn a_clip_holds_a_strand_point_and_carries_it() {
-        // Close the clip on a hanging strand, then move the tool 2 cm sideways in 0.2 s: the clipped point
-        // follows the tool within 1e-6 m at every step, and the tool feels the strand's pull.
+        // Close the clip on a hanging strand 5 cm below its root, then swing the tool along an arc of 4.5 cm
+        // radius centred 5 mm below the root (0.4 rad in 0.2 s; every point of it is closer to the root than the
+        // 5 cm of strand, so the inextensible strand can follow): the clipped point follows the tool within
+        // 1e-6 m at every step, and the tool feels the strand's pull.
         let mut strands = patch(1);
         strands.truncate(1);
         let x0 = strands[0].state.root.position.x;
-        let pose = |y: f64| ToolPose { position: Vector3::new(x0, y, 0.25), rotation: Matrix3::identity() };
+        let pose = |phi: f64| ToolPose { position: Vector3::new(x0, 0.045 * phi.sin(), 0.295 - 0.045 * phi.cos()), rotation: Matrix3::identity() };
         let mut it = LocalInteraction::new(strands, ToolShape::builtin("clip").unwrap(), pose(0.0), ForceModel::Constraint { friction: 0.2, options: ConstraintOptions::default() });
         let (k, s) = it.clip(0.002).expect("a strand within reach");
         assert_eq!(k, 0);
         assert!((s - 0.05).abs() < 1e-6, "clipped at s = {s}");
         let mut felt = 0.0f64;
         for n in 1..=200 {
-            let y = 0.02 * n as f64 / 200.0;
+            let y = 0.4 * n as f64 / 200.0;
             let r = it.step(1e-3, pose(y)).unwrap();
             felt = felt.max(r.force.norm());
             let st = &it.strands[0];

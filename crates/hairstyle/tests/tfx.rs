@@ -5,7 +5,9 @@ use common::*;
 use hairstyle::formats::{tfx, FormatError, HairCurves};
 
 fn strand(i: usize) -> Vec<[f32; 3]> {
-    (0..4).map(|j| [i as f32, j as f32 * 0.5, -(j as f32)]).collect()
+    (0..4)
+        .map(|j| [i as f32, j as f32 * 0.5, -(j as f32)])
+        .collect()
 }
 
 /// Header from the specification: version, counts, 5 offsets, 32 reserved words.
@@ -16,7 +18,10 @@ fn header(ns: u32, offsets: [u32; 5]) -> Bytes {
 
 fn positions(b: Bytes, ns: usize) -> Bytes {
     (0..ns).fold(b, |b, i| {
-        strand(i).iter().enumerate().fold(b, |b, (j, p)| b.f32s(p).f32(if j == 0 { 0.0 } else { 1.0 }))
+        strand(i)
+            .iter()
+            .enumerate()
+            .fold(b, |b, (j, p)| b.f32s(p).f32(if j == 0 { 0.0 } else { 1.0 }))
     })
 }
 
@@ -38,7 +43,9 @@ fn positions_only_fixture() {
 #[test]
 fn thickness_and_colour_fixture_with_alignment_padding() {
     // 3 strands x 4 vertices: positions 160..352, thickness 352..364, pad to 368, colours 368..560.
-    let b = positions(header(3, [160, 0, 0, 352, 368]), 3).f32s(&[0.1, 0.2, 0.3]).zeros(4);
+    let b = positions(header(3, [160, 0, 0, 352, 368]), 3)
+        .f32s(&[0.1, 0.2, 0.3])
+        .zeros(4);
     let colours: Vec<[f32; 3]> = (0..12).map(|k| [k as f32 / 12.0, 0.5, 1.0]).collect();
     let bytes = colours.iter().fold(b, |b, c| b.f32s(c).f32(1.0)).0;
     assert_eq!(bytes.len(), 560);
@@ -57,18 +64,31 @@ fn thickness_and_colour_fixture_with_alignment_padding() {
 #[test]
 fn reader_ignores_w_and_alpha_and_checks_uvs() {
     // Strand UVs at 288 (2 x 8 bytes) and vertex UVs at 304 (8 x 8 bytes); end 368.
-    let b = positions(header(2, [160, 288, 304, 0, 0]), 2).zeros(16 + 64).0;
+    let b = positions(header(2, [160, 288, 304, 0, 0]), 2)
+        .zeros(16 + 64)
+        .0;
     assert_eq!(tfx::read(&b).unwrap().strands, vec![strand(0), strand(1)]);
     let e = tfx::read(&b[..367]).unwrap_err().to_string();
-    assert!(e.starts_with(".tfx file, byte 20: expected offset of the vertex UVs (64 bytes) from 304 inside"), "{e}");
+    assert!(
+        e.starts_with(
+            ".tfx file, byte 20: expected offset of the vertex UVs (64 bytes) from 304 inside"
+        ),
+        "{e}"
+    );
 }
 
 #[test]
 fn round_trips() {
     let mut c = random_curves(30, |_| 16, true);
     c.transparency = None; // not carried by .tfx
-    // Thickness is per strand in .tfx.
-    let t: Vec<f32> = c.thickness.as_ref().unwrap().chunks(16).flat_map(|s| [s[0]; 16]).collect();
+                           // Thickness is per strand in .tfx.
+    let t: Vec<f32> = c
+        .thickness
+        .as_ref()
+        .unwrap()
+        .chunks(16)
+        .flat_map(|s| [s[0]; 16])
+        .collect();
     c.thickness = Some(t);
     assert_eq!(tfx::read(&tfx::write(&c).unwrap()).unwrap(), c);
     let empty = HairCurves::default();
@@ -80,9 +100,15 @@ fn unequal_or_out_of_range_strands_are_refused_unless_resampled() {
     let c = HairCurves::from_strands(two_strands());
     let e = tfx::write(&c).unwrap_err();
     assert!(matches!(e, FormatError::Unwritable { .. }));
-    assert!(e.to_string().contains("strand 0 has 2 and strand 1 has 3"), "{e}");
+    assert!(
+        e.to_string().contains("strand 0 has 2 and strand 1 has 3"),
+        "{e}"
+    );
     let short = HairCurves::from_strands(vec![vec![[0.0; 3]; 3]]);
-    assert!(tfx::write(&short).unwrap_err().to_string().contains("3 vertices per strand"));
+    assert!(tfx::write(&short)
+        .unwrap_err()
+        .to_string()
+        .contains("3 vertices per strand"));
 
     let mut c = c;
     c.thickness = Some(vec![1.0, 3.0, 2.0, 2.0, 2.0]);
@@ -103,14 +129,23 @@ fn malformed_files_name_offset_and_expectation() {
     let good = positions(header(2, [160, 0, 0, 0, 0]), 2).0;
     let mut b = good.clone();
     b[8] = 3;
-    assert_eq!(tfx::read(&b).unwrap_err().to_string(), ".tfx file, byte 8: expected 4 to 64 vertices per strand, found 3");
+    assert_eq!(
+        tfx::read(&b).unwrap_err().to_string(),
+        ".tfx file, byte 8: expected 4 to 64 vertices per strand, found 3"
+    );
     let mut b = good.clone();
     b[12] = 0;
     b[13] = 0;
-    assert!(tfx::read(&b).unwrap_err().to_string().contains("byte 12: expected a non-zero offset of the vertex positions"));
+    assert!(tfx::read(&b)
+        .unwrap_err()
+        .to_string()
+        .contains("byte 12: expected a non-zero offset of the vertex positions"));
     let mut b = good;
     b[12] = 100; // inside the header
-    assert!(tfx::read(&b).unwrap_err().to_string().starts_with(".tfx file, byte 12:"));
+    assert!(tfx::read(&b)
+        .unwrap_err()
+        .to_string()
+        .starts_with(".tfx file, byte 12:"));
 }
 
 #[test]
@@ -118,5 +153,10 @@ fn absurd_counts_error_before_allocating() {
     let mut b = header(u32::MAX, [160, 0, 0, 0, 0]).0;
     b.resize(200, 0);
     let e = tfx::read(&b).unwrap_err().to_string();
-    assert!(e.starts_with(".tfx file, byte 12: expected offset of the vertex positions (274877906880 bytes)"), "{e}");
+    assert!(
+        e.starts_with(
+            ".tfx file, byte 12: expected offset of the vertex positions (274877906880 bytes)"
+        ),
+        "{e}"
+    );
 }

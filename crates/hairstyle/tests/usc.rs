@@ -41,13 +41,26 @@ fn every_truncation_is_an_error_and_mutations_do_not_panic() {
 fn malformed_files_name_offset_and_expectation() {
     let e = usc::read(&fixture_bytes()[..30]).unwrap_err().to_string();
     assert_eq!(e, ".data file, byte 8: expected points of strand 0 (3 x f32 each): 2 x 12 bytes, but only 22 bytes are left in the file");
-    let e = usc::read(&Bytes::default().i32(-1).0).unwrap_err().to_string();
-    assert_eq!(e, ".data file, byte 0: expected a non-negative number of strands, found -1");
-    let e = usc::read(&Bytes::default().i32(1).i32(-3).0).unwrap_err().to_string();
-    assert_eq!(e, ".data file, byte 4: expected a non-negative number of points for strand 0, found -3");
+    let e = usc::read(&Bytes::default().i32(-1).0)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        ".data file, byte 0: expected a non-negative number of strands, found -1"
+    );
+    let e = usc::read(&Bytes::default().i32(1).i32(-3).0)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        ".data file, byte 4: expected a non-negative number of points for strand 0, found -3"
+    );
     let mut b = fixture_bytes();
     b.extend_from_slice(&[1, 2, 3]);
-    assert_eq!(usc::read(&b).unwrap_err().to_string(), ".data file, byte 72: expected end of file, found 3 more bytes");
+    assert_eq!(
+        usc::read(&b).unwrap_err().to_string(),
+        ".data file, byte 72: expected end of file, found 3 more bytes"
+    );
     let e = usc::read(&[1, 0]).unwrap_err().to_string();
     assert_eq!(e, ".data file, byte 0: expected number of strands (i32) (4 bytes), but the file ends at byte 2");
 }
@@ -56,8 +69,14 @@ fn malformed_files_name_offset_and_expectation() {
 fn absurd_counts_error_before_allocating() {
     let mut b = Bytes::default().i32(i32::MAX).0;
     b.resize(200, 0);
-    assert!(usc::read(&b).unwrap_err().to_string().contains("byte 4: expected strand counts"));
+    assert!(usc::read(&b)
+        .unwrap_err()
+        .to_string()
+        .contains("byte 4: expected strand counts"));
     let mut b = Bytes::default().i32(1).i32(i32::MAX).0;
     b.resize(200, 0);
-    assert!(usc::read(&b).unwrap_err().to_string().contains("byte 8: expected points of strand 0"));
+    assert!(usc::read(&b)
+        .unwrap_err()
+        .to_string()
+        .contains("byte 8: expected points of strand 0"));
 }

@@ -99,6 +99,12 @@ fn lex(text: &str) -> Result<Vec<(Tok, usize)>, FormatError> {
                 };
                 let mut j = i + q.len();
                 while j < b.len() && !b[j..].starts_with(q) {
+                    if q.len() == 1 && b[j] == b'\n' {
+                        return Err(err(
+                            start_line,
+                            "a closing quote on the same line for this string",
+                        ));
+                    }
                     line += (b[j] == b'\n') as usize;
                     j += if b[j] == b'\\' { 2 } else { 1 };
                 }

@@ -55,8 +55,9 @@ pub fn random_curves(ns: usize, len: impl Fn(usize) -> usize, attributes: bool) 
         state ^= state << 17;
         ((state >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * 0.6
     };
-    let mut strands: Vec<Vec<[f32; 3]>> =
-        (0..ns).map(|i| (0..len(i)).map(|_| [next(), next(), next()]).collect()).collect();
+    let mut strands: Vec<Vec<[f32; 3]>> = (0..ns)
+        .map(|i| (0..len(i)).map(|_| [next(), next(), next()]).collect())
+        .collect();
     if let Some(p) = strands.first_mut().and_then(|s| s.first_mut()) {
         *p = [-0.0, 1e-40, 3.4e38]; // negative zero, subnormal, huge
     }
@@ -65,7 +66,11 @@ pub fn random_curves(ns: usize, len: impl Fn(usize) -> usize, attributes: bool) 
     if attributes {
         curves.thickness = Some((0..n).map(|_| next().abs() * 1e-4).collect());
         curves.transparency = Some((0..n).map(|_| next().abs()).collect());
-        curves.color = Some((0..n).map(|_| [next().abs(), next().abs(), next().abs()]).collect());
+        curves.color = Some(
+            (0..n)
+                .map(|_| [next().abs(), next().abs(), next().abs()])
+                .collect(),
+        );
     }
     curves
 }
@@ -73,12 +78,19 @@ pub fn random_curves(ns: usize, len: impl Fn(usize) -> usize, attributes: bool) 
 /// Every strict truncation of `bytes` must be an error (and must not panic).
 pub fn every_truncation_errors(bytes: &[u8], read: fn(&[u8]) -> Result<HairCurves, FormatError>) {
     for len in 0..bytes.len() {
-        assert!(read(&bytes[..len]).is_err(), "truncation to {len} of {} bytes was accepted", bytes.len());
+        assert!(
+            read(&bytes[..len]).is_err(),
+            "truncation to {len} of {} bytes was accepted",
+            bytes.len()
+        );
     }
 }
 
 /// Overwriting any single byte with a few values must not panic (errors or data are both fine).
-pub fn byte_mutations_do_not_panic(bytes: &[u8], read: fn(&[u8]) -> Result<HairCurves, FormatError>) {
+pub fn byte_mutations_do_not_panic(
+    bytes: &[u8],
+    read: fn(&[u8]) -> Result<HairCurves, FormatError>,
+) {
     for i in 0..bytes.len() {
         for v in [0x00, 0x01, 0x7f, 0x80, 0xff, b'"', b'[', b'}'] {
             let mut b = bytes.to_vec();

@@ -4,6 +4,8 @@
 //! USC-HairSalon `.data`, AMD TressFX 4 `.tfx` and USD `BasisCurves` (`.usda` text).
 //! No physics here; positions are kept in the file's own units (see [`formats::HairCurves`]).
 
+#![warn(missing_docs)]
+
 pub mod formats;
 
 pub use formats::{info, read_file, write_file, FormatError, HairCurves};

@@ -154,3 +154,11 @@ fn malformed_files_name_the_line_and_expectation() {
         .to_string()
         .starts_with(".usda file, line 5: UTF-8 text"));
 }
+
+#[test]
+fn deep_nesting_is_an_error_not_a_stack_overflow() {
+    let deep = format!("#usda 1.0\n({}", "[".repeat(100_000));
+    assert!(error(&deep).contains("at most 100 nested"));
+    let prims = format!("#usda 1.0\n{}", "def \"a\" {\n".repeat(100_000));
+    assert!(error(&prims).contains("at most 100 nested"));
+}

@@ -32,7 +32,7 @@ pub const HAS_THICKNESS: u32 = 1 << 2;
 pub const HAS_TRANSPARENCY: u32 = 1 << 3;
 /// Flag bit: colour array present.
 pub const HAS_COLOR: u32 = 1 << 4;
-/// Information text written by [`write`] (then zero bytes up to 88).
+/// Information text written by [`write()`] (then zero bytes up to 88).
 pub const INFO_TEXT: &[u8] = b"Coiffure";
 
 /// The 128-byte header of a `.hair` file.

@@ -6,7 +6,8 @@
 //! thickness (f32 per strand) and vertex colours (4 x f32 RGBA per vertex), 0 meaning absent
 //! (positions are required), then 32 reserved u32 — and the arrays where the offsets say.
 //!
-//! Reading: positions are x, y, z (the 4th component, w, is ignored); strand thickness becomes
+//! Reading: the version is read but not checked; positions are x, y, z (the 4th component, w,
+//! is ignored); strand thickness becomes
 //! the same thickness on every vertex of the strand; colours keep RGB (alpha is ignored); UV
 //! arrays are checked to lie inside the file but not kept; reserved words are ignored. Bytes
 //! outside the arrays are not checked.
@@ -16,7 +17,7 @@
 //! vertex; then the strand thickness if present (the root vertex's thickness is used for the
 //! whole strand); then, at the next multiple of 8 bytes, colours if present (alpha 1.0). No UVs,
 //! reserved words 0. Every strand must have the same number of vertices, 4 to 64: otherwise
-//! [`write`] returns [`FormatError::Unwritable`]; resampling happens only if the caller asks,
+//! [`write()`] returns [`FormatError::Unwritable`]; resampling happens only if the caller asks,
 //! through [`resample`]. An empty set of curves is written with 4 vertices per strand.
 
 use super::{put_f32, put_u32, Cursor, FormatError, HairCurves};
@@ -25,7 +26,7 @@ const FORMAT: &str = ".tfx";
 /// Size of the header in bytes: 4 + 4 + 4 + 5 x 4 + 32 x 4.
 pub const HEADER_SIZE: usize = 4 + 4 + 4 + 5 * 4 + 32 * 4;
 const _: () = assert!(HEADER_SIZE == 160);
-/// Version number written by [`write`].
+/// Version number written by [`write()`].
 pub const VERSION: f32 = 4.0;
 /// Allowed numbers of vertices per strand.
 pub const VERTICES_PER_STRAND: std::ops::RangeInclusive<u32> = 4..=64;
@@ -87,12 +88,7 @@ pub fn read(bytes: &[u8]) -> Result<HairCurves, FormatError> {
         let per_strand = (0..ns)
             .map(|_| c.f32("strand thickness (f32)"))
             .collect::<Result<Vec<_>, _>>()?;
-        Some(
-            per_strand
-                .iter()
-                .flat_map(|&t| std::iter::repeat(t).take(nv))
-                .collect(),
-        )
+        Some(per_strand.iter().flat_map(|&t| vec![t; nv]).collect())
     } else {
         None
     };
@@ -212,7 +208,7 @@ pub fn write(curves: &HairCurves) -> Result<Vec<u8>, FormatError> {
 /// Resample every strand to `n` vertices evenly spaced along its length (arc length), keeping
 /// both ends; per-vertex attributes are interpolated linearly at the same places. A strand of
 /// one vertex, or of zero length, becomes `n` copies of its root. Errors if `n < 2` or a strand
-/// is empty. Use it before [`write`] for strands of unequal or out-of-range vertex counts.
+/// is empty. Use it before [`write()`] for strands of unequal or out-of-range vertex counts.
 pub fn resample(curves: &HairCurves, n: usize) -> Result<HairCurves, FormatError> {
     curves.check_attributes(FORMAT)?;
     let unwritable = |reason: String| FormatError::Unwritable {

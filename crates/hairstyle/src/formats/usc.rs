@@ -1,8 +1,8 @@
 //! USC-HairSalon `.data` format (little-endian).
 //!
 //! Layout: i32 number of strands; then per strand an i32 number of points `n` followed by
-//! `n` x (3 x f32) positions. Nothing else: only positions are stored, so [`write`] drops any
-//! thickness, transparency or colour, and [`read`] returns none. Negative counts and bytes after
+//! `n` x (3 x f32) positions. Nothing else: only positions are stored, so [`write()`] drops any
+//! thickness, transparency or colour, and [`read()`] returns none. Negative counts and bytes after
 //! the last strand are errors. Strands of 0 or 1 point (found in the USC database for bald
 //! scalp samples) are kept as they are.
 

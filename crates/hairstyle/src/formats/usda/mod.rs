@@ -1,12 +1,12 @@
 //! USD `BasisCurves` as `.usda` text.
 //!
-//! [`write`] produces a minimal valid layer: `#usda 1.0` and one `def BasisCurves "hair"` with
+//! [`write()`] produces a minimal valid layer: `#usda 1.0` and one `def BasisCurves "hair"` with
 //! `uniform token type = "linear"`, `int[] curveVertexCounts`, `point3f[] points`, and, when
 //! present, `float[] widths` (the thickness, per vertex) and `color3f[] primvars:displayColor`
 //! (per vertex). Transparency is not written. Numbers are written in Rust's shortest exact form,
 //! so reading back gives the same `f32` values.
 //!
-//! [`read`] is a small tolerant parser, not a full USD reader. Supported: the `#usda` header
+//! [`read()`] is a small tolerant parser, not a full USD reader. Supported: the `#usda` header
 //! line, `#` comments, layer and prim metadata in parentheses (skipped), any prim hierarchy
 //! (`def`/`over`/`class`, typed or not) containing exactly one `BasisCurves` prim, attributes
 //! with qualifiers (`uniform`, `custom`, `varying`), `rel`s, any attribute values (lists, tuples,
@@ -117,7 +117,7 @@ fn per_vertex<T: Clone>(
         (Some("vertex" | "varying") | None, n) if n == np => Ok(v),
         (Some("constant") | None, 1) => Ok(vec![v[0].clone(); np]),
         (Some("uniform") | None, n) if n == counts.len() => {
-            Ok(counts.iter().zip(v).flat_map(|(&c, x)| std::iter::repeat(x).take(c)).collect())
+            Ok(counts.iter().zip(v).flat_map(|(&c, x)| vec![x; c]).collect())
         }
         (i, n) => Err(err(line, format!("{np} (vertex), {} (uniform) or 1 (constant) values for interpolation {i:?}, found {n}", counts.len()))),
     }

@@ -1,4 +1,4 @@
-//! Lexer and tolerant parser for the `.usda` subset read by [`super::read`].
+//! Lexer and tolerant parser for the `.usda` subset read by [`super::read()`].
 
 use super::err;
 use crate::formats::FormatError;
@@ -109,7 +109,12 @@ pub(super) struct Parser {
     pub(super) attrs: Vec<(String, Value, usize, Option<String>)>,
     /// Line of the BasisCurves prim, once found.
     pub(super) curves_line: Option<usize>,
+    /// Current nesting of brackets and prims, limited to [`MAX_DEPTH`].
+    depth: usize,
 }
+
+/// Deepest nesting of brackets and prims accepted (guards the recursion against hostile files).
+const MAX_DEPTH: usize = 100;
 
 impl Parser {
     pub(super) fn new(toks: Vec<(Tok, usize)>) -> Self {
@@ -118,6 +123,7 @@ impl Parser {
             i: 0,
             attrs: Vec::new(),
             curves_line: None,
+            depth: 0,
         }
     }
 
@@ -198,7 +204,9 @@ impl Parser {
             }
             self.curves_line = Some(line);
         }
+        self.enter(line)?;
         self.prims(Some(is_curves))?;
+        self.depth -= 1;
         self.expect('}')
     }
 
@@ -251,6 +259,17 @@ impl Parser {
         Ok(())
     }
 
+    fn enter(&mut self, line: usize) -> Result<(), FormatError> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(err(
+                line,
+                format!("at most {MAX_DEPTH} nested brackets or prims"),
+            ));
+        }
+        Ok(())
+    }
+
     pub(super) fn value(&mut self) -> Result<Value, FormatError> {
         let line = self.line();
         match self.next("a value")? {
@@ -260,6 +279,7 @@ impl Parser {
                     '(' => ')',
                     _ => '}',
                 };
+                self.enter(line)?;
                 let mut items = Vec::new();
                 while !self.eat(close) {
                     items.push(self.value()?);
@@ -267,6 +287,7 @@ impl Parser {
                     self.eat(':'); // dictionary / time-sample keys
                     self.eat('=');
                 }
+                self.depth -= 1;
                 Ok(match open {
                     '[' => Value::List(items),
                     '(' => Value::Tuple(items),

@@ -162,3 +162,18 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
     let prims = format!("#usda 1.0\n{}", "def \"a\" {\n".repeat(100_000));
     assert!(error(&prims).contains("at most 100 nested"));
 }
+
+#[test]
+fn huge_or_fractional_counts_are_errors() {
+    let huge = FIXTURE.replace("[2, 3]", "[4294967295, 4294967295, 4294967295]");
+    assert!(
+        error(&huge).contains("line 7: 12884901885 points"),
+        "{}",
+        error(&huge)
+    );
+    let frac = FIXTURE.replace("[2, 3]", "[2.5, 2.5]");
+    assert_eq!(
+        error(&frac),
+        ".usda file, line 6: a vertex count (integer from 0 to 2^32 - 1), found `2.5`"
+    );
+}

@@ -7,10 +7,9 @@
 //! (positions are required), then 32 reserved u32 — and the arrays where the offsets say.
 //!
 //! Reading: the version is read but not checked; positions are x, y, z (the 4th component, w,
-//! is ignored); strand thickness becomes
-//! the same thickness on every vertex of the strand; colours keep RGB (alpha is ignored); UV
-//! arrays are checked to lie inside the file but not kept; reserved words are ignored. Bytes
-//! outside the arrays are not checked.
+//! is ignored); strand thickness becomes the same thickness on every vertex of the strand;
+//! colours keep RGB (alpha is ignored); UV arrays are checked to lie inside the file but not
+//! kept; reserved words are ignored. Bytes outside the arrays are not checked.
 //!
 //! Writing: version 4.0, positions at byte 160 with w = 0.0 for the root (first) vertex of each
 //! strand, which TressFX treats as fixed (inverse mass 0), and w = 1.0 for every other (movable)

@@ -177,20 +177,23 @@ pub fn read(bytes: &[u8]) -> Result<HairCurves, FormatError> {
         ));
     }
     let (_, v, line, _) = required("curveVertexCounts")?;
-    let counts = list(v, *line, |x, l| {
-        let n = number(x, l)?;
-        (n >= 0.0 && n.fract() == 0.0)
-            .then_some(n as usize)
-            .ok_or_else(|| err(l, format!("a vertex count, found {n}")))
+    let counts = list(v, *line, |x, l| match x {
+        Value::Word(w) => w.parse::<u32>().map(|n| n as usize).map_err(|_| {
+            err(
+                l,
+                format!("a vertex count (integer from 0 to 2^32 - 1), found `{w}`"),
+            )
+        }),
+        x => Err(err(l, format!("a vertex count, found {x:?}"))),
     })?;
     let (_, v, line, _) = required("points")?;
     let points = list(v, *line, vec3)?;
-    if points.len() != counts.iter().sum::<usize>() {
+    let total: u64 = counts.iter().map(|&n| n as u64).sum();
+    if points.len() as u64 != total {
         return Err(err(
             *line,
             format!(
-                "{} points (the sum of curveVertexCounts), found {}",
-                counts.iter().sum::<usize>(),
+                "{total} points (the sum of curveVertexCounts), found {}",
                 points.len()
             ),
         ));

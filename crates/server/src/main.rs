@@ -1,6 +1,7 @@
 //! `coiffure`: the command line of the Coiffure hair simulator.
 
 mod demo;
+mod files_cmd;
 mod run_cmd;
 mod strand_cmd;
 
@@ -23,6 +24,10 @@ enum Command {
     Strand(strand_cmd::StrandArgs),
     /// Run a scripted tool session (scenario TOML) headless: force trace and summary.
     Run(run_cmd::RunArgs),
+    /// Convert a hair file between formats (.hair, .data, .tfx, .usda), chosen by extension.
+    Convert(files_cmd::ConvertArgs),
+    /// Print a hair file's strand and point counts and bounds.
+    Info(files_cmd::InfoArgs),
 }
 
 fn main() -> ExitCode {
@@ -37,6 +42,8 @@ fn main() -> ExitCode {
         Command::Demo(args) => demo::run(&args),
         Command::Strand(args) => strand_cmd::run(&args),
         Command::Run(args) => run_cmd::run(&args),
+        Command::Convert(args) => files_cmd::convert(&args),
+        Command::Info(args) => files_cmd::show_info(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

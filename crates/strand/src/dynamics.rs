@@ -15,6 +15,10 @@
 //! 3. Off-diagonal blocks `M[P,Q] = S_P^T F_Q` for `P < Q` (O(N^2); everything else is O(N)).
 //! 4. Elastic `-K (q - q_rest)` and internal damping `-tau K qdot` (K diagonal).
 //!
+//! Steps 1, 4 and the force half of step 2 are `Dynamics::sweep`; the mass half of step 2 and step 3 are
+//! only done when the dense mass matrix is asked for. The linearly implicit step instead solves
+//! `(scale M + stiffness K) x = b` from the per-segment sums of step 1 in O(N) (`Dynamics::solve_articulated`).
+//!
 //! Air drag acts on each point as `-nu w rdot`, with a matching rotary drag `-(nu / rho A) I_c omega`, so the
 //! drag matrix is `(nu / rho A) M` and the integrator can treat it implicitly.
 
@@ -147,6 +151,23 @@ fn twists_at(w_cols: &Matrix3<f64>, u_cols: &Matrix3<f64>, x: &Vector3<f64>) -> 
         t.fixed_view_mut::<3, 1>(3, k).copy_from(&v);
     }
     t
+}
+
+/// Inverse of a symmetric 3x3 matrix by cofactors, or None unless it is (numerically) positive definite
+/// (leading principal minors positive).
+fn spd_inverse(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    let c00 = a[(1, 1)] * a[(2, 2)] - a[(1, 2)] * a[(2, 1)];
+    let c01 = a[(1, 2)] * a[(2, 0)] - a[(1, 0)] * a[(2, 2)];
+    let c02 = a[(1, 0)] * a[(2, 1)] - a[(1, 1)] * a[(2, 0)];
+    let det = a[(0, 0)] * c00 + a[(0, 1)] * c01 + a[(0, 2)] * c02;
+    let minor2 = a[(0, 0)] * a[(1, 1)] - a[(0, 1)] * a[(1, 0)];
+    if !(a[(0, 0)] > 0.0 && minor2 > 0.0 && det > 0.0 && det.is_finite()) {
+        return None;
+    }
+    let c11 = a[(0, 0)] * a[(2, 2)] - a[(0, 2)] * a[(2, 0)];
+    let c12 = a[(0, 1)] * a[(2, 0)] - a[(0, 0)] * a[(2, 1)];
+    let inv = 1.0 / det;
+    Some(Matrix3::new(c00, c01, c02, c01, c11, c12, c02, c12, minor2) * inv)
 }
 
 /// What the root-to-tip sweep gathers about one segment.
@@ -395,7 +416,7 @@ impl Dynamics {
                     dm[(k, k)] = 1.0;
                 }
             }
-            let Some(dinv) = dm.cholesky().map(|ch| ch.inverse()) else { return false };
+            let Some(dinv) = spd_inverse(&dm) else { return false };
             let u_dinv = u * dinv;
             ia += sums.inertia.matrix() * scale - u_dinv * u.transpose();
             pa += u_dinv * c;

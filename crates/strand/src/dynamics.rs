@@ -170,6 +170,41 @@ fn spd_inverse(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     Some(Matrix3::new(c00, c01, c02, c01, c11, c12, c02, c12, minor2) * inv)
 }
 
+/// One tip-to-root step of [`Dynamics::solve_articulated`] for a segment with `D` coordinates: updates the
+/// articulated inertia `ia` and bias `pa` and returns `(U, D^-1, c)` padded to 3 columns (zeros beyond `D`).
+fn eliminate<const D: usize>(
+    ia: &mut Matrix6<f64>,
+    pa: &mut Vector6,
+    motion: &Twists,
+    sums: &SegmentSums,
+    scale: f64,
+    rig: &Vector3<f64>,
+    b: &[f64],
+) -> Option<(Twists, Matrix3<f64>, Vector3<f64>)> {
+    let s = motion.fixed_columns::<D>(0);
+    let ia_s = *ia * s;
+    let u = sums.f_own.fixed_columns::<D>(0) * scale + ia_s;
+    // D = scale M_own + S^T I^A S + stiffness K, padded with 1 on unused diagonal entries.
+    let mut dm = Matrix3::identity();
+    let mut c = Vector3::zeros();
+    let s_pa = s.tr_mul(pa);
+    for k in 0..D {
+        for j in 0..D {
+            dm[(j, k)] = sums.m_own[(j, k)] * scale + s.column(j).dot(&ia_s.column(k));
+        }
+        dm[(k, k)] += rig[k];
+        c[k] = -s_pa[k] - b[k];
+    }
+    let dinv = spd_inverse(&dm)?;
+    let dinv_d = dinv.fixed_view::<D, D>(0, 0);
+    let u_dinv = u * dinv_d;
+    *ia += sums.inertia.matrix() * scale - u_dinv * u.transpose();
+    *pa += u_dinv * c.fixed_rows::<D>(0);
+    let mut u_pad = Twists::zeros();
+    u_pad.fixed_columns_mut::<D>(0).copy_from(&u);
+    Some((u_pad, dinv, c))
+}
+
 /// What the root-to-tip sweep gathers about one segment.
 #[derive(Debug, Clone, Copy)]
 struct SegmentSums {
@@ -401,26 +436,14 @@ impl Dynamics {
         let mut ia = Matrix6::zeros();
         let mut pa = Vector6::zeros();
         for i in (0..n).rev() {
-            let s_i = &self.motion[i];
-            let sums = &self.sums[i];
-            let ia_s = ia * s_i;
-            let u = sums.f_own * scale + ia_s;
-            let mut dm = sums.m_own * scale + s_i.tr_mul(&ia_s);
-            let mut c = -s_i.tr_mul(&pa);
-            for k in 0..3 {
-                if k < d {
-                    dm[(k, k)] += rig[k];
-                    c[k] -= b[i * d + k];
-                } else {
-                    // Unused coordinate of the reduced model (zero columns): keep D invertible.
-                    dm[(k, k)] = 1.0;
-                }
-            }
-            let Some(dinv) = spd_inverse(&dm) else { return false };
-            let u_dinv = u * dinv;
-            ia += sums.inertia.matrix() * scale - u_dinv * u.transpose();
-            pa += u_dinv * c;
-            self.articulated[i] = (u, dinv, c);
+            let bi = &b.as_slice()[i * d..(i + 1) * d];
+            let step = if d == 2 {
+                eliminate::<2>(&mut ia, &mut pa, &self.motion[i], &self.sums[i], scale, &rig, bi)
+            } else {
+                eliminate::<3>(&mut ia, &mut pa, &self.motion[i], &self.sums[i], scale, &rig, bi)
+            };
+            let Some(step) = step else { return false };
+            self.articulated[i] = step;
         }
         let mut v = Vector6::zeros();
         for i in 0..n {

@@ -1,7 +1,8 @@
 //! Point constraints solved inside the linearly implicit step: unilateral contacts with Coulomb friction
 //! (a tool's surface touching the strand) and bilateral pins (a clip holding a point of the strand).
 //!
-//! The step solves `A qdot+ = b + J^T p` with `A = M + hD + h^2 K` (already factorized), `J` the Jacobians
+//! The step solves `A qdot+ = b + J^T p` with `A = M + hD + h^2 K` (solved in O(N) per right-hand side by the
+//! articulated-body recursion of the step), `J` the Jacobians
 //! of the constrained points and `p` their impulses (N s, over the step). With `Y = A^-1 J^T` the point
 //! velocities after the step are `u = u_free + W p`, `W = J Y` (the Delassus operator). Impulses come from
 //! projected Gauss-Seidel sweeps: for a contact the normal impulse is >= 0 and brings the normal velocity to
@@ -14,7 +15,6 @@
 use crate::error::{Result, StrandError};
 use crate::integrator::{Integrator, Strand};
 use crate::kinematics::{frame_at, jacobian, segment_frames};
-use crate::linalg::cholesky_solve_in_place;
 use nalgebra::{DVector, Matrix3, Matrix3xX, Vector3};
 
 /// What a point constraint does.
@@ -127,7 +127,7 @@ impl Strand {
         let mut v = self.linearly_implicit_velocity(h, external)?;
         // Jacobians, free velocities (including the root's motion) and Y = A^-1 J^T per constraint.
         let frames = segment_frames(&self.model, &self.state);
-        let root = &self.state.root;
+        let root = self.state.root.clone();
         let mut jac: Vec<Matrix3xX<f64>> = Vec::with_capacity(constraints.len());
         let mut y: Vec<Matrix3xX<f64>> = Vec::with_capacity(constraints.len());
         let mut bias: Vec<Vector3<f64>> = Vec::with_capacity(constraints.len());
@@ -140,7 +140,9 @@ impl Strand {
             let mut yc = Matrix3xX::zeros(self.model.dofs());
             for k in 0..3 {
                 let mut col: DVector<f64> = j.row(k).transpose();
-                cholesky_solve_in_place(self.system_factor(), &mut col);
+                if !self.solve_step_matrix(h, &mut col) {
+                    return Err(StrandError::NotPositiveDefinite { what: "step matrix" });
+                }
                 yc.set_row(k, &col.transpose());
             }
             jac.push(j);

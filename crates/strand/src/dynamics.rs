@@ -15,6 +15,10 @@
 //! 3. Off-diagonal blocks `M[P,Q] = S_P^T F_Q` for `P < Q` (O(N^2); everything else is O(N)).
 //! 4. Elastic `-K (q - q_rest)` and internal damping `-tau K qdot` (K diagonal).
 //!
+//! Steps 1, 4 and the force half of step 2 are `Dynamics::sweep`; the mass half of step 2 and step 3 are
+//! only done when the dense mass matrix is asked for. The linearly implicit step instead solves
+//! `(scale M + stiffness K) x = b` from the per-segment sums of step 1 in O(N) (`Dynamics::solve_articulated`).
+//!
 //! Air drag acts on each point as `-nu w rdot`, with a matching rotary drag `-(nu / rho A) I_c omega`, so the
 //! drag matrix is `(nu / rho A) M` and the integrator can treat it implicitly.
 
@@ -22,7 +26,7 @@ use crate::helix::segment_kinematics;
 use crate::kinematics::{darboux, Frame, Twists};
 use crate::model::{gauss_legendre, StrandModel};
 use crate::state::StrandState;
-use nalgebra::{DMatrix, DVector, Matrix3, SVector, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, SVector, Vector3};
 
 type Vector6 = SVector<f64, 6>;
 
@@ -60,11 +64,38 @@ impl Inertia {
         Vector6::new(a.x, a.y, a.z, l.x, l.y, l.z)
     }
 
-    fn add_point(&mut self, m: f64, ic: &Matrix3<f64>, x: &Vector3<f64>) {
-        let xc = x.cross_matrix();
+    /// Adds a point of mass `m` at `x` whose rotary inertia is `rot diag(ic_local) rot^T`.
+    fn add_point(&mut self, m: f64, rot: &Matrix3<f64>, ic_local: &Vector3<f64>, x: &Vector3<f64>) {
         self.m += m;
         self.c += x * m;
-        self.j += ic - xc * xc * m;
+        // I_c - m [x]^2 = sum_k ic_k r_k r_k^T + m (|x|^2 1 - x x^T).
+        let x2 = x.norm_squared();
+        for b in 0..3 {
+            for a in b..3 {
+                let mut v = -m * x[a] * x[b];
+                if a == b {
+                    v += m * x2;
+                }
+                for k in 0..3 {
+                    v += ic_local[k] * rot[(a, k)] * rot[(b, k)];
+                }
+                self.j[(a, b)] += v;
+                if a != b {
+                    self.j[(b, a)] += v;
+                }
+            }
+        }
+    }
+
+    /// The 6x6 spatial inertia `[[J, [c]x], [-[c]x, m 1]]` (maps a twist to its momentum, as [`Inertia::apply`]).
+    fn matrix(&self) -> Matrix6<f64> {
+        let mut out = Matrix6::zeros();
+        let cx = self.c.cross_matrix();
+        out.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.j);
+        out.fixed_view_mut::<3, 3>(0, 3).copy_from(&cx);
+        out.fixed_view_mut::<3, 3>(3, 0).copy_from(&cx.transpose());
+        out.fixed_view_mut::<3, 3>(3, 3).fill_diagonal(self.m);
+        out
     }
 
     fn add(&mut self, o: &Inertia) {
@@ -122,6 +153,58 @@ fn twists_at(w_cols: &Matrix3<f64>, u_cols: &Matrix3<f64>, x: &Vector3<f64>) -> 
     t
 }
 
+/// Inverse of a symmetric 3x3 matrix by cofactors, or None unless it is (numerically) positive definite
+/// (leading principal minors positive).
+fn spd_inverse(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    let c00 = a[(1, 1)] * a[(2, 2)] - a[(1, 2)] * a[(2, 1)];
+    let c01 = a[(1, 2)] * a[(2, 0)] - a[(1, 0)] * a[(2, 2)];
+    let c02 = a[(1, 0)] * a[(2, 1)] - a[(1, 1)] * a[(2, 0)];
+    let det = a[(0, 0)] * c00 + a[(0, 1)] * c01 + a[(0, 2)] * c02;
+    let minor2 = a[(0, 0)] * a[(1, 1)] - a[(0, 1)] * a[(1, 0)];
+    if !(a[(0, 0)] > 0.0 && minor2 > 0.0 && det > 0.0 && det.is_finite()) {
+        return None;
+    }
+    let c11 = a[(0, 0)] * a[(2, 2)] - a[(0, 2)] * a[(2, 0)];
+    let c12 = a[(0, 1)] * a[(2, 0)] - a[(0, 0)] * a[(2, 1)];
+    let inv = 1.0 / det;
+    Some(Matrix3::new(c00, c01, c02, c01, c11, c12, c02, c12, minor2) * inv)
+}
+
+/// One tip-to-root step of [`Dynamics::solve_articulated`] for a segment with `D` coordinates: updates the
+/// articulated inertia `ia` and bias `pa` and returns `(U, D^-1, c)` padded to 3 columns (zeros beyond `D`).
+fn eliminate<const D: usize>(
+    ia: &mut Matrix6<f64>,
+    pa: &mut Vector6,
+    motion: &Twists,
+    sums: &SegmentSums,
+    scale: f64,
+    rig: &Vector3<f64>,
+    b: &[f64],
+) -> Option<(Twists, Matrix3<f64>, Vector3<f64>)> {
+    let s = motion.fixed_columns::<D>(0);
+    let ia_s = *ia * s;
+    let u = sums.f_own.fixed_columns::<D>(0) * scale + ia_s;
+    // D = scale M_own + S^T I^A S + stiffness K, padded with 1 on unused diagonal entries.
+    let mut dm = Matrix3::identity();
+    let mut c = Vector3::zeros();
+    let s_pa = s.tr_mul(pa);
+    for k in 0..D {
+        for j in 0..D {
+            dm[(j, k)] = sums.m_own[(j, k)] * scale + s.column(j).dot(&ia_s.column(k));
+        }
+        dm[(k, k)] += rig[k];
+        c[k] = -s_pa[k] - b[k];
+    }
+    let dinv = spd_inverse(&dm)?;
+    let dinv_d = dinv.fixed_view::<D, D>(0, 0);
+    let u_dinv = u * dinv_d;
+    *ia += sums.inertia.matrix() * scale - u_dinv * u.transpose();
+    *pa += u_dinv * c.fixed_rows::<D>(0);
+    let mut u_pad = Twists::zeros();
+    u_pad.fixed_columns_mut::<D>(0).copy_from(&u);
+    Some((u_pad, dinv, c))
+}
+
 /// What the root-to-tip sweep gathers about one segment.
 #[derive(Debug, Clone, Copy)]
 struct SegmentSums {
@@ -150,6 +233,8 @@ pub struct Dynamics {
     sums: Vec<SegmentSums>,
     /// Coupling blocks F_Q = I^C_Q+1 S_Q + own momentum.
     coupling: Vec<Twists>,
+    /// Workspace of [`Dynamics::solve_articulated`], per segment: `U_Q`, `D_Q^-1` and `c_Q`.
+    articulated: Vec<(Twists, Matrix3<f64>, Vector3<f64>)>,
     /// Mass matrix M(q): the kinetic energy (with a fixed root) is `qdot^T M qdot / 2`, J.
     pub mass: DMatrix<f64>,
     /// All generalized forces at the evaluated state (elastic, damping, gravity, drag, point forces and
@@ -191,6 +276,7 @@ impl Dynamics {
             motion: vec![Twists::zeros(); n],
             sums: vec![empty; n],
             coupling: vec![Twists::zeros(); n],
+            articulated: vec![(Twists::zeros(), Matrix3::zeros(), Vector3::zeros()); n],
             mass: DMatrix::zeros(dofs, dofs),
             forces: DVector::zeros(dofs),
             kinetic_energy: 0.0,
@@ -207,6 +293,17 @@ impl Dynamics {
     /// Evaluates energies and generalized forces at `state` (and the mass matrix if `with_mass`),
     /// with `external` point forces applied. See the module documentation for the pipeline.
     pub fn evaluate(&mut self, model: &StrandModel, state: &StrandState, external: &[PointForce], with_mass: bool) {
+        self.sweep(model, state, external, with_mass);
+        if with_mass {
+            self.assemble_mass(model);
+        }
+    }
+
+    /// Steps 1, 2 (forces) and 4 of the pipeline: frames, energies, generalized forces and (if `with_sums`)
+    /// the per-segment inertial sums and motion subspaces that the mass matrix and
+    /// [`Dynamics::solve_articulated`] are built from.
+    pub(crate) fn sweep(&mut self, model: &StrandModel, state: &StrandState, external: &[PointForce], with_sums: bool) {
+        let with_mass = with_sums;
         let d = model.dofs_per_segment();
         let n = model.segments;
         let l = model.segment_length();
@@ -244,24 +341,41 @@ impl Dynamics {
                 let pk = point_kinematics(&start, &q, &qdot, sigma);
                 let p = &pk.motion;
                 let m = rho_a * weight;
-                let ic = p.rot * Matrix3::from_diagonal(&(rot_inertia * weight)) * p.rot.transpose();
-                let icw = ic * p.w;
+                // Rotary inertia `I_c = R diag(ic_local) R^T`, applied in the point's material frame.
+                let ic_local = rot_inertia * weight;
+                let ic_apply = |v: &Vector3<f64>| p.rot * ic_local.component_mul(&p.rot.tr_mul(v));
+                let icw = ic_apply(&p.w);
                 // Gravity, air drag and minus the velocity-product inertial force; torque about the point.
                 let f = g * m - p.v * (drag_rate * m) - p.a * m;
-                let tau = -icw * drag_rate - (ic * p.alpha + p.w.cross(&icw));
-                sums.q_own += pk.u_cols.transpose() * f + pk.w_cols.transpose() * tau;
+                let tau = -icw * drag_rate - (ic_apply(&p.alpha) + p.w.cross(&icw));
+                sums.q_own += pk.u_cols.tr_mul(&f) + pk.w_cols.tr_mul(&tau);
                 sums.wrench += wrench(&f, &tau, &p.x);
                 self.kinetic_energy += 0.5 * (m * p.v.norm_squared() + p.w.dot(&icw));
                 self.gravity_energy -= m * g.dot(&(p.x + origin));
                 if with_mass {
-                    for k in 0..d {
-                        let u = pk.u_cols.column(k) * m;
-                        let ang = ic * pk.w_cols.column(k) + p.x.cross(&u);
-                        let col = sums.f_own.column(k) + Vector6::new(ang.x, ang.y, ang.z, u.x, u.y, u.z);
-                        sums.f_own.set_column(k, &col);
+                    // The own columns in the material frame (rotary part) for a symmetric own block.
+                    let mut w_local = [Vector3::zeros(); 3];
+                    for a in 0..d {
+                        w_local[a] = p.rot.tr_mul(&pk.w_cols.column(a));
+                        let u = pk.u_cols.column(a) * m;
+                        let ang = p.rot * ic_local.component_mul(&w_local[a]) + p.x.cross(&u);
+                        let mut col = sums.f_own.column_mut(a);
+                        col[0] += ang.x;
+                        col[1] += ang.y;
+                        col[2] += ang.z;
+                        col[3] += u.x;
+                        col[4] += u.y;
+                        col[5] += u.z;
+                        for b in 0..=a {
+                            let v = m * pk.u_cols.column(b).dot(&pk.u_cols.column(a))
+                                + w_local[b].dot(&ic_local.component_mul(&w_local[a]));
+                            sums.m_own[(b, a)] += v;
+                            if b != a {
+                                sums.m_own[(a, b)] += v;
+                            }
+                        }
                     }
-                    sums.m_own += pk.u_cols.transpose() * pk.u_cols * m + pk.w_cols.transpose() * ic * pk.w_cols;
-                    sums.inertia.add_point(m, &ic, &p.x);
+                    sums.inertia.add_point(m, &p.rot, &ic_local, &p.x);
                 }
             }
             for pf in external {
@@ -274,51 +388,22 @@ impl Dynamics {
             }
             let end = point_kinematics(&start, &q, &qdot, l);
             self.motion[i] = twists_at(&end.w_cols, &end.u_cols, &end.motion.x);
+            // The reduced model has no third coordinate: keep its column zero.
+            self.motion[i].columns_mut(d, 3 - d).fill(0.0);
             self.sums[i] = sums;
             start = end.motion;
         }
         self.frames.push(Frame { rotation: start.rot, position: start.x + origin });
 
-        // Step 2: tip-to-root sweep with suffix sums.
+        // Step 2 (forces): tip-to-root sweep with the suffix sum of the wrenches.
         let mut suffix_wrench = Vector6::zeros();
-        let mut suffix_inertia = Inertia::zero();
         for i in (0..n).rev() {
-            let s_i = self.motion[i];
             let sums = &self.sums[i];
-            let q_block = sums.q_own + s_i.transpose() * suffix_wrench;
+            let q_block = sums.q_own + self.motion[i].tr_mul(&suffix_wrench);
             for k in 0..d {
                 self.forces[i * d + k] = q_block[k];
             }
-            if with_mass {
-                let mut couple = sums.f_own;
-                for k in 0..d {
-                    let c = suffix_inertia.apply(&s_i.column(k).into_owned());
-                    couple.set_column(k, &(couple.column(k) + c));
-                }
-                let diag = sums.m_own + s_i.transpose() * (couple - sums.f_own);
-                for a in 0..d {
-                    for b in 0..d {
-                        self.mass[(i * d + a, i * d + b)] = diag[(a, b)];
-                    }
-                }
-                self.coupling[i] = couple;
-                suffix_inertia.add(&sums.inertia);
-            }
             suffix_wrench += sums.wrench;
-        }
-        // Step 3: off-diagonal blocks.
-        if with_mass {
-            for i in 0..n {
-                for j in 0..i {
-                    let blk = self.motion[j].transpose() * self.coupling[i];
-                    for a in 0..d {
-                        for b in 0..d {
-                            self.mass[(j * d + a, i * d + b)] = blk[(a, b)];
-                            self.mass[(i * d + b, j * d + a)] = blk[(a, b)];
-                        }
-                    }
-                }
-            }
         }
         // Step 4: elasticity and internal damping (K diagonal).
         let rig = model.rigidities() * l;
@@ -329,6 +414,81 @@ impl Dynamics {
                 let dq = state.q[j] - model.rest[i][k];
                 self.elastic_energy += 0.5 * rig[k] * dq * dq;
                 self.forces[j] -= rig[k] * (dq + model.damping * state.qdot[j]);
+            }
+        }
+    }
+
+    /// Solves `(scale M + stiffness K) x = b` in place in O(N), where `M` is the mass matrix at the state of
+    /// the last [`Dynamics::sweep`] with sums (not assembled) and `K` the diagonal elastic stiffness.
+    /// Returns false if the matrix is not (numerically) positive definite.
+    ///
+    /// Articulated-body recursion (Featherstone; Bertails 2009, "Linear time super-helices"): `x` minimizes
+    /// `x^T A x / 2 - b^T x`, where `x^T M x` is the kinetic form `sum_points V^T I V` of the twists that `x`
+    /// gives the points. Eliminating the segments from the tip, the minimum over segments `Q+1..` for a twist
+    /// `V` of the frame at the end of segment `Q` is `V^T I^A_Q+1 V / 2 - V^T p^A_Q+1` (+ const), with
+    /// `U = scale F_own + I^A S`, `D = scale M_own + S^T I^A S + stiffness K_Q`, `c = -S^T p^A - b_Q`,
+    /// `I^A_Q = scale I_own + I^A_Q+1 - U D^-1 U^T`, `p^A_Q = p^A_Q+1 + U D^-1 c`; then from the root (`V = 0`),
+    /// `x_Q = -D^-1 (U^T V + c)` and `V += S_Q x_Q`.
+    pub(crate) fn solve_articulated(&mut self, model: &StrandModel, scale: f64, stiffness: f64, b: &mut DVector<f64>) -> bool {
+        let d = model.dofs_per_segment();
+        let n = model.segments;
+        let rig = model.rigidities() * (model.segment_length() * stiffness);
+        let mut ia = Matrix6::zeros();
+        let mut pa = Vector6::zeros();
+        for i in (0..n).rev() {
+            let bi = &b.as_slice()[i * d..(i + 1) * d];
+            let step = if d == 2 {
+                eliminate::<2>(&mut ia, &mut pa, &self.motion[i], &self.sums[i], scale, &rig, bi)
+            } else {
+                eliminate::<3>(&mut ia, &mut pa, &self.motion[i], &self.sums[i], scale, &rig, bi)
+            };
+            let Some(step) = step else { return false };
+            self.articulated[i] = step;
+        }
+        let mut v = Vector6::zeros();
+        for i in 0..n {
+            let (u, dinv, c) = &self.articulated[i];
+            let x = -(dinv * (u.tr_mul(&v) + c));
+            for k in 0..d {
+                b[i * d + k] = x[k];
+            }
+            v += self.motion[i] * x;
+        }
+        b.iter().all(|x| x.is_finite())
+    }
+
+    /// Steps 2 (mass) and 3 of the pipeline: the dense mass matrix from the sums of [`Dynamics::sweep`].
+    fn assemble_mass(&mut self, model: &StrandModel) {
+        let d = model.dofs_per_segment();
+        let n = model.segments;
+        let mut suffix_inertia = Inertia::zero();
+        for i in (0..n).rev() {
+            let s_i = self.motion[i];
+            let sums = &self.sums[i];
+            let mut couple = sums.f_own;
+            for k in 0..d {
+                let c = suffix_inertia.apply(&s_i.column(k).into_owned());
+                couple.set_column(k, &(couple.column(k) + c));
+            }
+            let diag = sums.m_own + s_i.transpose() * (couple - sums.f_own);
+            for a in 0..d {
+                for b in 0..d {
+                    self.mass[(i * d + a, i * d + b)] = diag[(a, b)];
+                }
+            }
+            self.coupling[i] = couple;
+            suffix_inertia.add(&sums.inertia);
+        }
+        // Step 3: off-diagonal blocks.
+        for i in 0..n {
+            for j in 0..i {
+                let blk = self.motion[j].transpose() * self.coupling[i];
+                for a in 0..d {
+                    for b in 0..d {
+                        self.mass[(j * d + a, i * d + b)] = blk[(a, b)];
+                        self.mass[(i * d + b, j * d + a)] = blk[(a, b)];
+                    }
+                }
             }
         }
     }

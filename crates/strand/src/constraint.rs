@@ -140,7 +140,7 @@ impl Strand {
             let mut yc = Matrix3xX::zeros(self.model.dofs());
             for k in 0..3 {
                 let mut col: DVector<f64> = j.row(k).transpose();
-                if !self.solve_step_matrix(h, &mut col) {
+                if !self.resolve_step_matrix(&mut col) {
                     return Err(StrandError::NotPositiveDefinite { what: "step matrix" });
                 }
                 yc.set_row(k, &col.transpose());

@@ -126,6 +126,11 @@ impl Strand {
         Ok(())
     }
 
+    /// Solves `A x = b` in place with the matrix of the last linearly implicit step, reusing its elimination.
+    pub(crate) fn resolve_step_matrix(&mut self, b: &mut DVector<f64>) -> bool {
+        self.dynamics.resolve_articulated(&self.model, b)
+    }
+
     /// Solves `A x = b` in place with the linearly implicit step's matrix `A = M (1 + h c) + (h tau + h^2) K` at
     /// the state of the last sweep (O(N)); false if `A` is not positive definite.
     pub(crate) fn solve_step_matrix(&mut self, h: f64, b: &mut DVector<f64>) -> bool {

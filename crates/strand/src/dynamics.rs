@@ -30,13 +30,22 @@ use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, SVector, Vector3};
 
 type Vector6 = SVector<f64, 6>;
 
-/// A force applied to the centreline at arc length `s` (m from the root), in N (world axes).
+/// A force (and a torque) applied to the strand at arc length `s` (m from the root), world axes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PointForce {
     /// Arc length from the root, m (clamped to [0, L]).
     pub s: f64,
-    /// Force, N.
+    /// Force on the centreline, N.
     pub force: Vector3<f64>,
+    /// Torque on the cross-section, N m (e.g. friction acting on the hair's surface twists it).
+    pub torque: Vector3<f64>,
+}
+
+impl PointForce {
+    /// A force without torque.
+    pub fn new(s: f64, force: Vector3<f64>) -> Self {
+        Self { s, force, torque: Vector3::zeros() }
+    }
 }
 
 /// Rigid inertia about the root origin of a set of points: mass, first moment, rotational inertia.
@@ -382,8 +391,8 @@ impl Dynamics {
                 let (j, sigma) = crate::kinematics::locate(model, pf.s);
                 if j == i {
                     let pk = point_kinematics(&start, &q, &qdot, sigma);
-                    sums.q_own += pk.u_cols.transpose() * pf.force;
-                    sums.wrench += wrench(&pf.force, &Vector3::zeros(), &pk.motion.x);
+                    sums.q_own += pk.u_cols.transpose() * pf.force + pk.w_cols.transpose() * pf.torque;
+                    sums.wrench += wrench(&pf.force, &pf.torque, &pk.motion.x);
                 }
             }
             let end = point_kinematics(&start, &q, &qdot, l);
@@ -670,10 +679,37 @@ mod tests {
         st.qdot.fill(0.0);
         st.q = m.rest_coordinates();
         let mut dynamics = Dynamics::new(&m);
-        let pf = PointForce { s: 0.073, force: Vector3::new(1e-3, -2e-3, 5e-4) };
+        let pf = PointForce::new(0.073, Vector3::new(1e-3, -2e-3, 5e-4));
         dynamics.evaluate(&m, &st, &[pf], false);
         let expected = jacobian(&m, &st, pf.s).transpose() * pf.force;
         assert!((&dynamics.forces - &expected).norm() < 1e-12 * expected.norm());
         let _ = frame_at(&m, &st.q, &segment_frames(&m, &st), 0.0);
+    }
+
+    #[test]
+    fn point_torque_maps_through_the_angular_jacobian() {
+        // The generalized force of a torque tau on the section at s is tau . d(theta)/dq, the rotation of the
+        // section per unit coordinate, here by central differences of the frame (step 1e-6): 1e-7 relative.
+        let (mut m, mut st) = curly(ModelKind::Full);
+        m.gravity = Vector3::zeros();
+        m.air_drag = 0.0;
+        st.qdot.fill(0.0);
+        st.q = m.rest_coordinates();
+        let mut dynamics = Dynamics::new(&m);
+        let pf = PointForce { s: 0.061, force: Vector3::zeros(), torque: Vector3::new(2e-9, -1e-9, 3e-9) };
+        dynamics.evaluate(&m, &st, &[pf], false);
+        let r0 = frame_at(&m, &st.q, &segment_frames(&m, &st), pf.s).rotation;
+        for j in 0..m.dofs() {
+            let h = 1e-6;
+            let rot = |dq: f64| {
+                let mut t = st.clone();
+                t.q[j] += dq;
+                frame_at(&m, &t.q, &segment_frames(&m, &t), pf.s).rotation
+            };
+            let w = (rot(h) - rot(-h)) / (2.0 * h) * r0.transpose();
+            let dtheta = Vector3::new(w[(2, 1)] - w[(1, 2)], w[(0, 2)] - w[(2, 0)], w[(1, 0)] - w[(0, 1)]) * 0.5;
+            let expected = pf.torque.dot(&dtheta);
+            assert!((dynamics.forces[j] - expected).abs() < 1e-7 * pf.torque.norm() * (1.0 + dtheta.norm()), "j={j}: {} vs {expected}", dynamics.forces[j]);
+        }
     }
 }

@@ -94,7 +94,7 @@ impl Strand {
             return Err(StrandError::InvalidParameter { field: "dt", reason: format!("must be a finite positive time step, got {h}") });
         }
         for pf in external {
-            if !(pf.s.is_finite() && pf.force.iter().all(|f| f.is_finite())) {
+            if !(pf.s.is_finite() && pf.force.iter().chain(pf.torque.iter()).all(|f| f.is_finite())) {
                 return Err(StrandError::InvalidParameter { field: "point force", reason: format!("must be finite, got {pf:?}") });
             }
         }
@@ -240,7 +240,7 @@ mod tests {
                 s.state.q[i] += 25.0 * ((i as f64) * 1.3).sin();
                 s.state.qdot[i] = 40.0 * ((i as f64) * 0.7).cos();
             }
-            let pf = [PointForce { s: 0.13, force: Vector3::new(1e-4, -2e-4, 5e-5) }];
+            let pf = [PointForce { s: 0.13, force: Vector3::new(1e-4, -2e-4, 5e-5), torque: Vector3::new(1e-9, 3e-9, -2e-9) }];
             for h in [1e-4, 1e-3, 1e-2] {
                 let fast = s.linearly_implicit_velocity(h, &pf).unwrap();
                 let dense = s.linearly_implicit_velocity_dense(h, &pf).unwrap();

@@ -103,6 +103,9 @@ fn positive_definite(m: &DMatrix<f64>) -> bool {
 pub fn solve_equilibrium(model: &StrandModel, start: &StrandState, external: &[PointForce], opts: &StaticOptions) -> Result<Equilibrium> {
     model.validate()?;
     start.root.validate()?;
+    if external.iter().any(|pf| pf.torque != Vector3::zeros()) {
+        return Err(StrandError::InvalidParameter { field: "point force", reason: "statics takes forces only (a point torque has no potential)".into() });
+    }
     let mut state = start.clone();
     state.qdot.fill(0.0);
     let mut root = state.root.clone();

@@ -454,9 +454,13 @@ impl Dynamics {
             let Some(step) = step else { return false };
             self.articulated[i] = step;
         }
+        self.back_substitute(d, b)
+    }
+
+    /// Root-to-tip back-substitution of the articulated solve: `x_Q = -D^-1 (U^T V + c)`, `V += S_Q x_Q`.
+    fn back_substitute(&self, d: usize, b: &mut DVector<f64>) -> bool {
         let mut v = Vector6::zeros();
-        for i in 0..n {
-            let (u, dinv, c) = &self.articulated[i];
+        for (i, (u, dinv, c)) in self.articulated.iter().enumerate() {
             let x = -(dinv * (u.tr_mul(&v) + c));
             for k in 0..d {
                 b[i * d + k] = x[k];
@@ -481,16 +485,7 @@ impl Dynamics {
             }
             pa += *u * (*dinv * *c);
         }
-        let mut v = Vector6::zeros();
-        for i in 0..n {
-            let (u, dinv, c) = &self.articulated[i];
-            let x = -(dinv * (u.tr_mul(&v) + c));
-            for k in 0..d {
-                b[i * d + k] = x[k];
-            }
-            v += self.motion[i] * x;
-        }
-        b.iter().all(|x| x.is_finite())
+        self.back_substitute(d, b)
     }
 
     /// Steps 2 (mass) and 3 of the pipeline: the dense mass matrix from the sums of [`Dynamics::sweep`].

@@ -51,7 +51,11 @@ pub enum FfdError {
 #[inline]
 pub fn basis(t: f64) -> [f64; 3] {
     let u = 1.0 - t;
-    [0.5 * u * u, 0.5 * (-2.0 * t * t + 2.0 * t + 1.0), 0.5 * t * t]
+    [
+        0.5 * u * u,
+        0.5 * (-2.0 * t * t + 2.0 * t + 1.0),
+        0.5 * t * t,
+    ]
 }
 
 /// Derivatives d/dt of the quadratic B-spline pieces at t in [0, 1]: (B0', B1', B2'). Dimensionless.
@@ -80,12 +84,22 @@ impl FfdLattice {
     /// A lattice with node (0,0,0) at `origin` (m), spacing `h` (m) and node counts `n`.
     pub fn new(origin: Point3<f64>, h: f64, n: [usize; 3]) -> Result<Self, FfdError> {
         if !(h > 0.0 && h.is_finite()) {
-            return Err(FfdError::InvalidLattice(format!("cell size {h} m must be > 0")));
+            return Err(FfdError::InvalidLattice(format!(
+                "cell size {h} m must be > 0"
+            )));
         }
         if n.iter().any(|&k| k < 3) {
-            return Err(FfdError::InvalidLattice(format!("node counts {n:?} must all be >= 3")));
+            return Err(FfdError::InvalidLattice(format!(
+                "node counts {n:?} must all be >= 3"
+            )));
         }
-        Ok(Self { origin, h, nx: n[0], ny: n[1], nz: n[2] })
+        Ok(Self {
+            origin,
+            h,
+            nx: n[0],
+            ny: n[1],
+            nz: n[2],
+        })
     }
 
     /// The smallest lattice of spacing `h` (m) whose embedded volume contains the box
@@ -93,7 +107,9 @@ impl FfdLattice {
     /// inside the first cell that is fully supported).
     pub fn enclosing(lo: Point3<f64>, hi: Point3<f64>, h: f64) -> Result<Self, FfdError> {
         if !(h > 0.0 && h.is_finite()) {
-            return Err(FfdError::InvalidLattice(format!("cell size {h} m must be > 0")));
+            return Err(FfdError::InvalidLattice(format!(
+                "cell size {h} m must be > 0"
+            )));
         }
         let origin = lo - Vector3::repeat(0.5 * h);
         let mut n = [0usize; 3];
@@ -185,21 +201,27 @@ impl FfdLattice {
     /// Order: x fastest, then y, then z, over nodes cell-1..=cell+1 on each axis.
     /// Errors with [`FfdError::Outside`] if `p` is outside the embedded volume.
     pub fn weights(&self, p: &Point3<f64>) -> Result<([usize; 27], [f64; 27]), FfdError> {
-        let (lower, t) =
-            self.locate(p, false).ok_or(FfdError::Outside(p.x, p.y, p.z))?;
+        let (lower, t) = self
+            .locate(p, false)
+            .ok_or(FfdError::Outside(p.x, p.y, p.z))?;
         Ok(self.stencil(lower, t))
     }
 
     /// Like [`weights`](Self::weights) but clamps `p` into the embedded volume first (never fails
     /// for finite `p`; NaN coordinates still error).
     pub fn weights_clamped(&self, p: &Point3<f64>) -> Result<([usize; 27], [f64; 27]), FfdError> {
-        let (lower, t) = self.locate(p, true).ok_or(FfdError::Outside(p.x, p.y, p.z))?;
+        let (lower, t) = self
+            .locate(p, true)
+            .ok_or(FfdError::Outside(p.x, p.y, p.z))?;
         Ok(self.stencil(lower, t))
     }
 
     fn check_nodes(&self, nodes: &[Point3<f64>]) -> Result<(), FfdError> {
         if nodes.len() != self.node_count() {
-            return Err(FfdError::NodeCount { expected: self.node_count(), got: nodes.len() });
+            return Err(FfdError::NodeCount {
+                expected: self.node_count(),
+                got: nodes.len(),
+            });
         }
         Ok(())
     }
@@ -224,9 +246,15 @@ impl FfdLattice {
         nodes: &[Point3<f64>],
     ) -> Result<nalgebra::Matrix3<f64>, FfdError> {
         self.check_nodes(nodes)?;
-        let (lower, t) = self.locate(p, false).ok_or(FfdError::Outside(p.x, p.y, p.z))?;
+        let (lower, t) = self
+            .locate(p, false)
+            .ok_or(FfdError::Outside(p.x, p.y, p.z))?;
         let b = [basis(t[0]), basis(t[1]), basis(t[2])];
-        let d = [basis_derivative(t[0]), basis_derivative(t[1]), basis_derivative(t[2])];
+        let d = [
+            basis_derivative(t[0]),
+            basis_derivative(t[1]),
+            basis_derivative(t[2]),
+        ];
         let mut jac = nalgebra::Matrix3::zeros();
         for c in 0..3 {
             for bb in 0..3 {
@@ -276,8 +304,11 @@ impl Binding {
             node_count: lattice.node_count(),
         };
         for p in points {
-            let (idx, w) =
-                if clamp { lattice.weights_clamped(p)? } else { lattice.weights(p)? };
+            let (idx, w) = if clamp {
+                lattice.weights_clamped(p)?
+            } else {
+                lattice.weights(p)?
+            };
             b.indices.extend(idx.iter().map(|&i| i as u32));
             b.weights.extend_from_slice(&w);
         }
@@ -298,11 +329,18 @@ impl Binding {
     /// [`len`](Self::len)), given current node positions `nodes` (m, flat order).
     pub fn apply(&self, nodes: &[Point3<f64>], out: &mut Vec<Point3<f64>>) -> Result<(), FfdError> {
         if nodes.len() != self.node_count {
-            return Err(FfdError::NodeCount { expected: self.node_count, got: nodes.len() });
+            return Err(FfdError::NodeCount {
+                expected: self.node_count,
+                got: nodes.len(),
+            });
         }
         out.clear();
         out.reserve(self.len());
-        for (idx, w) in self.indices.chunks_exact(27).zip(self.weights.chunks_exact(27)) {
+        for (idx, w) in self
+            .indices
+            .chunks_exact(27)
+            .zip(self.weights.chunks_exact(27))
+        {
             let mut x = Vector3::zeros();
             for m in 0..27 {
                 x += w[m] * nodes[idx[m] as usize].coords;
@@ -344,8 +382,8 @@ mod tests {
             .collect();
         // corners of the embedded volume and a node and a cell face
         let lo = l.origin + Vector3::repeat(0.5 * l.h);
-        let hi = l.origin
-            + l.h * Vector3::new(l.nx as f64 - 1.5, l.ny as f64 - 1.5, l.nz as f64 - 1.5);
+        let hi =
+            l.origin + l.h * Vector3::new(l.nx as f64 - 1.5, l.ny as f64 - 1.5, l.nz as f64 - 1.5);
         pts.push(lo);
         pts.push(hi);
         pts.push(l.rest_position(2, 2, 3));
@@ -395,12 +433,18 @@ mod tests {
     #[test]
     fn affine_deformation_is_reproduced() {
         let l = lattice();
-        let rot = Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(Vector3::new(1.0, 2.0, -0.5)), 0.8);
+        let rot = Rotation3::from_axis_angle(
+            &nalgebra::Unit::new_normalize(Vector3::new(1.0, 2.0, -0.5)),
+            0.8,
+        );
         let a: Matrix3<f64> = rot.matrix() * Matrix3::from_diagonal(&Vector3::new(1.3, 0.7, 2.0));
         let shift = Vector3::new(0.4, -1.2, 0.3);
         let map = |p: &Point3<f64>| a * p.coords + shift;
-        let nodes: Vec<Point3<f64>> =
-            l.rest_positions().iter().map(|p| Point3::from(map(p))).collect();
+        let nodes: Vec<Point3<f64>> = l
+            .rest_positions()
+            .iter()
+            .map(|p| Point3::from(map(p)))
+            .collect();
         let pts = sample_points(&l, 500);
         let b = Binding::new(&l, &pts).unwrap();
         let mut out = Vec::new();
@@ -419,8 +463,8 @@ mod tests {
     /// distance e + d of the face; the two must agree to 1e-4 (they differ by O(d) x the second
     /// derivative, which jumps across the face: |x''| <~ 0.1/h^2 here).
     /// Analytic Jacobians at +-e of the face agree to 1e-6 (they differ by about 2 e |x''|; the
-/// wiggles of 0.01 m over h = 0.03 m give |x''| ~ 0.04 m / h^2 ~ 50 /m, so ~1e-7; a C0-only
-/// interpolant would jump by O(0.01 m / h) ~ 0.3 here).
+    /// wiggles of 0.01 m over h = 0.03 m give |x''| ~ 0.04 m / h^2 ~ 50 /m, so ~1e-7; a C0-only
+    /// interpolant would jump by O(0.01 m / h) ~ 0.3 here).
     #[test]
     fn c1_across_cell_faces() {
         let l = lattice();
@@ -448,7 +492,11 @@ mod tests {
             }
             let jl = l.jacobian(&(face - e * dir), &nodes).unwrap();
             let jr = l.jacobian(&(face + e * dir), &nodes).unwrap();
-            assert!((jl - jr).norm() < 1e-6, "jacobian jump {}", (jl - jr).norm());
+            assert!(
+                (jl - jr).norm() < 1e-6,
+                "jacobian jump {}",
+                (jl - jr).norm()
+            );
         }
     }
 

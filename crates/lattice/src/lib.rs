@@ -6,4 +6,4 @@
 //! Physics only: no threads, no I/O. SI units (m, kg, s, N), f64.
 
 pub mod ffd;
-
+pub mod metaball;

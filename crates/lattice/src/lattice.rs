@@ -584,7 +584,8 @@ mod tests {
         for _ in 0..300 {
             m.step(&mut s, 0.01, &head, Some(&ball));
         }
-        // the node's stiffeners, bending stiffeners and attachment (~173 + 10 + 5 N/m along an axis) hold it back against
+        // the node's stiffeners, bending stiffeners and attachment (~173 + 10 + 5 N/m along an
+        // axis) hold it back against
         // the penalty (1000 N/m): to first order the penetration settles near
         // 188 / 1188 ~ 0.16 of the initial one, not to zero
         assert!(depth(&s) < 0.25 * d0, "penetration {d0} -> {}", depth(&s));

@@ -1,0 +1,13 @@
+//! # Coiffure global layer: the lattice
+//!
+//! After Volino and Magnenat-Thalmann (2006): a regular lattice encloses the hairstyle and hair
+//! follows the lattice by quadratic B-spline free-form deformation ([`ffd`]); the head, body and
+//! tools are sets of metaballs that push lattice nodes out ([`metaball`]); the nodes are particles
+//! joined by stiffeners and attached to the head, integrated implicitly ([`lattice`]).
+//! Physics only: no threads, no I/O. SI units (m, kg, s, N), f64.
+
+#![warn(missing_docs)]
+
+pub mod ffd;
+pub mod lattice;
+pub mod metaball;

@@ -1,0 +1,388 @@
+//! Metaballs: the implicit bodies (head, neck, shoulders, tools) that lattice nodes collide with.
+//!
+//! Field (dimensionless): F(x) = sum_i (1 - |x - c_i|^2 / R_i^2)^2 for |x - c_i| < R_i, 0 outside.
+//! Each term is 1 at its centre and falls to 0 with zero slope at its radius, so F is C1.
+//! The body is {F > T} for a threshold T; an isolated ball's surface is the sphere of radius
+//! R sqrt(1 - sqrt(T)) (0.707 R for T = 1/4).
+//!
+//! ## Collision response (the rule, see [`MetaballSet::response`])
+//! With g = grad F (1/m), the outward normal is n = -g/|g| and the signed distance to the surface
+//! is estimated to first order as d = (T - F)/|g| (m; < 0 inside, > 0 outside).
+//! - inside (d < 0): penalty push out, f = k (-d) n (k = [`MetaballParams::stiffness`], N/m);
+//! - thin band outside (0 <= d < w, w = [`MetaballParams::band`]): weak attraction back to the
+//!   surface, f = -k_a d (1 - d/w) n (k_a = [`MetaballParams::attraction_stiffness`], N/m), zero at
+//!   both edges of the band so the force is continuous in d; the particle is held at the
+//!   surface instead of bouncing in and out of the penalty layer (the paper's "stabilising" force);
+//! - inside and in the band: normal damping -c (v . n) n (c = [`MetaballParams::damping`], N s/m),
+//!   which removes the normal velocity that drives jitter, and leaves tangential sliding free;
+//! - beyond the band (d >= w): no force.
+
+use nalgebra::{Point3, Vector3};
+
+/// One metaball (model: immutable).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Metaball {
+    /// Centre c, m.
+    pub centre: Point3<f64>,
+    /// Radius of influence R, m; > 0. The field term is zero beyond it.
+    pub radius: f64,
+}
+
+impl Metaball {
+    /// A metaball at `centre` (m) with radius of influence `radius` (m).
+    pub fn new(centre: Point3<f64>, radius: f64) -> Self {
+        Self { centre, radius }
+    }
+
+    /// This ball's term (dimensionless) and its gradient (1/m) at `x` (m).
+    #[inline]
+    pub fn term(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+        let r = x - self.centre;
+        let r2inv = 1.0 / (self.radius * self.radius);
+        let q = 1.0 - r.norm_squared() * r2inv;
+        if q <= 0.0 {
+            return (0.0, Vector3::zeros());
+        }
+        (q * q, (-4.0 * q * r2inv) * r)
+    }
+}
+
+/// Parameters of the metaball collision response. See the module docs for the rule.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MetaballParams {
+    /// Iso-value T of the body's surface (dimensionless, in (0, 1)); inside where F > T.
+    /// Default 0.25 (an isolated ball's surface at 0.707 R).
+    pub threshold: f64,
+    /// Penalty stiffness k of the push out, N/m (force per metre of estimated penetration).
+    /// Default 50 N/m.
+    pub stiffness: f64,
+    /// Stiffness k_a of the weak attraction in the band outside the surface, N/m.
+    /// Default 5 N/m (a tenth of the penalty).
+    pub attraction_stiffness: f64,
+    /// Width w of the attraction band outside the surface, m. Default 0.005 m.
+    pub band: f64,
+    /// Normal damping c inside the body and in the band, N s/m. Default 0.05 N s/m.
+    pub damping: f64,
+}
+
+impl Default for MetaballParams {
+    fn default() -> Self {
+        Self {
+            threshold: 0.25,
+            stiffness: 50.0,
+            attraction_stiffness: 5.0,
+            band: 0.005,
+            damping: 0.05,
+        }
+    }
+}
+
+/// The result of a collision query of one particle against a metaball set.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MetaballContact {
+    /// Field value F at the particle (dimensionless).
+    pub field: f64,
+    /// Estimated signed distance d to the surface, m (< 0 inside). Infinite where F = 0.
+    pub distance: f64,
+    /// Outward surface normal n (unit) used for the response; zero where F = 0.
+    pub normal: Vector3<f64>,
+    /// Force on the particle, N (penalty + band attraction + normal damping).
+    pub force: Vector3<f64>,
+}
+
+/// A set of metaballs forming one body or several (model: immutable).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct MetaballSet {
+    /// The balls.
+    pub balls: Vec<Metaball>,
+}
+
+impl MetaballSet {
+    /// A set from its balls.
+    pub fn new(balls: Vec<Metaball>) -> Self {
+        Self { balls }
+    }
+
+    /// A rough head, neck and shoulders in a head frame (m): z up, y forward (face), origin at the
+    /// head's centre; `head_radius` (m) is the radius of the head's surface at the default
+    /// threshold T = 1/4. Illustrative, not a measured body.
+    pub fn head_neck_shoulders(head_radius: f64) -> Self {
+        let s = head_radius / (1.0 - 0.25f64.sqrt()).sqrt(); // ball radius whose T=1/4 surface is head_radius
+        let a = head_radius;
+        let p = |x: f64, y: f64, z: f64| Point3::new(x * a, y * a, z * a);
+        Self::new(vec![
+            Metaball::new(p(0.0, 0.0, 0.0), s),          // cranium
+            Metaball::new(p(0.0, 0.25, -0.45), 0.8 * s), // face and jaw
+            Metaball::new(p(0.0, -0.1, -1.2), 0.6 * s),  // neck
+            Metaball::new(p(0.0, -0.1, -1.7), 0.6 * s),  // neck base
+            Metaball::new(p(-1.1, -0.1, -2.1), 0.9 * s), // left shoulder
+            Metaball::new(p(1.1, -0.1, -2.1), 0.9 * s),  // right shoulder
+            Metaball::new(p(0.0, -0.1, -2.3), 1.0 * s),  // upper chest
+        ])
+    }
+
+    /// Field value F at `x` (m), dimensionless, >= 0.
+    pub fn field(&self, x: &Point3<f64>) -> f64 {
+        self.balls.iter().map(|b| b.term(x).0).sum()
+    }
+
+    /// Analytic gradient of F at `x` (m), 1/m.
+    pub fn gradient(&self, x: &Point3<f64>) -> Vector3<f64> {
+        self.field_and_gradient(x).1
+    }
+
+    /// F (dimensionless) and its gradient (1/m) at `x` (m).
+    pub fn field_and_gradient(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+        let mut f = 0.0;
+        let mut g = Vector3::zeros();
+        for b in &self.balls {
+            let (fb, gb) = b.term(x);
+            f += fb;
+            g += gb;
+        }
+        (f, g)
+    }
+
+    /// True if `x` (m) is inside the body, F(x) > `threshold` (dimensionless).
+    pub fn inside(&self, x: &Point3<f64>, threshold: f64) -> bool {
+        self.field(x) > threshold
+    }
+
+    /// Collision response of a particle at `x` (m) moving at `v` (m/s): the rule of the module
+    /// docs with `params`. Where |grad F| vanishes (e.g. exactly at an isolated ball's centre) the
+    /// normal is taken from the centre of the largest contributing term to `x` (+z if they
+    /// coincide) and the penetration is capped at that ball's radius.
+    pub fn response(
+        &self,
+        params: &MetaballParams,
+        x: &Point3<f64>,
+        v: &Vector3<f64>,
+    ) -> MetaballContact {
+        let (f, g) = self.field_and_gradient(x);
+        let none = MetaballContact {
+            field: f,
+            distance: f64::INFINITY,
+            normal: Vector3::zeros(),
+            force: Vector3::zeros(),
+        };
+        if f <= 0.0 {
+            return none;
+        }
+        let gn = g.norm();
+        // largest contributing ball, for the degenerate-gradient fallback and the depth cap
+        let (mut best, mut best_f) = (0usize, -1.0);
+        for (i, b) in self.balls.iter().enumerate() {
+            let fb = b.term(x).0;
+            if fb > best_f {
+                best = i;
+                best_f = fb;
+            }
+        }
+        let ball = self.balls[best];
+        let cap = ball.radius;
+        let (normal, mut d) = if gn > 1e-9 / cap {
+            (-g / gn, (params.threshold - f) / gn)
+        } else {
+            let r = x - ball.centre;
+            let n = if r.norm() > 0.0 {
+                r.normalize()
+            } else {
+                Vector3::z()
+            };
+            (
+                n,
+                if f > params.threshold {
+                    -cap
+                } else {
+                    f64::INFINITY
+                },
+            )
+        };
+        if d < -cap {
+            d = -cap;
+        }
+        if d >= params.band {
+            return MetaballContact {
+                distance: d,
+                normal,
+                ..none
+            };
+        }
+        let vn = v.dot(&normal);
+        let mut force = -params.damping * vn * normal;
+        if d < 0.0 {
+            force += params.stiffness * (-d) * normal;
+        } else {
+            force -= params.attraction_stiffness * d * (1.0 - d / params.band) * normal;
+        }
+        MetaballContact {
+            field: f,
+            distance: d,
+            normal,
+            force,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn set() -> MetaballSet {
+        MetaballSet::new(vec![
+            Metaball::new(Point3::new(0.0, 0.0, 0.0), 0.1),
+            Metaball::new(Point3::new(0.06, 0.02, -0.01), 0.07),
+            Metaball::new(Point3::new(-0.03, 0.09, 0.04), 0.05),
+        ])
+    }
+
+    fn points() -> Vec<Point3<f64>> {
+        let mut out = Vec::new();
+        for i in 0..9 {
+            for j in 0..9 {
+                for k in 0..9 {
+                    let p = Point3::new(
+                        -0.12 + 0.03 * i as f64 + 0.0013,
+                        -0.1 + 0.028 * j as f64 + 0.0007,
+                        -0.11 + 0.027 * k as f64 + 0.0003,
+                    );
+                    out.push(p);
+                }
+            }
+        }
+        out
+    }
+
+    /// Central differences with step 1e-7 m (truncation ~ step^2 |F'''| ~ 1e-14/R^3 relative to
+    /// |grad F| ~ 1/R, i.e. ~1e-10; round-off ~ 1e-16/1e-7 ~ 1e-9): relative agreement 1e-6
+    /// wherever |grad F| is not tiny, absolute 1e-6 /m otherwise.
+    #[test]
+    fn gradient_matches_finite_differences() {
+        let s = set();
+        let h = 1e-7;
+        let mut checked = 0;
+        for p in points() {
+            let g = s.gradient(&p);
+            let mut fd = Vector3::zeros();
+            for a in 0..3 {
+                let mut e = Vector3::zeros();
+                e[a] = h;
+                fd[a] = (s.field(&(p + e)) - s.field(&(p - e))) / (2.0 * h);
+            }
+            let err = (fd - g).norm();
+            assert!(err <= 1e-6 * g.norm().max(1.0), "{p}: {g} vs {fd}");
+            if g.norm() > 1.0 {
+                checked += 1;
+            }
+        }
+        assert!(checked > 50, "too few points inside the balls: {checked}");
+    }
+
+    #[test]
+    fn field_is_zero_outside_every_ball() {
+        let s = set();
+        for p in points() {
+            let outside_all = s.balls.iter().all(|b| (p - b.centre).norm() >= b.radius);
+            if outside_all {
+                assert_eq!(s.field(&p), 0.0);
+                assert_eq!(s.gradient(&p), Vector3::zeros());
+                let c = s.response(&MetaballParams::default(), &p, &Vector3::new(1.0, 0.0, 0.0));
+                assert_eq!(c.force, Vector3::zeros());
+            } else {
+                assert!(s.field(&p) > 0.0);
+            }
+        }
+        // single ball: exact value and surface radius
+        let b = MetaballSet::new(vec![Metaball::new(Point3::origin(), 0.1)]);
+        assert_eq!(b.field(&Point3::origin()), 1.0);
+        let r_surf = 0.1 * (1.0 - 0.25f64.sqrt()).sqrt();
+        assert!(b.inside(&Point3::new(r_surf - 1e-9, 0.0, 0.0), 0.25));
+        assert!(!b.inside(&Point3::new(r_surf + 1e-9, 0.0, 0.0), 0.25));
+    }
+
+    #[test]
+    fn particle_inside_is_pushed_outwards() {
+        let params = MetaballParams::default();
+        let b = MetaballSet::new(vec![Metaball::new(Point3::new(0.1, 0.2, 0.3), 0.1)]);
+        let r_surf = 0.1 * (1.0 - 0.25f64.sqrt()).sqrt();
+        for dir in [
+            Vector3::x(),
+            Vector3::new(1.0, -2.0, 0.5).normalize(),
+            -Vector3::z(),
+        ] {
+            let mut last = f64::INFINITY;
+            for r in [0.9 * r_surf, 0.6 * r_surf, 0.3 * r_surf] {
+                let x = b.balls[0].centre + r * dir;
+                let c = b.response(&params, &x, &Vector3::zeros());
+                assert!(c.distance < 0.0);
+                assert!((c.normal - dir).norm() < 1e-12);
+                let push = c.force.dot(&dir);
+                assert!(push > 0.0 && (c.force - push * dir).norm() < 1e-12);
+                // deeper -> harder push
+                assert!(push > 0.0 && (last == f64::INFINITY || push > last));
+                last = push;
+            }
+            // first-order distance is exact to O(depth^2) near the surface
+            let x = b.balls[0].centre + (r_surf - 1e-4) * dir;
+            let c = b.response(&params, &x, &Vector3::zeros());
+            assert!((c.distance + 1e-4).abs() < 1e-6, "{}", c.distance);
+            assert!((c.force.norm() - params.stiffness * (-c.distance)).abs() < 1e-12);
+        }
+        // degenerate gradient at the very centre: still pushed out (along +z), finite
+        let c = b.response(&params, &b.balls[0].centre, &Vector3::zeros());
+        assert!(c.force.z > 0.0 && c.force.norm().is_finite());
+        // several balls: pushed away from the body
+        let s = set();
+        let x = Point3::new(0.0, 0.0, 0.06);
+        let c = s.response(&params, &x, &Vector3::zeros());
+        assert!(s.inside(&x, params.threshold));
+        let fd_step = 1e-4 * c.force.normalize();
+        assert!(s.field(&(x + fd_step)) < s.field(&x));
+    }
+
+    #[test]
+    fn band_attracts_weakly_and_damps_normal_velocity() {
+        let params = MetaballParams::default();
+        let b = MetaballSet::new(vec![Metaball::new(Point3::origin(), 0.1)]);
+        let r_surf = 0.1 * (1.0 - 0.25f64.sqrt()).sqrt();
+        let n = Vector3::new(0.0, 1.0, 0.0);
+        // in the band: pulled towards the surface, weaker than the penalty at the same depth
+        let x = Point3::from((r_surf + 0.5 * params.band) * n);
+        let c = b.response(&params, &x, &Vector3::zeros());
+        assert!(c.distance > 0.0 && c.distance < params.band);
+        let pull = -c.force.dot(&n);
+        assert!(pull > 0.0);
+        let x_in = Point3::from((r_surf - 0.5 * params.band) * n);
+        let push = b.response(&params, &x_in, &Vector3::zeros()).force.dot(&n);
+        assert!(pull < push);
+        // beyond the band: nothing
+        let x_far = Point3::from((r_surf + 2.0 * params.band) * n);
+        assert_eq!(
+            b.response(&params, &x_far, &Vector3::new(0.0, -1.0, 0.0))
+                .force,
+            Vector3::zeros()
+        );
+        // normal damping opposes normal velocity, tangential velocity is free
+        let c_vn = b.response(&params, &x, &(-0.2 * n));
+        assert!((c_vn.force - c.force - params.damping * 0.2 * n).norm() < 1e-12);
+        let c_vt = b.response(&params, &x, &Vector3::new(0.3, 0.0, 0.0));
+        assert!((c_vt.force - c.force).norm() < 1e-12);
+        // force continuous across the surface (d = 0) and the band's outer edge
+        let f_at = |r: f64| {
+            b.response(&params, &Point3::from(r * n), &Vector3::zeros())
+                .force
+        };
+        assert!((f_at(r_surf - 1e-9) - f_at(r_surf + 1e-9)).norm() < 1e-6);
+    }
+
+    #[test]
+    fn head_neck_shoulders_has_head_at_radius() {
+        let body = MetaballSet::head_neck_shoulders(0.09);
+        let t = MetaballParams::default().threshold;
+        assert!(body.inside(&Point3::origin(), t));
+        assert!(body.inside(&Point3::new(0.0, 0.0, 0.08), t));
+        assert!(!body.inside(&Point3::new(0.0, 0.0, 0.1), t));
+        assert!(body.inside(&Point3::new(0.1, -0.009, -0.19), t)); // shoulder
+        assert!(!body.inside(&Point3::new(0.3, 0.0, 0.0), t));
+    }
+}

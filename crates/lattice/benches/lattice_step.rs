@@ -35,6 +35,7 @@ fn bench(c: &mut Criterion) {
     let mut out = vec![Point3::origin(); pts.len()];
     g.throughput(Throughput::Elements(pts.len() as u64));
     g.bench_function("ffd_320k_vertices", |b| b.iter(|| binding.apply(&nodes, &mut out).unwrap()));
+    g.bench_function("ffd_320k_vertices_both_cores", |b| b.iter(|| binding.apply_parallel(&nodes, &mut out).unwrap()));
     g.finish();
 }
 

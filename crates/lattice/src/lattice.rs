@@ -441,6 +441,14 @@ mod tests {
     use super::*;
     use crate::metaball::Metaball;
 
+    /// Default parameters without gravity.
+    fn weightless() -> LatticeParams {
+        LatticeParams {
+            gravity: Vector3::zeros(),
+            ..Default::default()
+        }
+    }
+
     fn model(params: LatticeParams) -> LatticeModel {
         let ffd = FfdLattice::new(Point3::new(-0.1, -0.1, -0.05), 0.05, [5, 5, 4]).unwrap();
         LatticeModel::uniform(ffd, 2e-3, params).unwrap()
@@ -477,10 +485,7 @@ mod tests {
 
     #[test]
     fn at_rest_stays_at_rest() {
-        let params = LatticeParams {
-            gravity: Vector3::zeros(),
-            ..Default::default()
-        };
+        let params = weightless();
         let m = model(params);
         let head = Isometry3::translation(0.3, -0.2, 1.5)
             * Isometry3::rotation(Vector3::new(0.2, -0.1, 0.7));
@@ -497,10 +502,7 @@ mod tests {
 
     #[test]
     fn displaced_returns_towards_rest_with_energy_decreasing() {
-        let params = LatticeParams {
-            gravity: Vector3::zeros(),
-            ..Default::default()
-        };
+        let params = weightless();
         let m = model(params);
         let head = Isometry3::identity();
         let mut s = m.rest_state(&head);
@@ -555,10 +557,7 @@ mod tests {
 
     #[test]
     fn metaball_pushes_nodes_out() {
-        let params = LatticeParams {
-            gravity: Vector3::zeros(),
-            ..Default::default()
-        };
+        let params = weightless();
         let m = model(params);
         let head = Isometry3::identity();
         let mut s = m.rest_state(&head);

@@ -14,7 +14,7 @@
 
 use crate::error::{Result, StrandError};
 use crate::integrator::{Integrator, Strand};
-use crate::kinematics::{frame_at, jacobian, segment_frames};
+use crate::kinematics::{frame_at, jacobian_with_frames, segment_frames};
 use nalgebra::{DVector, Matrix3, Matrix3xX, Vector3};
 
 /// What a point constraint does.
@@ -133,7 +133,7 @@ impl Strand {
         let mut bias: Vec<Vector3<f64>> = Vec::with_capacity(constraints.len());
         let mut position: Vec<Vector3<f64>> = Vec::with_capacity(constraints.len());
         for c in constraints {
-            let j = jacobian(&self.model, &self.state, c.s);
+            let j = jacobian_with_frames(&self.model, &self.state, &frames, c.s);
             let x = frame_at(&self.model, &self.state.q, &frames, c.s).position;
             bias.push(root.velocity + root.angular_velocity.cross(&(x - root.position)));
             position.push(x);

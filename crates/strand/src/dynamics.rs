@@ -244,7 +244,8 @@ pub struct Dynamics {
     coupling: Vec<Twists>,
     /// Workspace of [`Dynamics::solve_articulated`], per segment: `U_Q`, `D_Q^-1` and `c_Q`.
     articulated: Vec<(Twists, Matrix3<f64>, Vector3<f64>)>,
-    /// Mass matrix M(q): the kinetic energy (with a fixed root) is `qdot^T M qdot / 2`, J.
+    /// Mass matrix M(q): the kinetic energy (with a fixed root) is `qdot^T M qdot / 2`, J. Assembled only by
+    /// `evaluate(.., with_mass = true)` (the linearly implicit step does not need it and leaves it stale).
     pub mass: DMatrix<f64>,
     /// All generalized forces at the evaluated state (elastic, damping, gravity, drag, point forces and
     /// minus the velocity-product terms), conjugate to q, so that `qdot . forces` is a power in W.
@@ -668,28 +669,29 @@ mod tests {
     #[test]
     fn point_force_maps_through_the_jacobian_transpose() {
         // Generalized force of a point force equals J(s)^T f: 1e-12 relative.
-        let (mut m, mut st) = curly(ModelKind::Full);
-        m.gravity = Vector3::zeros();
-        m.air_drag = 0.0;
-        st.qdot.fill(0.0);
-        st.q = m.rest_coordinates();
+        let (m, st) = weightless_at_rest();
         let mut dynamics = Dynamics::new(&m);
         let pf = PointForce::new(0.073, Vector3::new(1e-3, -2e-3, 5e-4));
         dynamics.evaluate(&m, &st, &[pf], false);
         let expected = jacobian(&m, &st, pf.s).transpose() * pf.force;
         assert!((&dynamics.forces - &expected).norm() < 1e-12 * expected.norm());
-        let _ = frame_at(&m, &st.q, &segment_frames(&m, &st), 0.0);
+    }
+
+    /// The curly full-model strand at its rest shape and at rest, without gravity or air drag.
+    fn weightless_at_rest() -> (StrandModel, StrandState) {
+        let (mut m, mut st) = curly(ModelKind::Full);
+        m.gravity = Vector3::zeros();
+        m.air_drag = 0.0;
+        st.qdot.fill(0.0);
+        st.q = m.rest_coordinates();
+        (m, st)
     }
 
     #[test]
     fn point_torque_maps_through_the_angular_jacobian() {
         // The generalized force of a torque tau on the section at s is tau . d(theta)/dq, the rotation of the
         // section per unit coordinate, here by central differences of the frame (step 1e-6): 1e-7 relative.
-        let (mut m, mut st) = curly(ModelKind::Full);
-        m.gravity = Vector3::zeros();
-        m.air_drag = 0.0;
-        st.qdot.fill(0.0);
-        st.q = m.rest_coordinates();
+        let (m, st) = weightless_at_rest();
         let mut dynamics = Dynamics::new(&m);
         let pf = PointForce { s: 0.061, force: Vector3::zeros(), torque: Vector3::new(2e-9, -1e-9, 3e-9) };
         dynamics.evaluate(&m, &st, &[pf], false);

@@ -100,9 +100,14 @@ pub fn point_velocity(t: &nalgebra::SVector<f64, 6>, x: &Vector3<f64>) -> Vector
 
 /// Jacobian `dr(s)/dq` of the centreline point at arc length `s` (3 x 2N or 3 x 3N), m per (rad/m).
 pub fn jacobian(model: &StrandModel, state: &StrandState, s: f64) -> Matrix3xX<f64> {
+    jacobian_with_frames(model, state, &segment_frames(model, state), s)
+}
+
+/// [`jacobian`] with the segment frames of `state` already computed by [`segment_frames`] (several points of
+/// one state share them).
+pub fn jacobian_with_frames(model: &StrandModel, state: &StrandState, frames: &[Frame], s: f64) -> Matrix3xX<f64> {
     let d = model.dofs_per_segment();
     let l = model.segment_length();
-    let frames = segment_frames(model, state);
     let origin = state.root.position;
     let (i, sigma) = locate(model, s);
     let (own, f) = own_twists(&frames[i], &darboux(model, &state.q, i), sigma, &origin);

@@ -14,7 +14,7 @@
 
 use crate::error::{Result, StrandError};
 use crate::integrator::{Integrator, Strand};
-use crate::kinematics::{frame_at, jacobian_with_frames, segment_frames};
+use crate::kinematics::{frame_at, segment_frames};
 use nalgebra::{DVector, Matrix3, Matrix3xX, Vector3};
 
 /// What a point constraint does.
@@ -107,6 +107,7 @@ impl Strand {
     /// One linearly implicit Euler step of `h` seconds with point forces `external` and point `constraints`.
     /// Returns the impulse (N s) each constraint gave the strand over the step (the force is impulse / h; the
     /// obstacle receives the opposite). On failure the state is left unchanged.
+    /// Equal to [`Strand::prepare_step`] followed by [`Strand::finish_step`].
     pub fn step_constrained(
         &mut self,
         h: f64,
@@ -117,24 +118,50 @@ impl Strand {
         if constraints.is_empty() {
             return self.step(h, external).map(|_| vec![]);
         }
+        for c in constraints {
+            c.validate()?;
+        }
+        self.prepare_step(h, external)?;
+        self.finish_step(constraints, opts)
+    }
+
+    /// First half of a linearly implicit Euler step of `h` seconds with point forces `external`: evaluates the
+    /// dynamics at the current state and solves the velocities without constraints. Afterwards
+    /// `self.dynamics.frames` and `self.dynamics.points` hold the segment frames and Gauss points of the
+    /// current state (e.g. to sample the centreline for collision detection at no extra cost). Complete the
+    /// step with [`Strand::finish_step`]; until then the state is unchanged.
+    pub fn prepare_step(&mut self, h: f64, external: &[crate::dynamics::PointForce]) -> Result<()> {
+        self.prepared = None;
         if self.integrator != Integrator::LinearlyImplicitEuler {
             return Err(StrandError::InvalidParameter { field: "integrator", reason: "constraints need the linearly implicit Euler integrator".into() });
+        }
+        self.check_step_input(h, external)?;
+        let v = self.linearly_implicit_velocity(h, external)?;
+        self.prepared = Some((h, v));
+        Ok(())
+    }
+
+    /// Second half of the step begun by [`Strand::prepare_step`]: solves the point `constraints` (at the state
+    /// the step was prepared at) and advances the state. Returns each constraint's impulse (N s), as
+    /// [`Strand::step_constrained`]. An error if no step was prepared; on failure the state is unchanged.
+    pub fn finish_step(&mut self, constraints: &[PointConstraint], opts: &ConstraintOptions) -> Result<Vec<Vector3<f64>>> {
+        let Some((h, mut v)) = self.prepared.take() else {
+            return Err(StrandError::InvalidParameter { field: "finish_step", reason: "no step was prepared (call prepare_step first)".into() });
+        };
+        if constraints.is_empty() {
+            return self.commit_step(h, v).map(|_| vec![]);
         }
         for c in constraints {
             c.validate()?;
         }
-        self.check_step_input(h, external)?;
-        let mut v = self.linearly_implicit_velocity(h, external)?;
-        // Jacobians, free velocities (including the root's motion) and Y = A^-1 J^T per constraint.
-        let frames = segment_frames(&self.model, &self.state);
+        // Jacobians from the frames and motion subspaces of the step's own sweep (same state).
         let root = self.state.root.clone();
         let mut jac: Vec<Matrix3xX<f64>> = Vec::with_capacity(constraints.len());
         let mut y: Vec<Matrix3xX<f64>> = Vec::with_capacity(constraints.len());
         let mut bias: Vec<Vector3<f64>> = Vec::with_capacity(constraints.len());
         let mut position: Vec<Vector3<f64>> = Vec::with_capacity(constraints.len());
         for c in constraints {
-            let j = jacobian_with_frames(&self.model, &self.state, &frames, c.s);
-            let x = frame_at(&self.model, &self.state.q, &frames, c.s).position;
+            let (j, x) = self.dynamics.point_jacobian(&self.model, &self.state, c.s);
             bias.push(root.velocity + root.angular_velocity.cross(&(x - root.position)));
             position.push(x);
             let mut yc = Matrix3xX::zeros(self.model.dofs());

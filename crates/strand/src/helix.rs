@@ -106,45 +106,83 @@ pub struct SegmentPoint {
     pub linear_bias: Vector3<f64>,
 }
 
+/// The coefficients `a, b, c, db/du, dc/du` of [`coefficients`] and [`coefficient_derivatives`] at `u`, and
+/// the time derivatives of `b, c, db/du, dc/du` when `u` changes at the rate `u_dot` (forward-mode dual
+/// numbers; one sine and cosine shared by all of them). Returns `[a, b, c, db, dc, b_dot, c_dot, db_dot, dc_dot]`.
+#[inline]
+fn coefficients_with_rates(u: f64, u_dot: f64) -> [f64; 9] {
+    use num_dual::Dual64;
+    let ud = Dual64::new(u, u_dot);
+    let (b, c, db, dc, a) = if u < SERIES_BELOW {
+        let (a, b, c) = coefficients(ud);
+        let (db, dc) = coefficient_derivatives(ud);
+        (b, c, db, dc, a.re)
+    } else {
+        // The closed forms of `coefficients` and `coefficient_derivatives`, with one sin/cos for all.
+        let t = num_dual::DualNum::sqrt(&ud);
+        let (s, co) = num_dual::DualNum::sin_cos(&t);
+        let one_minus_cos = -co + 1.0;
+        let b = one_minus_cos / ud;
+        let c = (t - s) / (ud * t);
+        let db = (t * s - one_minus_cos * 2.0) / (ud * ud * 2.0);
+        let dc = (t * one_minus_cos - (t - s) * 3.0) / (ud * ud * t * 2.0);
+        (b, c, db, dc, s.re / t.re)
+    };
+    [a, b.re, c.re, db.re, dc.re, b.eps, c.eps, db.eps, dc.eps]
+}
+
 /// Transform, derivatives and velocity-product terms of a segment point in one pass (one set of
 /// trigonometric functions, evaluated in forward-mode dual numbers of `u = |sigma omega|^2` along time).
 /// Equal to [`segment_transform`], [`segment_derivatives`] and their directional derivatives along `rate`.
+/// The matrices are written out with `[phi]x^2 = phi phi^T - |phi|^2 1` and `e0 = x` (no 3x3 products).
+#[inline]
 pub fn segment_kinematics(omega: &Vector3<f64>, rate: &Vector3<f64>, sigma: f64) -> SegmentPoint {
-    use num_dual::Dual64;
     let phi = omega * sigma;
     let phi_dot = rate * sigma;
     let nu = rate;
     let u = phi.norm_squared();
     let pn = phi.dot(nu);
     let u_dot = 2.0 * sigma * pn;
-    let ud = Dual64::new(u, u_dot);
-    let (a, b, c) = coefficients(ud);
-    let (db, dc) = coefficient_derivatives(ud);
-    let (a, b_dot, b) = (a.re, b.eps, b.re);
-    let (c_dot, c) = (c.eps, c.re);
-    let (db_dot, db) = (db.eps, db.re);
-    let (dc_dot, dc) = (dc.eps, dc.re);
-    let k = phi.cross_matrix();
-    let k2 = k * k;
+    let [a, b, c, db, dc, b_dot, c_dot, db_dot, dc_dot] = coefficients_with_rates(u, u_dot);
+    let (p0, p1, p2) = (phi.x, phi.y, phi.z);
     let e0 = Vector3::x();
-    let pe = phi.cross(&e0);
-    let ppe = phi.cross(&pe);
-    let rotation = Matrix3::identity() + k * a + k2 * b;
+    // phi x e0 and phi x (phi x e0) = p0 phi - u e0.
+    let pe = Vector3::new(0.0, p2, -p1);
+    let ppe = Vector3::new(p0 * p0 - u, p0 * p1, p0 * p2);
+    let pp = phi * phi.transpose();
+    let k = Matrix3::new(0.0, -p2, p1, p2, 0.0, -p0, -p1, p0, 0.0);
+    // E = 1 + a K + b K^2 and angular = sigma (1 + b K + c K^2), with K^2 = phi phi^T - u 1.
+    let mut rotation = k * a + pp * b;
+    let diag = 1.0 - b * u;
+    rotation[(0, 0)] += diag;
+    rotation[(1, 1)] += diag;
+    rotation[(2, 2)] += diag;
+    let mut angular = k * b + pp * c;
+    let diag = 1.0 - c * u;
+    angular[(0, 0)] += diag;
+    angular[(1, 1)] += diag;
+    angular[(2, 2)] += diag;
+    angular *= sigma;
     let offset = (e0 + pe * b + ppe * c) * sigma;
-    let angular = (Matrix3::identity() + k * b + k2 * c) * sigma;
-    let e0x = e0.cross_matrix();
-    let linear = ((pe * phi.transpose()) * (2.0 * db) - e0x * b + (ppe * phi.transpose()) * (2.0 * dc)
-        - (pe.cross_matrix() + k * e0x) * c)
-        * (sigma * sigma);
+    // linear = sigma^2 [2 db pe phi^T + 2 dc ppe phi^T - b [e0]x - c ([pe]x + K [e0]x)], where
+    // [pe]x + K [e0]x = [[0, 2 p1, 2 p2], [-p1, -p0, 0], [-p2, 0, -p0]].
+    let g = pe * (2.0 * db) + ppe * (2.0 * dc);
+    let mut linear = g * phi.transpose();
+    let m = Matrix3::new(0.0, 2.0 * p1, 2.0 * p2, -p1, -p0, 0.0, -p2, 0.0, -p0);
+    linear -= m * c;
+    linear[(2, 1)] -= b;
+    linear[(1, 2)] += b;
+    linear *= sigma * sigma;
     let pnu = phi.cross(nu);
     let angular_bias = (pnu * b_dot + phi.cross(&pnu) * c_dot + nu.cross(&pnu) * (c * sigma)) * sigma;
     let p_dot = sigma * nu.norm_squared();
-    let nue = nu.cross(&e0);
+    let nue = Vector3::new(0.0, nu.z, -nu.y);
+    let pde = Vector3::new(0.0, phi_dot.z, -phi_dot.y);
     let linear_bias = (pe * (2.0 * (db_dot * pn + db * p_dot))
-        + phi_dot.cross(&e0) * (2.0 * db * pn)
+        + pde * (2.0 * db * pn)
         + nue * b_dot
         + ppe * (2.0 * (dc_dot * pn + dc * p_dot))
-        + (phi_dot.cross(&pe) + phi.cross(&phi_dot.cross(&e0))) * (2.0 * dc * pn)
+        + (phi_dot.cross(&pe) + phi.cross(&pde)) * (2.0 * dc * pn)
         + (nu.cross(&pe) + phi.cross(&nue)) * c_dot
         + nu.cross(&nue) * (2.0 * c * sigma))
         * (sigma * sigma);

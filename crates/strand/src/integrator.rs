@@ -57,6 +57,8 @@ pub struct Strand {
     system: DMatrix<f64>,
     /// Workspace: right-hand side, then solution, of the step's linear system.
     rhs: DVector<f64>,
+    /// A step begun by [`Strand::prepare_step`]: its time step (s) and unconstrained velocities.
+    pub(crate) prepared: Option<(f64, DVector<f64>)>,
 }
 
 impl Strand {
@@ -67,7 +69,7 @@ impl Strand {
         let state = StrandState::at_rest(&model, root);
         let dynamics = Dynamics::new(&model);
         let n = model.dofs();
-        Ok(Self { model, state, integrator: Integrator::default(), dynamics, clamped_steps: 0, system: DMatrix::zeros(n, n), rhs: DVector::zeros(n) })
+        Ok(Self { model, state, integrator: Integrator::default(), dynamics, clamped_steps: 0, system: DMatrix::zeros(n, n), rhs: DVector::zeros(n), prepared: None })
     }
 
     /// Total energy (kinetic + gravity + elastic) at the current state, J.

@@ -1,6 +1,8 @@
 //! Benchmark of the haptic loop: a comb drawn at 0.2 m/s through N hanging strands of 16 segments (full
 //! model, constraint contacts), 1 kHz, one haptic thread. Prints step-time mean, p99, p99.9, max and deadline
-//! misses. Run: `cargo run --release -p coiffure-engine --example haptic_loop_bench [-- N...]` (default 16 32 64).
+//! misses, then the mean time per step of each phase of the interaction step. Run:
+//! `cargo run --release -p coiffure-engine --example haptic_loop_bench [-- [full|reduced] N...]`
+//! (default: full model, 16 32 64 strands).
 
 use engine::local_session::run_local_session;
 use haptics::backends::ScriptedDevice;
@@ -12,13 +14,17 @@ use tools::interaction::{ForceModel, LocalInteraction};
 use tools::shape::ToolShape;
 
 fn main() {
-    let counts: Vec<usize> = std::env::args().skip(1).filter_map(|a| a.parse().ok()).collect();
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let kind = if args.iter().any(|a| a == "reduced") { ModelKind::Reduced } else { ModelKind::Full };
+    let counts: Vec<usize> = args.iter().filter_map(|a| a.parse().ok()).collect();
     let counts = if counts.is_empty() { vec![16, 32, 64] } else { counts };
-    println!("| strands x 16 segments | steps | step mean | p99 | p99.9 | max | misses | contact steps |");
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("model: {kind:?}");
+    println!("| strands x 16 segments | steps | step mean | p99 | p99.9 | max | misses | contact steps | peak device force |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    let mut phases = Vec::new();
     for n in counts {
         let h = HairType::H1;
-        let m = StrandModel::new(ModelKind::Full, 0.15, 16, h.section().unwrap(), h.material().unwrap()).unwrap();
+        let m = StrandModel::new(kind, 0.15, 16, h.section().unwrap(), h.material().unwrap()).unwrap();
         let strands: Vec<Strand> = (0..n)
             .map(|i| {
                 let x = -0.03 + 0.06 * (i as f64 + 0.5) / n as f64;
@@ -29,16 +35,27 @@ fn main() {
         let it = LocalInteraction::new(strands, ToolShape::builtin("comb").unwrap(), pose, ForceModel::Constraint { friction: h.friction_coefficient(), options: Default::default() });
         let script = |t: f64| Some(DeviceReading { time: t, position: Vector3::new(0.0004, -0.02 + 0.2 * t, 0.22), rotation: Matrix3::identity(), buttons: 0 });
         let steps = 2000;
-        let (s, _, c) = run_local_session(1000.0, ScriptedDevice::new(script), DeviceProfile::PHANTOM_DESKTOP, it, steps).unwrap();
+        let (s, dev, c) = run_local_session(1000.0, ScriptedDevice::new(script), DeviceProfile::PHANTOM_DESKTOP, it, steps).unwrap();
+        let peak = dev.commands.iter().map(|c| c.force.norm()).fold(0.0, f64::max);
+        let per_step = |i: usize| c.phase_ns[i].load(std::sync::atomic::Ordering::Relaxed) as f64 / s.steps as f64 / 1e3;
+        phases.push((n, [per_step(0), per_step(1), per_step(2), per_step(3), per_step(4)], c.touched_strands.load(std::sync::atomic::Ordering::Relaxed) as f64 / s.steps as f64));
         println!(
-            "| {n} | {} | {:.0} us | {:.0} us | {:.0} us | {:.0} us | {} | {} |",
+            "| {n} | {} | {:.0} us | {:.0} us | {:.0} us | {:.0} us | {} | {} | {:.2} N |",
             s.steps,
             s.step_mean * 1e6,
             s.step_p99 * 1e6,
             s.step_p999 * 1e6,
             s.step_max * 1e6,
             s.misses,
-            c.contact_steps.load(std::sync::atomic::Ordering::Relaxed)
+            c.contact_steps.load(std::sync::atomic::Ordering::Relaxed),
+            peak
         );
+    }
+    println!();
+    println!("Mean time per step of each phase:");
+    println!("| strands | strand dynamics + free solve | sampling + tree refit | detection | strands with contacts (assembly, PGS, commit) | strands without (commit) | strands touched per step |");
+    println!("|---|---|---|---|---|---|---|");
+    for (n, p, touched) in phases {
+        println!("| {n} | {:.0} us | {:.0} us | {:.0} us | {:.0} us | {:.0} us | {touched:.1} |", p[0], p[1], p[2], p[3], p[4]);
     }
 }

@@ -20,6 +20,12 @@ pub struct SessionCounters {
     pub failed_steps: AtomicU64,
     /// Steps with at least one contact.
     pub contact_steps: AtomicU64,
+    /// Total wall time of the interaction steps' phases, ns (see [`tools::interaction::StepTimings`]): strand
+    /// dynamics and unconstrained solves, centreline sampling and tree refit, contact detection, strands with
+    /// contacts, strands without.
+    pub phase_ns: [AtomicU64; 5],
+    /// Total strands with contacts over all steps.
+    pub touched_strands: AtomicU64,
 }
 
 /// Starts the haptic loop at `rate_hz` with `device` driving the tool of `interaction`.
@@ -48,6 +54,11 @@ pub fn spawn_local_session<D: HapticDevice + 'static>(
         match interaction.step(dt, pose) {
             Ok(res) => {
                 hair = res.force;
+                let t = &res.timings;
+                for (slot, secs) in shared.phase_ns.iter().zip([t.dynamics, t.sample, t.detect, t.constrained, t.free]) {
+                    slot.fetch_add((secs * 1e9) as u64, Ordering::Relaxed);
+                }
+                shared.touched_strands.fetch_add(t.touched_strands as u64, Ordering::Relaxed);
                 if !res.contacts.is_empty() {
                     shared.contact_steps.fetch_add(1, Ordering::Relaxed);
                 }

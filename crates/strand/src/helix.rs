@@ -114,9 +114,22 @@ fn coefficients_with_rates(u: f64, u_dot: f64) -> [f64; 9] {
     use num_dual::Dual64;
     let ud = Dual64::new(u, u_dot);
     let (b, c, db, dc, a) = if u < SERIES_BELOW {
-        let (a, b, c) = coefficients(ud);
-        let (db, dc) = coefficient_derivatives(ud);
-        (b, c, db, dc, a.re)
+        // The Taylor series of `coefficients` and `coefficient_derivatives` (ascending powers of u), with
+        // their u-derivatives by Horner's scheme in plain floating point.
+        const A: [f64; 6] = [1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0];
+        const B: [f64; 6] = [0.5, -1.0 / 24.0, 1.0 / 720.0, -1.0 / 40320.0, 1.0 / 3628800.0, -1.0 / 479001600.0];
+        const C: [f64; 6] = [1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0, -1.0 / 6227020800.0];
+        const DB: [f64; 5] = [-1.0 / 24.0, 2.0 / 720.0, -3.0 / 40320.0, 4.0 / 3628800.0, -5.0 / 479001600.0];
+        const DC: [f64; 5] = [-1.0 / 120.0, 2.0 / 5040.0, -3.0 / 362880.0, 4.0 / 39916800.0, -5.0 / 6227020800.0];
+        let horner = |k: &[f64]| {
+            let (mut p, mut dp) = (k[k.len() - 1], 0.0);
+            for &c in k[..k.len() - 1].iter().rev() {
+                dp = dp * u + p;
+                p = p * u + c;
+            }
+            Dual64::new(p, dp * u_dot)
+        };
+        (horner(&B), horner(&C), horner(&DB), horner(&DC), horner(&A).re)
     } else {
         // The closed forms of `coefficients` and `coefficient_derivatives`, with one sin/cos for all.
         let t = num_dual::DualNum::sqrt(&ud);

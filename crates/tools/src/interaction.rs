@@ -16,7 +16,7 @@ use crate::contact::{detect, Contact, DetectReport, ToolPose};
 use crate::shape::ToolShape;
 use nalgebra::Vector3;
 use strand::constraint::{ConstraintKind, ConstraintOptions, PointConstraint};
-use strand::kinematics::{centerline, frame_at, segment_frames};
+use strand::kinematics::{frame_at, segment_frames};
 use strand::{PointForce, Strand, StrandError};
 
 /// How a contact pushes a strand.
@@ -50,6 +50,27 @@ pub struct StepResult {
     pub contacts: Vec<Contact>,
     /// Detection details (sub-steps, too-fast flag).
     pub report: DetectReport,
+    /// Where the step's time went (wall clock).
+    pub timings: StepTimings,
+}
+
+/// Wall-clock time of the phases of one [`LocalInteraction::step`], s.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StepTimings {
+    /// Every strand's dynamics at the current state and unconstrained velocities (constraint model: the first
+    /// half of each step, [`Strand::prepare_step`]), s.
+    pub dynamics: f64,
+    /// Sampling the centrelines into pieces and refitting the AABB tree, s.
+    pub sample: f64,
+    /// Contact detection, s.
+    pub detect: f64,
+    /// Strands with contacts: constraint assembly, projected Gauss-Seidel and commit (paper model: the strand
+    /// steps with contact forces), s.
+    pub constrained: f64,
+    /// Strands without contacts: commit of the prepared step (paper model: their whole step), s.
+    pub free: f64,
+    /// Strands that had contacts this step.
+    pub touched_strands: usize,
 }
 
 /// A patch of strands, a tool, and the contact between them.
@@ -69,6 +90,10 @@ pub struct LocalInteraction {
     surface_torques: Vec<Vec<PointForce>>,
     pieces: Vec<Piece>,
     bvh: Bvh,
+    /// Workspace: which strands' steps were prepared this step.
+    prepared: Vec<bool>,
+    /// Workspace: contacts of this step.
+    contacts: Vec<Contact>,
 }
 
 impl LocalInteraction {
@@ -78,7 +103,8 @@ impl LocalInteraction {
         let margin = Self::hair_radius(&strands);
         let bvh = Bvh::build(&pieces, margin);
         let surface_torques = vec![Vec::new(); strands.len()];
-        Self { strands, shape, pose, model, pins: Vec::new(), surface_torques, pieces, bvh }
+        let prepared = vec![false; strands.len()];
+        Self { strands, shape, pose, model, pins: Vec::new(), surface_torques, pieces, bvh, prepared, contacts: Vec::new() }
     }
 
     /// Closes a clip: pins the strand point nearest to the tool origin, if one is within `reach` (m); it then
@@ -112,45 +138,128 @@ impl LocalInteraction {
         strands.iter().map(|s| s.model.section.semi_major).fold(0.0, f64::max)
     }
 
+    /// Arc lengths (m) at which a strand's centreline is sampled: every segment's start, its Gauss points (as
+    /// in the strand's dynamics, so that a step's own sweep gives these points), and the tip.
+    fn sample_arc_lengths(strand: &Strand) -> impl Iterator<Item = f64> + '_ {
+        let l = strand.model.segment_length();
+        let nodes = strand.dynamics.quadrature_nodes();
+        (0..strand.model.segments)
+            .flat_map(move |i| std::iter::once(i as f64 * l).chain(nodes.iter().map(move |&(sigma, _)| i as f64 * l + sigma)))
+            .chain(std::iter::once(strand.model.length))
+    }
+
+    /// Centreline pieces of every strand at its current state, computed from its kinematics.
     fn sample(strands: &[Strand]) -> Vec<Piece> {
         let mut pieces = Vec::new();
         for (k, s) in strands.iter().enumerate() {
-            let pts = centerline(&s.model, &s.state, 2 * s.model.segments + 1);
-            for w in pts.windows(2) {
-                pieces.push(Piece { strand: k, s: w[0].0, length: w[1].0 - w[0].0, a: w[0].1, b: w[1].1 });
-            }
+            Self::sample_strand(k, s, &mut pieces);
         }
         pieces
     }
 
+    /// Appends the pieces of strand `k` at its current state (kinematics evaluated here).
+    fn sample_strand(k: usize, strand: &Strand, pieces: &mut Vec<Piece>) {
+        let frames = segment_frames(&strand.model, &strand.state);
+        let mut last: Option<(f64, Vector3<f64>)> = None;
+        for s in Self::sample_arc_lengths(strand) {
+            let x = frame_at(&strand.model, &strand.state.q, &frames, s).position;
+            if let Some((s0, a)) = last {
+                pieces.push(Piece { strand: k, s: s0, length: s - s0, a, b: x });
+            }
+            last = Some((s, x));
+        }
+    }
+
+    /// Appends the pieces of strand `k` from the frames and Gauss points of its prepared step's sweep (the same
+    /// points as [`LocalInteraction::sample_strand`], without evaluating anything).
+    fn sample_strand_from_sweep(k: usize, strand: &Strand, pieces: &mut Vec<Piece>) {
+        let dy = &strand.dynamics;
+        let q = dy.quadrature_nodes().len();
+        let l = strand.model.segment_length();
+        let mut s0 = 0.0;
+        let mut a = dy.frames[0].position;
+        let mut push = |s: f64, x: Vector3<f64>| {
+            pieces.push(Piece { strand: k, s: s0, length: s - s0, a, b: x });
+            s0 = s;
+            a = x;
+        };
+        for i in 0..strand.model.segments {
+            if i > 0 {
+                push(i as f64 * l, dy.frames[i].position);
+            }
+            for (g, &(sigma, _)) in dy.quadrature_nodes().iter().enumerate() {
+                push(i as f64 * l + sigma, dy.points[i * q + g]);
+            }
+        }
+        push(strand.model.length, dy.frames[strand.model.segments].position);
+    }
+
     /// Moves the tool to `pose` over `dt` seconds and steps every strand. On a strand's failure the error is
     /// returned; the other strands have stepped.
+    ///
+    /// With the constraint model every strand first evaluates its dynamics and unconstrained velocities
+    /// ([`Strand::prepare_step`]); the collision pieces are then read from that evaluation's frames and Gauss
+    /// points (no kinematics of their own), and strands without contacts only commit their prepared step.
     pub fn step(&mut self, dt: f64, pose: ToolPose) -> Result<StepResult, StrandError> {
-        self.pieces = Self::sample(&self.strands);
+        let mut timings = StepTimings::default();
+        let clock = std::time::Instant::now();
+        let mut first_error = None;
+        let constraint = matches!(self.model, ForceModel::Constraint { .. });
+        self.prepared.iter_mut().for_each(|p| *p = false);
+        if constraint {
+            // A strand that cannot prepare (another integrator, bad input) takes the whole step below instead,
+            // which reports its error.
+            for (k, strand) in self.strands.iter_mut().enumerate() {
+                if strand.integrator == strand::Integrator::LinearlyImplicitEuler && strand.prepare_step(dt, &self.surface_torques[k]).is_ok() {
+                    self.prepared[k] = true;
+                    self.surface_torques[k].clear();
+                }
+            }
+        }
+        let t_dynamics = clock.elapsed().as_secs_f64();
+        timings.dynamics = t_dynamics;
+        self.pieces.clear();
+        for (k, strand) in self.strands.iter().enumerate() {
+            if self.prepared[k] {
+                Self::sample_strand_from_sweep(k, strand, &mut self.pieces);
+            } else {
+                Self::sample_strand(k, strand, &mut self.pieces);
+            }
+        }
         self.bvh.refit(&self.pieces);
-        let mut contacts = Vec::new();
+        let t_sample = clock.elapsed().as_secs_f64();
+        timings.sample = t_sample - t_dynamics;
+        let mut contacts = std::mem::take(&mut self.contacts);
+        contacts.clear();
         let radius = Self::hair_radius(&self.strands);
         let report = detect(&self.shape, &self.pose, &pose, dt, &self.pieces, &self.bvh, radius, &mut contacts);
+        let t_detect = clock.elapsed().as_secs_f64();
+        timings.detect = t_detect - t_sample;
         let mut result = StepResult { report, ..Default::default() };
-        let mut first_error = None;
         for (k, strand) in self.strands.iter_mut().enumerate() {
+            let t_strand = clock.elapsed().as_secs_f64();
             // A clip's jaws hold the strands it pins rather than pushing them.
             let held = self.shape.kind == crate::shape::ToolKind::Clip && self.pins.iter().any(|p| p.0 == k);
-            let mine: Vec<&Contact> = contacts.iter().filter(|c| c.strand == k && !held).collect();
+            let mine: Vec<&Contact> = if held { Vec::new() } else { contacts.iter().filter(|c| c.strand == k).collect() };
+            let pinned = self.pins.iter().any(|p| p.0 == k);
+            let touched = !mine.is_empty() || pinned;
             let forces: Vec<(Vector3<f64>, Vector3<f64>)> = match self.model {
                 ForceModel::Paper { gain } => {
                     let w = strand.model.material.density * strand.model.gravity.norm();
                     let area = strand.model.section.area();
-                    let frames = segment_frames(&strand.model, &strand.state);
-                    let applied: Vec<PointForce> = mine
-                        .iter()
-                        .map(|c| {
-                            let tangent = frame_at(&strand.model, &strand.state.q, &frames, c.s).rotation.column(0).into_owned();
-                            let perp = c.tool_velocity - tangent * tangent.dot(&c.tool_velocity);
-                            let l = c.s.max(1e-3 * strand.model.length);
-                            PointForce::new(c.s, perp * (gain * w * area / l))
-                        })
-                        .collect();
+                    let applied: Vec<PointForce> = if mine.is_empty() {
+                        Vec::new()
+                    } else {
+                        let frames = segment_frames(&strand.model, &strand.state);
+                        mine.iter()
+                            .map(|c| {
+                                let tangent = frame_at(&strand.model, &strand.state.q, &frames, c.s).rotation.column(0).into_owned();
+                                let perp = c.tool_velocity - tangent * tangent.dot(&c.tool_velocity);
+                                let l = c.s.max(1e-3 * strand.model.length);
+                                PointForce::new(c.s, perp * (gain * w * area / l))
+                            })
+                            .collect()
+                    };
                     let r = strand.step(dt, &applied);
                     self.surface_torques[k].clear();
                     if let Err(e) = r {
@@ -174,8 +283,13 @@ impl LocalInteraction {
                         cons.push(PointConstraint { s, kind: ConstraintKind::Pin { target }, velocity: (target - before) / dt });
                         levers.push(target - pose.position);
                     }
-                    let twisting = std::mem::take(&mut self.surface_torques[k]);
-                    match strand.step_constrained(dt, &twisting, &cons, &options) {
+                    let outcome = if self.prepared[k] {
+                        strand.finish_step(&cons, &options)
+                    } else {
+                        let twisting = std::mem::take(&mut self.surface_torques[k]);
+                        strand.step_constrained(dt, &twisting, &cons, &options)
+                    };
+                    match outcome {
                         Ok(p) => {
                             // Friction acts on the hair's surface, a radius away from the centreline towards the
                             // tool: it also twists the strand (brush torque). Applied at the next step; the tool
@@ -203,9 +317,18 @@ impl LocalInteraction {
                 result.force -= f;
                 result.torque -= lever.cross(&f);
             }
+            let spent = clock.elapsed().as_secs_f64() - t_strand;
+            if touched {
+                timings.constrained += spent;
+                timings.touched_strands += 1;
+            } else {
+                timings.free += spent;
+            }
         }
         self.pose = pose;
-        result.contacts = contacts;
+        result.contacts = contacts.clone();
+        self.contacts = contacts;
+        result.timings = timings;
         match first_error {
             Some(e) => Err(e),
             None => Ok(result),

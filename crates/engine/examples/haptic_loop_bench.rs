@@ -19,8 +19,8 @@ fn main() {
     let counts: Vec<usize> = args.iter().filter_map(|a| a.parse().ok()).collect();
     let counts = if counts.is_empty() { vec![16, 32, 64] } else { counts };
     println!("model: {kind:?}");
-    println!("| strands x 16 segments | steps | step mean | p99 | p99.9 | max | misses | contact steps | peak device force |");
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("| strands x 16 segments | steps | step mean | p99 | p99.9 | max | misses | contact steps | peak device force | peak hair force |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     let mut phases = Vec::new();
     for n in counts {
         let h = HairType::H1;
@@ -40,7 +40,7 @@ fn main() {
         let per_step = |i: usize| c.phase_ns[i].load(std::sync::atomic::Ordering::Relaxed) as f64 / s.steps as f64 / 1e3;
         phases.push((n, [per_step(0), per_step(1), per_step(2), per_step(3), per_step(4)], c.touched_strands.load(std::sync::atomic::Ordering::Relaxed) as f64 / s.steps as f64));
         println!(
-            "| {n} | {} | {:.0} us | {:.0} us | {:.0} us | {:.0} us | {} | {} | {:.2} N |",
+            "| {n} | {} | {:.0} us | {:.0} us | {:.0} us | {:.0} us | {} | {} | {:.2} N | {:.3e} N |",
             s.steps,
             s.step_mean * 1e6,
             s.step_p99 * 1e6,
@@ -48,7 +48,8 @@ fn main() {
             s.step_max * 1e6,
             s.misses,
             c.contact_steps.load(std::sync::atomic::Ordering::Relaxed),
-            peak
+            peak,
+            f64::from_bits(c.peak_hair_force_bits.load(std::sync::atomic::Ordering::Relaxed))
         );
     }
     println!();

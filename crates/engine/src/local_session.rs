@@ -26,6 +26,9 @@ pub struct SessionCounters {
     pub phase_ns: [AtomicU64; 5],
     /// Total strands with contacts over all steps.
     pub touched_strands: AtomicU64,
+    /// Largest force the hair exerted on the tool in one step (before the coupling limits what the device
+    /// renders), as the bits of a non-negative f64 in N (`f64::from_bits`).
+    pub peak_hair_force_bits: AtomicU64,
 }
 
 /// Starts the haptic loop at `rate_hz` with `device` driving the tool of `interaction`.
@@ -59,6 +62,8 @@ pub fn spawn_local_session<D: HapticDevice + 'static>(
                     slot.fetch_add((secs * 1e9) as u64, Ordering::Relaxed);
                 }
                 shared.touched_strands.fetch_add(t.touched_strands as u64, Ordering::Relaxed);
+                // Non-negative floats order as their bit patterns.
+                shared.peak_hair_force_bits.fetch_max(res.force.norm().to_bits(), Ordering::Relaxed);
                 if !res.contacts.is_empty() {
                     shared.contact_steps.fetch_add(1, Ordering::Relaxed);
                 }

@@ -47,16 +47,8 @@ const LEAF_SIZE: usize = 4;
 impl Bvh {
     /// Builds the tree over `pieces` with boxes grown by `margin` (m).
     pub fn build(pieces: &[Piece], margin: f64) -> Self {
-        let boxes = pieces
-            .iter()
-            .map(|p| Aabb::of_segment(&p.a, &p.b, margin))
-            .collect();
-        let mut bvh = Self {
-            nodes: Vec::with_capacity(2 * pieces.len() / LEAF_SIZE + 1),
-            order: (0..pieces.len()).collect(),
-            boxes,
-            margin,
-        };
+        let boxes = pieces.iter().map(|p| Aabb::of_segment(&p.a, &p.b, margin)).collect();
+        let mut bvh = Self { nodes: Vec::with_capacity(2 * pieces.len() / LEAF_SIZE + 1), order: (0..pieces.len()).collect(), boxes, margin };
         if !pieces.is_empty() {
             bvh.split(pieces, 0, pieces.len());
         }
@@ -64,21 +56,15 @@ impl Bvh {
     }
 
     fn split(&mut self, pieces: &[Piece], start: usize, end: usize) -> usize {
-        let bounds = self.order[start..end]
-            .iter()
-            .fold(Aabb::empty(), |b, &i| b.merge(&self.boxes[i]));
+        let bounds = self.order[start..end].iter().fold(Aabb::empty(), |b, &i| b.merge(&self.boxes[i]));
         let id = self.nodes.len();
-        self.nodes.push(Node {
-            bounds,
-            kind: NodeKind::Leaf { start, end },
-        });
+        self.nodes.push(Node { bounds, kind: NodeKind::Leaf { start, end } });
         if end - start > LEAF_SIZE {
             let extent = bounds.max - bounds.min;
             let axis = extent.imax();
             let mid = (start + end) / 2;
             let centre = |i: usize| (pieces[i].a[axis] + pieces[i].b[axis]) * 0.5;
-            self.order[start..end]
-                .select_nth_unstable_by(mid - start, |&x, &y| centre(x).total_cmp(&centre(y)));
+            self.order[start..end].select_nth_unstable_by(mid - start, |&x, &y| centre(x).total_cmp(&centre(y)));
             let left = self.split(pieces, start, mid);
             let right = self.split(pieces, mid, end);
             self.nodes[id].kind = NodeKind::Inner { left, right };
@@ -93,12 +79,8 @@ impl Bvh {
         }
         for id in (0..self.nodes.len()).rev() {
             let bounds = match self.nodes[id].kind {
-                NodeKind::Leaf { start, end } => self.order[start..end]
-                    .iter()
-                    .fold(Aabb::empty(), |b, &i| b.merge(&self.boxes[i])),
-                NodeKind::Inner { left, right } => {
-                    self.nodes[left].bounds.merge(&self.nodes[right].bounds)
-                }
+                NodeKind::Leaf { start, end } => self.order[start..end].iter().fold(Aabb::empty(), |b, &i| b.merge(&self.boxes[i])),
+                NodeKind::Inner { left, right } => self.nodes[left].bounds.merge(&self.nodes[right].bounds),
             };
             self.nodes[id].bounds = bounds;
         }
@@ -116,12 +98,9 @@ impl Bvh {
                 continue;
             }
             match node.kind {
-                NodeKind::Leaf { start, end } => out.extend(
-                    self.order[start..end]
-                        .iter()
-                        .copied()
-                        .filter(|&i| self.boxes[i].overlaps(query)),
-                ),
+                NodeKind::Leaf { start, end } => {
+                    out.extend(self.order[start..end].iter().copied().filter(|&i| self.boxes[i].overlaps(query)))
+                }
                 NodeKind::Inner { left, right } => {
                     stack.push(left);
                     stack.push(right);
@@ -138,30 +117,20 @@ mod tests {
     fn pieces(seed: u64, n: usize) -> Vec<Piece> {
         let mut s = seed;
         let mut rnd = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64
         };
         (0..n)
             .map(|i| {
                 let a = Vector3::new(rnd(), rnd(), rnd()) * 0.2;
                 let b = a + Vector3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 0.01;
-                Piece {
-                    strand: i / 16,
-                    s: (i % 16) as f64 * 0.01,
-                    length: 0.01,
-                    a,
-                    b,
-                }
+                Piece { strand: i / 16, s: (i % 16) as f64 * 0.01, length: 0.01, a, b }
             })
             .collect()
     }
 
     fn brute(p: &[Piece], q: &Aabb, margin: f64) -> Vec<usize> {
-        (0..p.len())
-            .filter(|&i| Aabb::of_segment(&p[i].a, &p[i].b, margin).overlaps(q))
-            .collect()
+        (0..p.len()).filter(|&i| Aabb::of_segment(&p[i].a, &p[i].b, margin).overlaps(q)).collect()
     }
 
     #[test]
@@ -169,18 +138,9 @@ mod tests {
         let mut p = pieces(7, 1000);
         let mut bvh = Bvh::build(&p, 1e-3);
         let queries = [
-            Aabb {
-                min: Vector3::new(0.05, 0.05, 0.05),
-                max: Vector3::new(0.08, 0.1, 0.07),
-            },
-            Aabb {
-                min: Vector3::repeat(-1.0),
-                max: Vector3::repeat(1.0),
-            },
-            Aabb {
-                min: Vector3::repeat(0.5),
-                max: Vector3::repeat(0.6),
-            },
+            Aabb { min: Vector3::new(0.05, 0.05, 0.05), max: Vector3::new(0.08, 0.1, 0.07) },
+            Aabb { min: Vector3::repeat(-1.0), max: Vector3::repeat(1.0) },
+            Aabb { min: Vector3::repeat(0.5), max: Vector3::repeat(0.6) },
         ];
         for round in 0..2 {
             for q in &queries {

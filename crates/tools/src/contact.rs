@@ -81,11 +81,7 @@ pub fn detect(
         .fold(0.0, f64::max);
     let wanted = (max_move / (0.5 * shape.min_radius())).ceil().max(1.0);
     let too_fast = !(wanted <= MAX_SUBSTEPS as f64);
-    let k = if too_fast {
-        MAX_SUBSTEPS
-    } else {
-        wanted as usize
-    };
+    let k = if too_fast { MAX_SUBSTEPS } else { wanted as usize };
     let mut candidates = Vec::new();
     for (ci, cap) in shape.capsules.iter().enumerate() {
         let (a0, b0) = (previous.apply(&cap.a), previous.apply(&cap.b));
@@ -110,11 +106,7 @@ pub fn detect(
                 // Normal from the first touching sub-step; if the axes cross exactly, fall back on the
                 // direction of the tool's motion.
                 let motion = (a1 - a0) * (1.0 - u) + (b1 - b0) * u;
-                let normal = if dist > 1e-12 * reach {
-                    gap / dist
-                } else {
-                    motion.try_normalize(1e-300).unwrap_or(Vector3::z())
-                };
+                let normal = if dist > 1e-12 * reach { gap / dist } else { motion.try_normalize(1e-300).unwrap_or(Vector3::z()) };
                 let (u1, v1) = closest_segment_params(&a1, &b1, &piece.a, &piece.b);
                 let axis_now = a1 + (b1 - a1) * u1;
                 let point = piece.a + (piece.b - piece.a) * v1;
@@ -135,10 +127,7 @@ pub fn detect(
             }
         }
     }
-    DetectReport {
-        substeps: k,
-        too_fast,
-    }
+    DetectReport { substeps: k, too_fast }
 }
 
 #[cfg(test)]
@@ -150,13 +139,7 @@ mod tests {
         (0..20)
             .map(|i| {
                 let x0 = -0.05 + 0.005 * i as f64;
-                Piece {
-                    strand: 0,
-                    s: 0.005 * i as f64,
-                    length: 0.005,
-                    a: Vector3::new(x0, 0.0, 0.0),
-                    b: Vector3::new(x0 + 0.005, 0.0, 0.0),
-                }
+                Piece { strand: 0, s: 0.005 * i as f64, length: 0.005, a: Vector3::new(x0, 0.0, 0.0), b: Vector3::new(x0 + 0.005, 0.0, 0.0) }
             })
             .collect()
     }
@@ -175,10 +158,7 @@ mod tests {
             for phase in 0..7 {
                 let y_start = -0.003 - 0.0001 * phase as f64;
                 let dt = 1e-3;
-                let pose = |y: f64| ToolPose {
-                    position: Vector3::new(0.0013, y, 0.01),
-                    rotation: Matrix3::identity(),
-                };
+                let pose = |y: f64| ToolPose { position: Vector3::new(0.0013, y, 0.01), rotation: Matrix3::identity() };
                 let mut y = y_start;
                 let mut crossed = false;
                 while y < 0.003 {
@@ -196,11 +176,7 @@ mod tests {
                     // (The strand is not pushed in this test, so once a tooth's centre is past the strand's line
                     // it touches it from the far side; only the approaching and crossing steps matter.)
                     for c in contacts.iter().filter(|_| y < -1e-12) {
-                        assert!(
-                            c.normal.y > 0.99,
-                            "speed {speed} phase {phase} y {y}: normal {:?} {c:?}",
-                            c.normal
-                        );
+                        assert!(c.normal.y > 0.99, "speed {speed} phase {phase} y {y}: normal {:?} {c:?}", c.normal);
                         assert!(c.depth > 0.0);
                         assert!((c.tool_velocity.y - speed).abs() < 1e-9);
                     }
@@ -216,14 +192,8 @@ mod tests {
         let comb = ToolShape::builtin("comb").unwrap();
         let pieces = strand_pieces();
         let bvh = Bvh::build(&pieces, 1e-4);
-        let a = ToolPose {
-            position: Vector3::zeros(),
-            rotation: Matrix3::identity(),
-        };
-        let b = ToolPose {
-            position: Vector3::new(0.0, 10.0, 0.0),
-            rotation: Matrix3::identity(),
-        };
+        let a = ToolPose { position: Vector3::zeros(), rotation: Matrix3::identity() };
+        let b = ToolPose { position: Vector3::new(0.0, 10.0, 0.0), rotation: Matrix3::identity() };
         let mut out = vec![];
         let rep = detect(&comb, &a, &b, 1e-3, &pieces, &bvh, 4e-5, &mut out);
         assert!(rep.too_fast);

@@ -4,12 +4,7 @@ use nalgebra::Vector3;
 
 /// Closest points between segments `[p0, p1]` and `[q0, q1]`: returns `(s, t)` in [0, 1] with the points
 /// `p0 + s (p1 - p0)` and `q0 + t (q1 - q0)`. Handles degenerate (point) segments and parallel ones.
-pub fn closest_segment_params(
-    p0: &Vector3<f64>,
-    p1: &Vector3<f64>,
-    q0: &Vector3<f64>,
-    q1: &Vector3<f64>,
-) -> (f64, f64) {
+pub fn closest_segment_params(p0: &Vector3<f64>, p1: &Vector3<f64>, q0: &Vector3<f64>, q1: &Vector3<f64>) -> (f64, f64) {
     let d1 = p1 - p0;
     let d2 = q1 - q0;
     let r = p0 - q0;
@@ -29,11 +24,7 @@ pub fn closest_segment_params(
     }
     let b = d1.dot(&d2);
     let denom = a * e - b * b;
-    let mut s = if denom > 1e-14 * a * e {
-        ((b * f - c * e) / denom).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
+    let mut s = if denom > 1e-14 * a * e { ((b * f - c * e) / denom).clamp(0.0, 1.0) } else { 0.0 };
     let mut t = (b * s + f) / e;
     if t < 0.0 {
         t = 0.0;
@@ -57,26 +48,17 @@ pub struct Aabb {
 impl Aabb {
     /// The empty box (contains nothing; the identity of [`Aabb::merge`]).
     pub fn empty() -> Self {
-        Self {
-            min: Vector3::repeat(f64::INFINITY),
-            max: Vector3::repeat(f64::NEG_INFINITY),
-        }
+        Self { min: Vector3::repeat(f64::INFINITY), max: Vector3::repeat(f64::NEG_INFINITY) }
     }
 
     /// Box around a segment, grown by `margin` (m) on every side.
     pub fn of_segment(a: &Vector3<f64>, b: &Vector3<f64>, margin: f64) -> Self {
-        Self {
-            min: a.inf(b).add_scalar(-margin),
-            max: a.sup(b).add_scalar(margin),
-        }
+        Self { min: a.inf(b).add_scalar(-margin), max: a.sup(b).add_scalar(margin) }
     }
 
     /// Smallest box containing both.
     pub fn merge(&self, o: &Aabb) -> Self {
-        Self {
-            min: self.min.inf(&o.min),
-            max: self.max.sup(&o.max),
-        }
+        Self { min: self.min.inf(&o.min), max: self.max.sup(&o.max) }
     }
 
     /// Whether the boxes overlap (touching counts).
@@ -113,9 +95,7 @@ mod tests {
         // the analytic distance must not exceed it and be within 1e-2 of the segments' length of it.
         let mut seed = 12345u64;
         let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
         };
         for case in 0..200 {
@@ -137,21 +117,9 @@ mod tests {
 
     #[test]
     fn boxes_overlap_and_merge() {
-        let a = Aabb::of_segment(
-            &Vector3::new(0.0, 0.0, 0.0),
-            &Vector3::new(1.0, 1.0, 0.0),
-            0.1,
-        );
-        let b = Aabb::of_segment(
-            &Vector3::new(1.05, 0.5, 0.0),
-            &Vector3::new(2.0, 0.5, 0.0),
-            0.0,
-        );
-        let c = Aabb::of_segment(
-            &Vector3::new(1.2, 0.5, 0.0),
-            &Vector3::new(2.0, 0.5, 0.0),
-            0.0,
-        );
+        let a = Aabb::of_segment(&Vector3::new(0.0, 0.0, 0.0), &Vector3::new(1.0, 1.0, 0.0), 0.1);
+        let b = Aabb::of_segment(&Vector3::new(1.05, 0.5, 0.0), &Vector3::new(2.0, 0.5, 0.0), 0.0);
+        let c = Aabb::of_segment(&Vector3::new(1.2, 0.5, 0.0), &Vector3::new(2.0, 0.5, 0.0), 0.0);
         assert!(a.overlaps(&b) && !a.overlaps(&c));
         let m = a.merge(&c);
         assert_eq!(m.min, Vector3::new(-0.1, -0.1, -0.1));

@@ -78,16 +78,7 @@ impl LocalInteraction {
         let margin = Self::hair_radius(&strands);
         let bvh = Bvh::build(&pieces, margin);
         let surface_torques = vec![Vec::new(); strands.len()];
-        Self {
-            strands,
-            shape,
-            pose,
-            model,
-            pins: Vec::new(),
-            surface_torques,
-            pieces,
-            bvh,
-        }
+        Self { strands, shape, pose, model, pins: Vec::new(), surface_torques, pieces, bvh }
     }
 
     /// Closes a clip: pins the strand point nearest to the tool origin, if one is within `reach` (m); it then
@@ -118,10 +109,7 @@ impl LocalInteraction {
 
     /// Largest semi-major axis of the strands, m (the contact distance added to the tool's radius).
     fn hair_radius(strands: &[Strand]) -> f64 {
-        strands
-            .iter()
-            .map(|s| s.model.section.semi_major)
-            .fold(0.0, f64::max)
+        strands.iter().map(|s| s.model.section.semi_major).fold(0.0, f64::max)
     }
 
     fn sample(strands: &[Strand]) -> Vec<Piece> {
@@ -129,13 +117,7 @@ impl LocalInteraction {
         for (k, s) in strands.iter().enumerate() {
             let pts = centerline(&s.model, &s.state, 2 * s.model.segments + 1);
             for w in pts.windows(2) {
-                pieces.push(Piece {
-                    strand: k,
-                    s: w[0].0,
-                    length: w[1].0 - w[0].0,
-                    a: w[0].1,
-                    b: w[1].1,
-                });
+                pieces.push(Piece { strand: k, s: w[0].0, length: w[1].0 - w[0].0, a: w[0].1, b: w[1].1 });
             }
         }
         pieces
@@ -148,25 +130,12 @@ impl LocalInteraction {
         self.bvh.refit(&self.pieces);
         let mut contacts = Vec::new();
         let radius = Self::hair_radius(&self.strands);
-        let report = detect(
-            &self.shape,
-            &self.pose,
-            &pose,
-            dt,
-            &self.pieces,
-            &self.bvh,
-            radius,
-            &mut contacts,
-        );
-        let mut result = StepResult {
-            report,
-            ..Default::default()
-        };
+        let report = detect(&self.shape, &self.pose, &pose, dt, &self.pieces, &self.bvh, radius, &mut contacts);
+        let mut result = StepResult { report, ..Default::default() };
         let mut first_error = None;
         for (k, strand) in self.strands.iter_mut().enumerate() {
             // A clip's jaws hold the strands it pins rather than pushing them.
-            let held = self.shape.kind == crate::shape::ToolKind::Clip
-                && self.pins.iter().any(|p| p.0 == k);
+            let held = self.shape.kind == crate::shape::ToolKind::Clip && self.pins.iter().any(|p| p.0 == k);
             let mine: Vec<&Contact> = contacts.iter().filter(|c| c.strand == k && !held).collect();
             let forces: Vec<(Vector3<f64>, Vector3<f64>)> = match self.model {
                 ForceModel::Paper { gain } => {
@@ -176,10 +145,7 @@ impl LocalInteraction {
                     let applied: Vec<PointForce> = mine
                         .iter()
                         .map(|c| {
-                            let tangent = frame_at(&strand.model, &strand.state.q, &frames, c.s)
-                                .rotation
-                                .column(0)
-                                .into_owned();
+                            let tangent = frame_at(&strand.model, &strand.state.q, &frames, c.s).rotation.column(0).into_owned();
                             let perp = c.tool_velocity - tangent * tangent.dot(&c.tool_velocity);
                             let l = c.s.max(1e-3 * strand.model.length);
                             PointForce::new(c.s, perp * (gain * w * area / l))
@@ -190,22 +156,14 @@ impl LocalInteraction {
                     if let Err(e) = r {
                         first_error.get_or_insert(e);
                     }
-                    applied
-                        .iter()
-                        .zip(&mine)
-                        .map(|(f, c)| (f.force, c.lever))
-                        .collect()
+                    applied.iter().zip(&mine).map(|(f, c)| (f.force, c.lever)).collect()
                 }
                 ForceModel::Constraint { friction, options } => {
                     let mut cons: Vec<PointConstraint> = mine
                         .iter()
                         .map(|c| PointConstraint {
                             s: c.s,
-                            kind: ConstraintKind::Contact {
-                                normal: c.normal,
-                                depth: c.depth,
-                                friction,
-                            },
+                            kind: ConstraintKind::Contact { normal: c.normal, depth: c.depth, friction },
                             velocity: c.tool_velocity,
                         })
                         .collect();
@@ -213,11 +171,7 @@ impl LocalInteraction {
                     for &(_, s, offset) in self.pins.iter().filter(|p| p.0 == k) {
                         let target = pose.position + pose.rotation * offset;
                         let before = self.pose.position + self.pose.rotation * offset;
-                        cons.push(PointConstraint {
-                            s,
-                            kind: ConstraintKind::Pin { target },
-                            velocity: (target - before) / dt,
-                        });
+                        cons.push(PointConstraint { s, kind: ConstraintKind::Pin { target }, velocity: (target - before) / dt });
                         levers.push(target - pose.position);
                     }
                     let twisting = std::mem::take(&mut self.surface_torques[k]);
@@ -232,11 +186,7 @@ impl LocalInteraction {
                                 let tangential = f - c.normal * c.normal.dot(&f);
                                 let tau = (-c.normal * r).cross(&tangential);
                                 if tau.norm() > 0.0 {
-                                    self.surface_torques[k].push(PointForce {
-                                        s: c.s,
-                                        force: Vector3::zeros(),
-                                        torque: tau,
-                                    });
+                                    self.surface_torques[k].push(PointForce { s: c.s, force: Vector3::zeros(), torque: tau });
                                     result.torque -= tau;
                                 }
                             }
@@ -272,22 +222,10 @@ mod tests {
     /// A row of hanging H1 strands along x (roots at z = 0.3), 10 cm long.
     fn patch(n: usize) -> Vec<Strand> {
         let h = HairType::H1;
-        let m = StrandModel::new(
-            ModelKind::Reduced,
-            0.1,
-            8,
-            h.section().unwrap(),
-            h.material().unwrap(),
-        )
-        .unwrap();
+        let m = StrandModel::new(ModelKind::Reduced, 0.1, 8, h.section().unwrap(), h.material().unwrap()).unwrap();
         (0..n)
             .map(|i| {
-                let root = RootFrame::new(
-                    Vector3::new(-0.01 + 0.02 * i as f64 / n.max(2) as f64, 0.0, 0.3),
-                    -Vector3::z(),
-                    Vector3::x(),
-                )
-                .unwrap();
+                let root = RootFrame::new(Vector3::new(-0.01 + 0.02 * i as f64 / n.max(2) as f64, 0.0, 0.3), -Vector3::z(), Vector3::x()).unwrap();
                 Strand::new(m.clone(), root).unwrap()
             })
             .collect()
@@ -296,10 +234,7 @@ mod tests {
     fn comb_at(y: f64) -> ToolPose {
         // Comb spine along x, teeth pointing down, at mid-height of the strands; stroke along +y. The teeth
         // (every 5 mm from x = -6 cm) are offset 0.4 mm from the strands, so each strand meets a tooth.
-        ToolPose {
-            position: Vector3::new(0.0004, y, 0.25),
-            rotation: Matrix3::identity(),
-        }
+        ToolPose { position: Vector3::new(0.0004, y, 0.25), rotation: Matrix3::identity() }
     }
 
     #[test]
@@ -307,41 +242,25 @@ mod tests {
         // Drawing the comb through hanging strands at 0.25 m/s: strands are pushed along the stroke, the tool
         // feels a force against its motion, and it equals minus the sum of the contact forces.
         for model in [
-            ForceModel::Constraint {
-                friction: HairType::H1.friction_coefficient(),
-                options: ConstraintOptions::default(),
-            },
+            ForceModel::Constraint { friction: HairType::H1.friction_coefficient(), options: ConstraintOptions::default() },
             ForceModel::Paper { gain: 1.0 },
         ] {
             let strands = patch(6);
-            let mut it = LocalInteraction::new(
-                strands,
-                ToolShape::builtin("comb").unwrap(),
-                comb_at(-0.01),
-                model,
-            );
+            let mut it = LocalInteraction::new(strands, ToolShape::builtin("comb").unwrap(), comb_at(-0.01), model);
             let (dt, v) = (1e-3, 0.25);
             let mut y = -0.01;
             let (mut peak, mut contacts) = (0.0f64, 0usize);
             for _ in 0..80 {
                 y += v * dt;
                 let r = it.step(dt, comb_at(y)).unwrap();
-                assert!(
-                    r.force.y <= 1e-12,
-                    "{model:?}: the hair resists the stroke, got {:?}",
-                    r.force
-                );
+                assert!(r.force.y <= 1e-12, "{model:?}: the hair resists the stroke, got {:?}", r.force);
                 peak = peak.max(-r.force.y);
                 contacts += r.contacts.len();
             }
             assert!(contacts > 0 && peak > 0.0, "{model:?}: no contact");
             println!("{model:?}: peak stroke force {peak:.3e} N over {contacts} contacts");
             // The strands' tips moved along the stroke.
-            let moved = it
-                .strands
-                .iter()
-                .map(|s| segment_frames(&s.model, &s.state)[8].position.y)
-                .fold(f64::NEG_INFINITY, f64::max);
+            let moved = it.strands.iter().map(|s| segment_frames(&s.model, &s.state)[8].position.y).fold(f64::NEG_INFINITY, f64::max);
             assert!(moved > 1e-3, "{model:?}: tips moved {moved}");
         }
     }
@@ -355,15 +274,7 @@ mod tests {
         let strands = patch(4);
         let friction = HairType::H1.friction_coefficient();
         let comb = ToolShape::builtin("comb").unwrap();
-        let mut it = LocalInteraction::new(
-            strands,
-            comb.clone(),
-            comb_at(-0.01),
-            ForceModel::Constraint {
-                friction,
-                options: ConstraintOptions::default(),
-            },
-        );
+        let mut it = LocalInteraction::new(strands, comb.clone(), comb_at(-0.01), ForceModel::Constraint { friction, options: ConstraintOptions::default() });
         let hair = HairType::H1.major_diameter / 2.0;
         let mut y = -0.01;
         let mut touching = 0;
@@ -377,21 +288,14 @@ mod tests {
                     let (u, v) = closest_segment_params(&a, &b, &piece.a, &piece.b);
                     let dist = ((a + (b - a) * u) - (piece.a + (piece.b - piece.a) * v)).norm();
                     let reach = cap.radius + hair;
-                    assert!(
-                        reach - dist < 0.2 * reach,
-                        "penetration {} of {reach}",
-                        reach - dist
-                    );
+                    assert!(reach - dist < 0.2 * reach, "penetration {} of {reach}", reach - dist);
                     if dist < 1.2 * reach {
                         touching += 1;
                     }
                 }
             }
         }
-        assert!(
-            touching > 10,
-            "strands never lay against the teeth ({touching})"
-        );
+        assert!(touching > 10, "strands never lay against the teeth ({touching})");
     }
 
     #[test]
@@ -403,19 +307,8 @@ mod tests {
         let mut strands = patch(1);
         strands.truncate(1);
         let x0 = strands[0].state.root.position.x;
-        let pose = |phi: f64| ToolPose {
-            position: Vector3::new(x0, 0.045 * phi.sin(), 0.295 - 0.045 * phi.cos()),
-            rotation: Matrix3::identity(),
-        };
-        let mut it = LocalInteraction::new(
-            strands,
-            ToolShape::builtin("clip").unwrap(),
-            pose(0.0),
-            ForceModel::Constraint {
-                friction: 0.2,
-                options: ConstraintOptions::default(),
-            },
-        );
+        let pose = |phi: f64| ToolPose { position: Vector3::new(x0, 0.045 * phi.sin(), 0.295 - 0.045 * phi.cos()), rotation: Matrix3::identity() };
+        let mut it = LocalInteraction::new(strands, ToolShape::builtin("clip").unwrap(), pose(0.0), ForceModel::Constraint { friction: 0.2, options: ConstraintOptions::default() });
         let (k, s) = it.clip(0.002).expect("a strand within reach");
         assert_eq!(k, 0);
         assert!((s - 0.05).abs() < 1e-6, "clipped at s = {s}");
@@ -425,18 +318,8 @@ mod tests {
             let r = it.step(1e-3, pose(y)).unwrap();
             felt = felt.max(r.force.norm());
             let st = &it.strands[0];
-            let p = frame_at(
-                &st.model,
-                &st.state.q,
-                &segment_frames(&st.model, &st.state),
-                s,
-            )
-            .position;
-            assert!(
-                (p - pose(y).position).norm() < 1e-6,
-                "step {n}: {}",
-                (p - pose(y).position).norm()
-            );
+            let p = frame_at(&st.model, &st.state.q, &segment_frames(&st.model, &st.state), s).position;
+            assert!((p - pose(y).position).norm() < 1e-6, "step {n}: {}", (p - pose(y).position).norm());
         }
         assert!(felt > 0.0);
         it.release();
@@ -451,35 +334,13 @@ mod tests {
         // about 0.6 %), as a torque arm of one hair radius (46 um) suggests.
         let run = |friction: f64| {
             let h = HairType::H1;
-            let m = StrandModel::new(
-                ModelKind::Full,
-                0.1,
-                8,
-                h.section().unwrap(),
-                h.material().unwrap(),
-            )
-            .unwrap();
-            let strands = vec![Strand::new(
-                m,
-                RootFrame::new(Vector3::new(0.0, 0.0, 0.3), -Vector3::z(), Vector3::x()).unwrap(),
-            )
-            .unwrap()];
+            let m = StrandModel::new(ModelKind::Full, 0.1, 8, h.section().unwrap(), h.material().unwrap()).unwrap();
+            let strands = vec![Strand::new(m, RootFrame::new(Vector3::new(0.0, 0.0, 0.3), -Vector3::z(), Vector3::x()).unwrap()).unwrap()];
             let x0 = 0.0;
             // The finger lies along +x with its rounded end 0.1 mm into the strand's side 1 cm below the root
             // (where the strand is stiff enough to press back), and slides along y.
-            let pose = |y: f64| ToolPose {
-                position: Vector3::new(x0 + 0.0079, y, 0.29),
-                rotation: Matrix3::new(0.0, 0.0, 1.0, 0.0, 1.0, 0.0, -1.0, 0.0, 0.0),
-            };
-            let mut it = LocalInteraction::new(
-                strands,
-                ToolShape::builtin("finger").unwrap(),
-                pose(-0.01),
-                ForceModel::Constraint {
-                    friction,
-                    options: ConstraintOptions::default(),
-                },
-            );
+            let pose = |y: f64| ToolPose { position: Vector3::new(x0 + 0.0079, y, 0.29), rotation: Matrix3::new(0.0, 0.0, 1.0, 0.0, 1.0, 0.0, -1.0, 0.0, 0.0) };
+            let mut it = LocalInteraction::new(strands, ToolShape::builtin("finger").unwrap(), pose(-0.01), ForceModel::Constraint { friction, options: ConstraintOptions::default() });
             let (mut torque, mut twist) = (0.0f64, 0.0f64);
             for n in 1..=100 {
                 let r = it.step(1e-3, pose(-0.01 + 0.0002 * n as f64)).unwrap();
@@ -494,9 +355,6 @@ mod tests {
         println!("twist with friction {with:e} (tool torque {torque:e} N m), without {without:e} ({no_torque:e})");
         assert!(torque > 1e-12, "torque {torque}");
         assert!(no_torque < 1e-20, "torque without friction {no_torque}");
-        assert!(
-            with > without,
-            "twist with friction {with}, without {without}"
-        );
+        assert!(with > without, "twist with friction {with}, without {without}");
     }
 }

@@ -105,17 +105,10 @@ impl ToolShape {
     pub fn from_toml(text: &str) -> Result<Self, ShapeError> {
         let f: ShapeFile = toml::from_str(text)?;
         let mut capsules = f.capsule.clone();
-        capsules.extend(f.sphere.iter().map(|s| Capsule {
-            a: s.center,
-            b: s.center,
-            radius: s.radius,
-        }));
+        capsules.extend(f.sphere.iter().map(|s| Capsule { a: s.center, b: s.center, radius: s.radius }));
         for (i, r) in f.row.iter().enumerate() {
             if r.count == 0 || r.count > MAX_PRIMITIVES {
-                return Err(ShapeError::Invalid(format!(
-                    "row {i}: count must be 1..{MAX_PRIMITIVES}, got {}",
-                    r.count
-                )));
+                return Err(ShapeError::Invalid(format!("row {i}: count must be 1..{MAX_PRIMITIVES}, got {}", r.count)));
             }
             let step = Vector3::from(r.step);
             for k in 0..r.count {
@@ -128,38 +121,21 @@ impl ToolShape {
             }
         }
         if capsules.is_empty() {
-            return Err(ShapeError::Invalid(format!(
-                "shape {:?} has no capsule, sphere or row",
-                f.name
-            )));
+            return Err(ShapeError::Invalid(format!("shape {:?} has no capsule, sphere or row", f.name)));
         }
         if capsules.len() > MAX_PRIMITIVES {
-            return Err(ShapeError::Invalid(format!(
-                "{} primitives, more than {MAX_PRIMITIVES}",
-                capsules.len()
-            )));
+            return Err(ShapeError::Invalid(format!("{} primitives, more than {MAX_PRIMITIVES}", capsules.len())));
         }
         for (i, c) in capsules.iter().enumerate() {
             let finite = c.a.iter().chain(c.b.iter()).all(|x| x.is_finite());
             if !finite || !(c.radius.is_finite() && c.radius > 0.0) {
-                return Err(ShapeError::Invalid(format!(
-                    "primitive {i}: coordinates must be finite and radius > 0, got {c:?}"
-                )));
+                return Err(ShapeError::Invalid(format!("primitive {i}: coordinates must be finite and radius > 0, got {c:?}")));
             }
-            if Vector3::from(c.a).amax() > 10.0
-                || Vector3::from(c.b).amax() > 10.0
-                || c.radius > 10.0
-            {
-                return Err(ShapeError::Invalid(format!(
-                    "primitive {i}: larger than 10 m (units are metres), got {c:?}"
-                )));
+            if Vector3::from(c.a).amax() > 10.0 || Vector3::from(c.b).amax() > 10.0 || c.radius > 10.0 {
+                return Err(ShapeError::Invalid(format!("primitive {i}: larger than 10 m (units are metres), got {c:?}")));
             }
         }
-        Ok(Self {
-            name: f.name,
-            kind: f.kind,
-            capsules,
-        })
+        Ok(Self { name: f.name, kind: f.kind, capsules })
     }
 
     /// One of the shapes shipped in `crates/tools/data/`: "comb", "brush", "finger", "clip".
@@ -176,10 +152,7 @@ impl ToolShape {
 
     /// Smallest primitive radius, m (sets how finely a fast motion is sub-stepped to avoid tunnelling).
     pub fn min_radius(&self) -> f64 {
-        self.capsules
-            .iter()
-            .map(|c| c.radius)
-            .fold(f64::INFINITY, f64::min)
+        self.capsules.iter().map(|c| c.radius).fold(f64::INFINITY, f64::min)
     }
 }
 
@@ -193,19 +166,13 @@ mod tests {
         assert_eq!(comb.kind, ToolKind::Comb);
         assert_eq!(comb.capsules.len(), 26, "spine + 25 teeth");
         let last = comb.capsules.last().unwrap();
-        assert!(
-            (last.a[0] - 0.06).abs() < 1e-12,
-            "25 teeth 5 mm apart from -6 cm end at +6 cm"
-        );
+        assert!((last.a[0] - 0.06).abs() < 1e-12, "25 teeth 5 mm apart from -6 cm end at +6 cm");
         assert!((comb.min_radius() - 0.0006).abs() < 1e-15);
         assert_eq!(ToolShape::builtin("brush").unwrap().capsules.len(), 2 + 35);
         assert_eq!(ToolShape::builtin("finger").unwrap().kind, ToolKind::Finger);
         let clip = ToolShape::builtin("clip").unwrap();
         assert_eq!(clip.capsules.len(), 3);
-        assert!(matches!(
-            ToolShape::builtin("rake"),
-            Err(ShapeError::Unknown(_))
-        ));
+        assert!(matches!(ToolShape::builtin("rake"), Err(ShapeError::Unknown(_))));
     }
 
     #[test]

@@ -42,17 +42,12 @@ impl Default for Cone {
 impl Cone {
     /// Checks the geometry, naming the first bad field.
     pub fn validate(&self) -> Result<(), WetnessError> {
-        let bad = |field: &'static str, reason: String| {
-            Err(WetnessError::InvalidParameter { field, reason })
-        };
+        let bad = |field: &'static str, reason: String| Err(WetnessError::InvalidParameter { field, reason });
         if !self.apex.iter().all(|x| x.is_finite()) {
             return bad("apex", format!("must be finite, got {:?}", self.apex));
         }
         if !(self.axis.iter().all(|x| x.is_finite()) && self.axis.norm() > 1e-12) {
-            return bad(
-                "axis",
-                format!("must be a finite non-zero vector, got {:?}", self.axis),
-            );
+            return bad("axis", format!("must be a finite non-zero vector, got {:?}", self.axis));
         }
         if !(self.half_angle > 0.0 && self.half_angle < std::f64::consts::FRAC_PI_2) {
             return bad(
@@ -115,10 +110,7 @@ impl HairDryer {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), WetnessError> {
         self.cone.validate()?;
-        for (field, v) in [
-            ("air_speed", self.air_speed),
-            ("drying_rate", self.drying_rate),
-        ] {
+        for (field, v) in [("air_speed", self.air_speed), ("drying_rate", self.drying_rate)] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(WetnessError::InvalidParameter {
                     field,
@@ -149,12 +141,7 @@ impl HairDryer {
     /// Dries `field` for `dt` seconds: each value `w <- w exp(-k(x) dt)` with x its segment's centre,
     /// `centres[strand][segment]` (m). Returns the total decrease of wetness summed over all values
     /// (dimensionless), for reports.
-    pub fn dry(
-        &self,
-        field: &mut WetnessField,
-        centres: &[Vec<Vector3<f64>>],
-        dt: f64,
-    ) -> Result<f64, WetnessError> {
+    pub fn dry(&self, field: &mut WetnessField, centres: &[Vec<Vector3<f64>>], dt: f64) -> Result<f64, WetnessError> {
         self.validate()?;
         check_step(field, centres, dt)?;
         let mut dried = 0.0;
@@ -173,11 +160,7 @@ impl HairDryer {
 }
 
 /// Checks a time step and that `centres` has one point per value of `field`.
-pub(crate) fn check_step(
-    field: &WetnessField,
-    centres: &[Vec<Vector3<f64>>],
-    dt: f64,
-) -> Result<(), WetnessError> {
+pub(crate) fn check_step(field: &WetnessField, centres: &[Vec<Vector3<f64>>], dt: f64) -> Result<(), WetnessError> {
     if !(dt.is_finite() && dt >= 0.0) {
         return Err(WetnessError::InvalidParameter {
             field: "dt",
@@ -186,11 +169,7 @@ pub(crate) fn check_step(
     }
     let n: Vec<usize> = centres.iter().map(Vec::len).collect();
     field.check_shape(&n)?;
-    if centres
-        .iter()
-        .flatten()
-        .any(|x| !x.iter().all(|c| c.is_finite()))
-    {
+    if centres.iter().flatten().any(|x| !x.iter().all(|c| c.is_finite())) {
         return Err(WetnessError::InvalidParameter {
             field: "centres",
             reason: "segment centres must be finite".into(),
@@ -244,9 +223,9 @@ mod tests {
         let d = dryer();
         let a = d.cone.apex;
         let outside = [
-            a + Vector3::new(0.0, 0.0, 0.05),  // behind the nozzle
-            a + Vector3::new(0.0, 0.0, -0.26), // beyond the range
-            a + Vector3::new(0.1 * 0.43f64.tan(), 0.0, -0.1), // just outside the half-angle
+            a + Vector3::new(0.0, 0.0, 0.05),                    // behind the nozzle
+            a + Vector3::new(0.0, 0.0, -0.26),                   // beyond the range
+            a + Vector3::new(0.1 * 0.43f64.tan(), 0.0, -0.1),    // just outside the half-angle
             a + Vector3::new(0.0, -0.05 * 0.41f64.tan(), -0.05), // idem, other side
         ];
         for x in outside {
@@ -276,8 +255,7 @@ mod tests {
         let x = d.cone.apex + Vector3::new(0.02, 0.0, -0.1);
         let f = d.force(&x, 2e-5);
         assert!(
-            f.dot(&(x - d.cone.apex)) > 0.0
-                && f.norm() < d.force(&(d.cone.apex - Vector3::z() * 0.1), 2e-5).norm()
+            f.dot(&(x - d.cone.apex)) > 0.0 && f.norm() < d.force(&(d.cone.apex - Vector3::z() * 0.1), 2e-5).norm()
         );
     }
 
@@ -288,10 +266,7 @@ mod tests {
         assert!(d.validate().unwrap_err().to_string().contains("half_angle"));
         let d = dryer();
         let mut f = WetnessField::dry(&[2]);
-        assert!(
-            d.dry(&mut f, &[vec![Vector3::zeros()]], 0.1).is_err(),
-            "shape mismatch"
-        );
+        assert!(d.dry(&mut f, &[vec![Vector3::zeros()]], 0.1).is_err(), "shape mismatch");
         assert!(d
             .dry(&mut f, &[vec![Vector3::zeros(); 2]], f64::NAN)
             .unwrap_err()

@@ -50,12 +50,7 @@ impl Sprayer {
 
     /// Sprays `field` for `dt` seconds, each value at its segment centre `centres[strand][segment]` (m).
     /// Returns the total increase of wetness summed over all values (dimensionless).
-    pub fn spray(
-        &self,
-        field: &mut WetnessField,
-        centres: &[Vec<Vector3<f64>>],
-        dt: f64,
-    ) -> Result<f64, WetnessError> {
+    pub fn spray(&self, field: &mut WetnessField, centres: &[Vec<Vector3<f64>>], dt: f64) -> Result<f64, WetnessError> {
         self.validate()?;
         check_step(field, centres, dt)?;
         let mut added = 0.0;
@@ -98,11 +93,7 @@ mod tests {
             assert!(f.values[0][0] <= 1.0);
         }
         let exact = 1.0 - 0.9 * (-s * 5.0f64).exp();
-        assert!(
-            (f.values[0][0] - exact).abs() < 1e-12,
-            "{} vs {exact}",
-            f.values[0][0]
-        );
+        assert!((f.values[0][0] - exact).abs() < 1e-12, "{} vs {exact}", f.values[0][0]);
         assert_eq!(f.values[0][1], 0.1, "outside the cone nothing changes");
     }
 }

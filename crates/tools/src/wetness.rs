@@ -117,9 +117,7 @@ impl WetMaterial {
 impl WetnessModel {
     /// Checks every parameter, naming the first bad one.
     pub fn validate(&self) -> Result<(), WetnessError> {
-        let bad = |field: &'static str, reason: String| {
-            Err(WetnessError::InvalidParameter { field, reason })
-        };
+        let bad = |field: &'static str, reason: String| Err(WetnessError::InvalidParameter { field, reason });
         for (field, v) in [
             ("water_uptake", self.water_uptake),
             ("surface_water", self.surface_water),
@@ -128,19 +126,13 @@ impl WetnessModel {
                 return bad(field, format!("must be >= 0, got {v}"));
             }
         }
-        for (field, v) in [
-            ("young_ratio", self.young_ratio),
-            ("shear_ratio", self.shear_ratio),
-        ] {
+        for (field, v) in [("young_ratio", self.young_ratio), ("shear_ratio", self.shear_ratio)] {
             if !(v.is_finite() && v > 0.0 && v <= 1.0) {
                 return bad(field, format!("must be in (0, 1], got {v}"));
             }
         }
         if !(self.friction_ratio.is_finite() && self.friction_ratio >= 1.0) {
-            return bad(
-                "friction_ratio",
-                format!("must be >= 1, got {}", self.friction_ratio),
-            );
+            return bad("friction_ratio", format!("must be >= 1, got {}", self.friction_ratio));
         }
         Ok(())
     }
@@ -153,13 +145,7 @@ impl WetnessModel {
 
     /// Effective material of `dry` (moduli in Pa, density in kg/m^3) at wetness `w`; the friction coefficient
     /// `dry_friction` (dimensionless) is scaled too, and `area` (m^2) gives the linear density.
-    pub fn wet(
-        &self,
-        dry: &Material,
-        dry_friction: f64,
-        area: f64,
-        w: f64,
-    ) -> Result<WetMaterial, WetnessError> {
+    pub fn wet(&self, dry: &Material, dry_friction: f64, area: f64, w: f64) -> Result<WetMaterial, WetnessError> {
         self.validate()?;
         let w = check_wetness("wetness", w)?;
         let density = dry.density * (1.0 + w * (self.water_uptake + self.surface_water));
@@ -316,11 +302,7 @@ mod tests {
             assert!(e.to_string().contains("wetness"), "{e}");
         }
         let mut f = WetnessField::dry(&[3, 2]);
-        assert!(f
-            .set(1, 1, f64::NAN)
-            .unwrap_err()
-            .to_string()
-            .contains("wetness[1][1]"));
+        assert!(f.set(1, 1, f64::NAN).unwrap_err().to_string().contains("wetness[1][1]"));
         assert!(f.set(2, 0, 0.5).is_err());
         f.set(1, 1, 1.0).unwrap();
         assert_eq!(f.mean(), 0.2);
@@ -337,10 +319,6 @@ mod tests {
             friction_ratio: f64::NAN,
             ..Default::default()
         };
-        assert!(bad
-            .validate()
-            .unwrap_err()
-            .to_string()
-            .contains("friction_ratio"));
+        assert!(bad.validate().unwrap_err().to_string().contains("friction_ratio"));
     }
 }

@@ -6,6 +6,7 @@
 
 #![warn(missing_docs)]
 
+pub mod cut;
 pub mod formats;
 
 pub use formats::{info, read_file, write_file, FormatError, HairCurves};

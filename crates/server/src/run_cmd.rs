@@ -3,7 +3,7 @@
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use engine::path::{ToolPath, Waypoint};
-use engine::scenario::Scenario;
+use engine::scenario::{GlobalScenario, Scenario};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use tools::shape::ToolShape;
@@ -47,6 +47,12 @@ fn read_path_csv(path: &Path) -> Result<Vec<Waypoint>> {
 
 pub fn run(args: &RunArgs) -> Result<()> {
     let text = std::fs::read_to_string(&args.scenario).with_context(|| format!("cannot read scenario {}", args.scenario.display()))?;
+    // A scenario with [[action]] tables (scissors, dryer, sprayer) is a global-tool scenario.
+    let table: toml::Table = toml::from_str(&text).with_context(|| format!("malformed scenario {}", args.scenario.display()))?;
+    if table.contains_key("action") || table.contains_key("hairstyle") {
+        let scenario: GlobalScenario = toml::from_str(&text).with_context(|| format!("malformed scenario {}", args.scenario.display()))?;
+        return run_global(args, &scenario);
+    }
     let scenario: Scenario = toml::from_str(&text).with_context(|| format!("malformed scenario {}", args.scenario.display()))?;
     let dir = args.scenario.parent().unwrap_or(Path::new("."));
     let stem = args.scenario.file_stem().and_then(|s| s.to_str()).unwrap_or("scenario").to_string();
@@ -103,6 +109,84 @@ pub fn run(args: &RunArgs) -> Result<()> {
         summary.work,
         wall,
         trace_path.display()
+    );
+    std::fs::write(out.join("summary.txt"), &text).with_context(|| format!("cannot write {}", out.join("summary.txt").display()))?;
+    print!("{text}");
+    Ok(())
+}
+
+/// `coiffure run` for a global-tool scenario: writes `wetness.csv`, `summary.txt`, `hairstyle.hair` (the final
+/// render strands) and `pieces.hair` (the cut pieces where they came to rest).
+fn run_global(args: &RunArgs, scenario: &GlobalScenario) -> Result<()> {
+    let stem = args.scenario.file_stem().and_then(|s| s.to_str()).unwrap_or("scenario").to_string();
+    let name = scenario.name.clone().unwrap_or(stem);
+    let started = std::time::Instant::now();
+    let out_data = scenario.run()?;
+    let wall = started.elapsed().as_secs_f64();
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from(&name));
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    let trace_path = out.join("wetness.csv");
+    let mut w = std::io::BufWriter::new(std::fs::File::create(&trace_path).with_context(|| format!("cannot write {}", trace_path.display()))?);
+    writeln!(w, "t,wetness_mean,wetness_min,wetness_max,guides_in_cone,blow_force,cluster_energy,mean_tip_z")?;
+    for r in &out_data.rows {
+        writeln!(
+            w,
+            "{:.4},{:.6e},{:.6e},{:.6e},{},{:.6e},{:.6e},{:.6e}",
+            r.t, r.wetness[0], r.wetness[1], r.wetness[2], r.in_cone, r.blow_force, r.cluster_energy, r.mean_tip_z
+        )?;
+    }
+    w.flush()?;
+    let hair_path = out.join("hairstyle.hair");
+    hairstyle::write_file(&hair_path, &out_data.hairstyle)?;
+    let pieces_path = out.join("pieces.hair");
+    hairstyle::write_file(&pieces_path, &out_data.pieces)?;
+    let s = &out_data.summary;
+    let h = &scenario.hairstyle;
+    let text = format!(
+        "scenario        {name}\n\
+         hairstyle       {} hair, {:.3} m, {} guides x {} segments, {} render strands\n\
+         steps           {} at {} s ({} clamped by the safety net)\n\
+         wetness before  {:.6}\n\
+         wetness after   {:.6} (min {:.6}, max {:.6})\n\
+         rest change     {:.6e} rad/m (rms over guide coordinates, wet set)\n\
+         guides cut      {} (mean length {:.6} m -> {:.6} m; dry mass {:.9e} kg -> {:.9e} kg on head + pieces)\n\
+         render cut      {} (mean length {:.6} m -> {:.6} m)\n\
+         render mass     {:.9e} kg before; {:.9e} kg on head + {:.9e} kg cut = {:.9e} kg\n\
+         clusters        {} (kinetic energy at the end {:.3e} J; largest body field at a piece point {:.4}, surface 0.25)\n\
+         wall time       {:.2} s\n\
+         outputs         {}, {}, {}\n",
+        h.hair_type,
+        h.length,
+        s.guides,
+        h.segments,
+        s.render_strands,
+        s.steps,
+        scenario.dt,
+        s.clamped_steps,
+        s.wetness_before,
+        s.wetness_after,
+        s.wetness_range_after[0],
+        s.wetness_range_after[1],
+        s.rest_change,
+        s.guides_cut,
+        s.guide_length_before,
+        s.guide_length_after,
+        s.guide_mass_before,
+        s.guide_mass_after,
+        s.render_cut,
+        s.render_length_before,
+        s.render_length_after,
+        s.render_mass_before,
+        s.render_mass_on_head,
+        s.render_mass_cut,
+        s.render_mass_on_head + s.render_mass_cut,
+        s.clusters,
+        s.cluster_energy,
+        s.pieces_max_field,
+        wall,
+        trace_path.display(),
+        hair_path.display(),
+        pieces_path.display(),
     );
     std::fs::write(out.join("summary.txt"), &text).with_context(|| format!("cannot write {}", out.join("summary.txt").display()))?;
     print!("{text}");

@@ -199,3 +199,75 @@ fn convert_and_info_between_hair_formats() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("byte"), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// Every number on the summary line starting with `key`.
+fn numbers(summary: &str, key: &str) -> Vec<f64> {
+    let line = summary.lines().find(|l| l.starts_with(key)).unwrap_or_else(|| panic!("no line {key:?} in {summary}"));
+    line[key.len()..]
+        .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == 'e' || c == '+'))
+        .filter_map(|t| t.parse::<f64>().ok())
+        .collect()
+}
+
+fn example(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenarios").join(name)
+}
+
+#[test]
+fn scissors_scenario_cuts_conserves_mass_and_the_pieces_rest_outside_the_body() {
+    let out = scratch("cut");
+    let o = bin().arg("run").arg(example("cut.toml")).arg("--out").arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = std::fs::read_to_string(out.join("summary.txt")).unwrap();
+    // Render hair mass: before = on the head + cut. The library conserves it to 1e-12 in f64; here the strands on
+    // the head are measured after their cut vertex was rounded to f32 (the file format), so 1e-6 relative.
+    let m = numbers(&summary, "render mass");
+    assert!(((m[1] + m[2]) - m[0]).abs() < 1e-6 * m[0], "{m:?}");
+    assert!(m[2] > 0.0, "something was cut");
+    let cut = numbers(&summary, "render cut");
+    assert!(cut[0] > 0.0 && cut[2] < cut[1], "shorter after: {cut:?}");
+    let g = numbers(&summary, "guides cut");
+    assert!(g[0] > 0.0 && g[2] < g[1] && ((g[4] - g[3]) / g[3]).abs() < 1e-9, "guides: {g:?}");
+    // Files: the final hairstyle has every render strand, the pieces file one strand per cut strand, and no
+    // piece point is inside the built-in body (field at most the threshold, 1e-6 relative).
+    let style = hairstyle::read_file(out.join("hairstyle.hair")).unwrap();
+    assert_eq!(style.strands.len(), 2000);
+    let pieces = hairstyle::read_file(out.join("pieces.hair")).unwrap();
+    assert_eq!(pieces.strands.len() as f64, cut[0]);
+    let head = hairstyle::Head::default();
+    for p in pieces.strands.iter().flatten() {
+        let x = nalgebra::Point3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+        assert!(head.field(&x) <= head.params.threshold * (1.0 + 1e-4), "piece point inside the body: {x:?}");
+    }
+    // What stays on the head is above the blade (z = -0.08) within f32 rounding.
+    let below = style.strands.iter().flatten().filter(|p| p[2] < -0.08 - 1e-5).count();
+    assert_eq!(below, 0, "{below} render vertices below the cut");
+}
+
+#[test]
+fn drying_scenario_wets_then_dries() {
+    let out = scratch("dry");
+    let o = bin().arg("run").arg(example("dry.toml")).arg("--out").arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(out.join("wetness.csv")).unwrap();
+    let (header, rows) = parse_csv(&text);
+    assert_eq!(header, "t,wetness_mean,wetness_min,wetness_max,guides_in_cone,blow_force,cluster_energy,mean_tip_z");
+    // Spray (0-0.8 s) raises the mean wetness, nothing changes until the dryer starts at 1 s, then it only falls.
+    let at = |t: f64| rows.iter().find(|r| (r[0] - t).abs() < 1e-6).unwrap();
+    let wet = at(0.8)[1];
+    assert!(wet > 0.05 && at(0.01)[1] < wet, "sprayed to {wet}");
+    assert_eq!(at(0.9)[1], at(0.99)[1]);
+    let drying: Vec<&Vec<f64>> = rows.iter().filter(|r| r[0] > 1.0).collect();
+    assert!(drying.windows(2).all(|w| w[1][1] <= w[0][1]), "wetness never rises while drying");
+    assert!(drying.iter().any(|r| r[5] > 0.0), "the dryer blew on the hair");
+    let summary = std::fs::read_to_string(out.join("summary.txt")).unwrap();
+    let after = numbers(&summary, "wetness after")[0];
+    assert!(after < 0.7 * wet, "dried from {wet} to {after}");
+    assert_eq!(hairstyle::read_file(out.join("hairstyle.hair")).unwrap().strands.len(), 2000);
+    // Bad input is named.
+    let bad = out.join("bad.toml");
+    std::fs::write(&bad, std::fs::read_to_string(example("dry.toml")).unwrap().replace("duration = 0.8", "duration = -1.0")).unwrap();
+    let o = bin().arg("run").arg(&bad).arg("--out").arg(out.join("bad")).output().unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("action 0 (spray)"), "{}", String::from_utf8_lossy(&o.stderr));
+}

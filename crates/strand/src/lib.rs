@@ -41,6 +41,7 @@ pub mod section;
 pub mod spec;
 pub mod state;
 pub mod statics;
+pub mod styling;
 
 pub use dynamics::PointForce;
 pub use error::StrandError;

@@ -6,15 +6,18 @@
 //!
 //! The built-in head, neck and shoulders with its scalp ([`head`]) and hairstyle generation
 //! ([`generate`]): guide Super-Helices and render strands bound to them, in SI units (m) in the
-//! head frame (origin at the head's centre, z up, y forward).
+//! head frame (origin at the head's centre, z up, y forward); the lattice that carries a
+//! hairstyle ([`global`]).
 
 #![warn(missing_docs)]
 
 pub mod cut;
 pub mod formats;
 pub mod generate;
+pub mod global;
 pub mod head;
 
 pub use formats::{info, read_file, write_file, FormatError, HairCurves};
 pub use generate::{Curl, GenerateError, Guide, Hairstyle, HairstyleParams, RenderStrands};
+pub use global::{body_in_world, HairLattice};
 pub use head::{Head, HeadError, HeadMesh, HeadParams, ScalpPoint};

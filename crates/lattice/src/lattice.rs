@@ -1,8 +1,7 @@
 //! The lattice particle system (Volino and Magnenat-Thalmann 2006): lattice nodes are particles
 //! carrying the hair mass around them, joined by "stiffeners" (springs) to their 26 neighbours
 //! and held to their head-fixed rest positions by viscoelastic attachment springs; integrated by
-//! implicit (backward) Euler, linearised once per step (Baraff and Witkin 1998), with a
-//! matrix-free Jacobi-preconditioned conjugate-gradient solve.
+//! linearly implicit Euler (Baraff and Witkin 1998) with a constant, factorised system matrix.
 //!
 //! Forces on node i (positions x, velocities v, SI units):
 //! - gravity m_i g;
@@ -16,13 +15,29 @@
 //!   band attraction and normal damping are also linearised along the normal n (k n n^T,
 //!   c n n^T) in the implicit matrix (the attraction's slope only where it is positive).
 //!
-//! The stiffness Jacobian of a stiffener, k_s (u u^T + max(0, 1 - L/|d|)(I - u u^T)), drops the
-//! negative transverse term of compressed springs so the system matrix stays symmetric positive
-//! definite (standard; it only adds numerical damping to buckling).
+//! ## Time step: linearly implicit Euler with a constant matrix
+//! Each step solves A dv = dt (f - dt K' v) with A = M + dt C' + dt^2 K', then v += dv, x += dt v, where f holds
+//! the exact forces above and K', C' are **isotropic approximations of the stiffness and damping
+//! Jacobians**: each stiffener contributes k_s I (and c_s I) on its node pair instead of the exact
+//! k_s (u u^T + max(0, 1 - L/|d|)(I - u u^T)) and c_s u u^T, and the attachment a_i k_a I,
+//! a_i c_a I. A is then one scalar sparse matrix shared by the three axes, constant in time and
+//! independent of the head pose, factorised once (sparse Cholesky, `faer`) per model and step size
+//! and kept in [`LatticeState::cache`]; a step costs one force pass and one triangular solve
+//! of three right-hand sides.
+//!
+//! This is a Rosenbrock-W (linearly implicit) method: it is first-order accurate whatever the
+//! Jacobian approximation, and its fixed points are exactly the zeros of f (static equilibria are
+//! unchanged). Because k_s I bounds the exact stiffener Jacobian from above (transverse term
+//! (1 - L/|d|) k_s <= k_s), the approximation only adds numerical damping of transverse (bending)
+//! motion of stretched stiffeners; it never removes stability.
+//!
+//! Contacts with obstacles keep their exact normal blocks (k n n^T, c n n^T): with contacts the
+//! system (A + D) dv = b is solved by conjugate gradients preconditioned with the factorisation
+//! of A, starting from A^-1 b.
 
 use crate::ffd::FfdLattice;
 use crate::metaball::{MetaballParams, MetaballSet};
-use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
+use nalgebra::{Isometry3, Point3, Vector3};
 use thiserror::Error;
 
 /// Errors of the lattice particle system.
@@ -39,6 +54,12 @@ pub enum LatticeError {
     /// A node mass is not positive and finite.
     #[error("node {0} has invalid mass {1} kg (must be > 0)")]
     InvalidMass(usize, f64),
+    /// A parameter is out of range (named, with its value).
+    #[error("invalid lattice parameter: {0}")]
+    InvalidParameter(String),
+    /// The FFD lattice could not be built.
+    #[error(transparent)]
+    Ffd(#[from] crate::ffd::FfdError),
 }
 
 /// Parameters of the lattice dynamics.
@@ -93,6 +114,54 @@ impl Default for LatticeParams {
     }
 }
 
+/// How a lattice is built around hair ([`LatticeModel::carrying`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CarryParams {
+    /// Lattice cell size, m. Default 0.02 m.
+    pub cell: f64,
+    /// Nodes within this distance (m) outside the body surface are fully attached (weight 1).
+    /// Default 0.01 m.
+    pub attach_distance: f64,
+    /// Beyond `attach_distance` the attachment weight falls linearly to 0 over this distance, m.
+    /// Default 0.02 m.
+    pub attach_falloff: f64,
+    /// Mass given to every node besides the hair it carries, kg (keeps empty nodes' equations
+    /// well posed). Default 1e-6 kg.
+    pub empty_node_mass: f64,
+}
+
+impl Default for CarryParams {
+    fn default() -> Self {
+        Self {
+            cell: 0.02,
+            attach_distance: 0.01,
+            attach_falloff: 0.02,
+            empty_node_mass: 1e-6,
+        }
+    }
+}
+
+impl CarryParams {
+    /// Checks every field.
+    pub fn validate(&self) -> Result<(), LatticeError> {
+        let bad =
+            |field: &str, v: f64| Err(LatticeError::InvalidParameter(format!("{field} = {v}")));
+        if !(self.cell > 0.0 && self.cell.is_finite()) {
+            return bad("cell (m, > 0)", self.cell);
+        }
+        if !(self.attach_distance.is_finite()) {
+            return bad("attach_distance (m, finite)", self.attach_distance);
+        }
+        if !(self.attach_falloff > 0.0 && self.attach_falloff.is_finite()) {
+            return bad("attach_falloff (m, > 0)", self.attach_falloff);
+        }
+        if !(self.empty_node_mass > 0.0 && self.empty_node_mass.is_finite()) {
+            return bad("empty_node_mass (kg, > 0)", self.empty_node_mass);
+        }
+        Ok(())
+    }
+}
+
 /// One stiffener (spring) between two nodes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Stiffener {
@@ -134,8 +203,16 @@ pub struct LatticeState {
     pub positions: Vec<Point3<f64>>,
     /// Node velocities, m/s.
     pub velocities: Vec<Vector3<f64>>,
-    /// Conjugate-gradient iterations used by the last step.
+    /// Linear solves used by the last step: 1 without contacts, 1 + conjugate-gradient
+    /// iterations with contacts.
     pub last_cg_iterations: usize,
+    /// Steps rejected so far because they would have made the state non-finite (the state was
+    /// kept and its velocities zeroed) or were given a bad step size.
+    pub rejected_steps: usize,
+    /// The factorised system matrix, kept between steps (rebuilt when `dt` or the model changes).
+    pub cache: StepCache,
+    /// Scratch buffers of the step.
+    pub work: StepWork,
 }
 
 impl LatticeModel {
@@ -239,6 +316,72 @@ impl LatticeModel {
         Self::new(ffd, vec![node_mass; n], vec![1.0; n], params)
     }
 
+    /// A lattice of cell size `carry.cell` (m) enclosing the points `points` (m, head frame; e.g.
+    /// hair vertices) whose node masses are the points' masses `masses` (kg, one per point)
+    /// spread with the quadratic B-spline weights of the FFD (so each node carries the hair
+    /// around it and the total is conserved), plus `carry.empty_node_mass` per node. Nodes inside
+    /// `body` (head frame) or within `carry.attach_distance` of its surface are fully attached to
+    /// the head; the weight falls linearly to 0 over `carry.attach_falloff` beyond.
+    pub fn carrying(
+        points: &[Point3<f64>],
+        masses: &[f64],
+        body: &MetaballSet,
+        carry: &CarryParams,
+        params: LatticeParams,
+    ) -> Result<Self, LatticeError> {
+        carry.validate()?;
+        if points.is_empty() || points.len() != masses.len() {
+            return Err(LatticeError::NodeCount {
+                expected: points.len().max(1),
+                got: masses.len(),
+            });
+        }
+        let mut lo = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        let mut hi = -lo;
+        for (i, p) in points.iter().enumerate() {
+            if !p.iter().all(|x| x.is_finite()) || !(masses[i] >= 0.0 && masses[i].is_finite()) {
+                return Err(LatticeError::InvalidMass(i, masses[i]));
+            }
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        let ffd = FfdLattice::enclosing(lo, hi, carry.cell)?;
+        let n = ffd.node_count();
+        let mut node_mass = vec![carry.empty_node_mass; n];
+        for (p, m) in points.iter().zip(masses) {
+            let (idx, w) = ffd.weights_clamped(p)?;
+            for (i, w) in idx.iter().zip(&w) {
+                node_mass[*i] += w * m;
+            }
+        }
+        let threshold = params.metaball.threshold;
+        let attachment = ffd
+            .rest_positions()
+            .iter()
+            .map(|x| {
+                let (f, g) = body.field_and_gradient(x);
+                if f > threshold {
+                    return 1.0;
+                }
+                let gn = g.norm();
+                let d = if f > 0.0 && gn > 0.0 {
+                    (threshold - f) / gn
+                } else {
+                    f64::INFINITY
+                };
+                (1.0 - (d - carry.attach_distance) / carry.attach_falloff).clamp(0.0, 1.0)
+            })
+            .collect();
+        Self::new(ffd, node_mass, attachment, params)
+    }
+
+    /// Total mass of the nodes, kg.
+    pub fn total_mass(&self) -> f64 {
+        self.masses.iter().sum()
+    }
+
     /// Number of nodes.
     pub fn node_count(&self) -> usize {
         self.rest.len()
@@ -251,6 +394,9 @@ impl LatticeModel {
             positions: self.rest.iter().map(|p| head * p).collect(),
             velocities: vec![Vector3::zeros(); self.node_count()],
             last_cg_iterations: 0,
+            rejected_steps: 0,
+            cache: StepCache::default(),
+            work: StepWork::default(),
         }
     }
 
@@ -273,8 +419,14 @@ impl LatticeModel {
         e
     }
 
-    /// Advances `state` by `dt` (s) with one linearised backward-Euler step, the head at pose
+    /// Advances `state` by `dt` (s) with one linearly implicit Euler step, the head at pose
     /// `head` (head frame to world) and optional metaball `obstacles` in the world frame.
+    ///
+    /// The system matrix is the constant one of the module docs (factorised once per `dt` and
+    /// model, kept in `state`); with obstacles in contact, the contacts' normal blocks are added
+    /// and the system is solved by conjugate gradients preconditioned with that factorisation.
+    /// A step that would give a non-finite state is rejected: the state is kept, its velocities
+    /// zeroed, and [`LatticeState::rejected_steps`] counts it.
     pub fn step(
         &self,
         state: &mut LatticeState,
@@ -283,157 +435,379 @@ impl LatticeModel {
         obstacles: Option<&MetaballSet>,
     ) {
         let n = self.node_count();
-        let p = &self.params;
-        let x = &state.positions;
-        let v = &state.velocities;
-        let mut force: Vec<Vector3<f64>> = (0..n).map(|i| self.masses[i] * p.gravity).collect();
-        // per-node implicit blocks: dt * (-df/dv) + dt^2 * (-df/dx), and -df/dx alone for K v
-        let mut node_s = vec![Matrix3::zeros(); n];
-        let mut node_k = vec![Matrix3::zeros(); n];
-        for i in 0..n {
-            let a = self.attachment[i];
-            let target = head * self.rest[i];
-            force[i] -=
-                a * (p.attachment_stiffness * (x[i] - target) + p.attachment_damping * v[i]);
-            let ka = a * p.attachment_stiffness;
-            let ca = a * p.attachment_damping;
-            node_k[i] = Matrix3::identity() * ka;
-            node_s[i] = Matrix3::identity() * (dt * ca + dt * dt * ka);
+        if !(dt > 0.0 && dt.is_finite())
+            || state.positions.len() != n
+            || state.velocities.len() != n
+        {
+            state.rejected_steps += 1;
+            return;
         }
-        if let Some(obs) = obstacles {
+        let factor = state.cache.factor(self, dt);
+        let p = &self.params;
+        let ws = &mut state.work;
+        ws.resize(n);
+        // forces
+        {
+            let x = &state.positions;
+            let v = &state.velocities;
             for i in 0..n {
-                let c = obs.response(&p.metaball, &x[i], &v[i]);
-                if c.force != Vector3::zeros() {
-                    force[i] += c.force;
-                    let nn = c.normal * c.normal.transpose();
-                    // -d(force . n)/dd: the penalty inside; in the band the attraction's slope
-                    // k_a (1 - 2 d / w), kept only where positive (SPD matrix)
-                    let mp = &p.metaball;
-                    let k = if c.distance < 0.0 {
-                        mp.stiffness
-                    } else {
-                        (mp.attraction_stiffness * (1.0 - 2.0 * c.distance / mp.band)).max(0.0)
-                    };
-                    node_k[i] += k * nn;
-                    node_s[i] += (dt * p.metaball.damping + dt * dt * k) * nn;
+                let a = self.attachment[i];
+                let target = head * self.rest[i];
+                let f = self.masses[i] * p.gravity
+                    - a * (p.attachment_stiffness * (x[i] - target) + p.attachment_damping * v[i]);
+                ws.force[i] = f;
+            }
+            for s in &self.stiffeners {
+                let d = x[s.j] - x[s.i];
+                let len = d.norm();
+                if len <= 0.0 {
+                    continue;
+                }
+                let u = d / len;
+                let f = (s.stiffness * (len - s.rest_length)
+                    + s.damping * (v[s.j] - v[s.i]).dot(&u))
+                    * u;
+                ws.force[s.i] += f;
+                ws.force[s.j] -= f;
+            }
+            ws.contacts.clear();
+            if let Some(obs) = obstacles {
+                let mp = &p.metaball;
+                for i in 0..n {
+                    let c = obs.response(mp, &x[i], &v[i]);
+                    if c.force != Vector3::zeros() {
+                        ws.force[i] += c.force;
+                        // -d(force . n)/dd: the penalty inside; in the band the attraction's
+                        // slope k_a (1 - 2 d / w), kept only where positive (SPD matrix)
+                        let k = if c.distance < 0.0 {
+                            mp.stiffness
+                        } else {
+                            (mp.attraction_stiffness * (1.0 - 2.0 * c.distance / mp.band)).max(0.0)
+                        };
+                        ws.contacts.push(Contact {
+                            node: i,
+                            normal: c.normal,
+                            k,
+                            s: dt * mp.damping + dt * dt * k,
+                        });
+                    }
+                }
+            }
+            // b = dt (f - dt K' v) (column-major n x 3: all x, then all y, then all z)
+            for c in 0..3 {
+                for i in 0..n {
+                    ws.v_col[c * n + i] = v[i][c];
+                }
+            }
+            factor.k.mul_cols(&ws.v_col, &mut ws.tmp);
+            for c in 0..3 {
+                for i in 0..n {
+                    ws.b[c * n + i] = dt * (ws.force[i][c] - dt * ws.tmp[c * n + i]);
+                }
+            }
+            for ct in &ws.contacts {
+                let i = ct.node;
+                let kv = ct.k * ct.normal.dot(&v[i]);
+                for c in 0..3 {
+                    ws.b[c * n + i] -= dt * dt * kv * ct.normal[c];
                 }
             }
         }
-        // stiffeners: forces and their blocks (-df_i/dx_i = K_s, -df_i/dx_j = -K_s)
-        let mut spring_s = Vec::with_capacity(self.stiffeners.len());
-        let mut spring_k = Vec::with_capacity(self.stiffeners.len());
-        for s in &self.stiffeners {
-            let d = x[s.j] - x[s.i];
-            let len = d.norm();
-            let u = if len > 0.0 { d / len } else { Vector3::x() };
-            let uu = u * u.transpose();
-            let f =
-                s.stiffness * (len - s.rest_length) * u + s.damping * (v[s.j] - v[s.i]).dot(&u) * u;
-            force[s.i] += f;
-            force[s.j] -= f;
-            let transverse = if len > 0.0 {
-                (1.0 - s.rest_length / len).max(0.0)
-            } else {
-                0.0
-            };
-            let ks = s.stiffness * (uu + transverse * (Matrix3::identity() - uu));
-            let cs = s.damping * uu;
-            spring_k.push(ks);
-            spring_s.push(dt * cs + dt * dt * ks);
+        // solve
+        ws.x.copy_from_slice(&ws.b);
+        factor.solve_in_place(&mut ws.x);
+        let mut iterations = 1;
+        if !ws.contacts.is_empty() {
+            iterations += pcg_contacts(&factor, ws, n, p.cg_tolerance, p.cg_max_iterations);
         }
-        // right-hand side b = dt (f + dt K v), with K = df/dx = -(positive blocks)
-        let mut kv = vec![Vector3::zeros(); n];
+        // update, rejecting a non-finite result
+        if ws.x.iter().any(|d| !d.is_finite()) {
+            state
+                .velocities
+                .iter_mut()
+                .for_each(|v| *v = Vector3::zeros());
+            state.rejected_steps += 1;
+            state.last_cg_iterations = iterations;
+            return;
+        }
         for i in 0..n {
-            kv[i] = node_k[i] * v[i];
+            let dv = Vector3::new(ws.x[i], ws.x[n + i], ws.x[2 * n + i]);
+            state.velocities[i] += dv;
+            state.positions[i] += dt * state.velocities[i];
         }
-        for (s, ks) in self.stiffeners.iter().zip(&spring_k) {
-            let r = ks * (v[s.i] - v[s.j]);
-            kv[s.i] += r;
-            kv[s.j] -= r;
-        }
-        let b: Vec<Vector3<f64>> = (0..n).map(|i| dt * (force[i] - dt * kv[i])).collect();
-        // A y = M y + node_s y + sum over springs S (y_i - y_j)
-        let apply = |y: &[Vector3<f64>], out: &mut [Vector3<f64>]| {
-            for i in 0..n {
-                out[i] = self.masses[i] * y[i] + node_s[i] * y[i];
-            }
-            for (s, ss) in self.stiffeners.iter().zip(&spring_s) {
-                let r = ss * (y[s.i] - y[s.j]);
-                out[s.i] += r;
-                out[s.j] -= r;
-            }
+        state.last_cg_iterations = iterations;
+    }
+}
+
+/// A symmetric scalar sparse matrix in compressed rows (node by node), applied to the three
+/// columns x, y, z at once.
+#[derive(Debug, Clone, PartialEq, Default)]
+struct ScalarCsr {
+    n: usize,
+    row: Vec<u32>,
+    col: Vec<u32>,
+    val: Vec<f64>,
+}
+
+impl ScalarCsr {
+    /// Sum of duplicate (row, col, value) entries.
+    fn from_entries(n: usize, mut e: Vec<(u32, u32, f64)>) -> Self {
+        e.sort_unstable_by_key(|&(r, c, _)| (r, c));
+        let mut m = ScalarCsr {
+            n,
+            row: vec![0; n + 1],
+            col: Vec::with_capacity(e.len()),
+            val: Vec::with_capacity(e.len()),
         };
-        // Jacobi preconditioner: inverse of A's diagonal
-        let mut diag: Vec<Vector3<f64>> = (0..n)
-            .map(|i| Vector3::repeat(self.masses[i]) + node_s[i].diagonal())
-            .collect();
-        for (s, ss) in self.stiffeners.iter().zip(&spring_s) {
-            diag[s.i] += ss.diagonal();
-            diag[s.j] += ss.diagonal();
+        let mut last = (u32::MAX, u32::MAX);
+        for (r, c, v) in e {
+            if (r, c) == last {
+                *m.val.last_mut().unwrap() += v;
+            } else {
+                m.col.push(c);
+                m.val.push(v);
+                m.row[r as usize + 1] = m.col.len() as u32;
+                last = (r, c);
+            }
         }
-        let inv_diag: Vec<Vector3<f64>> = diag.iter().map(|d| d.map(|x| 1.0 / x)).collect();
-        let (dv, iters) = pcg(&apply, &b, &inv_diag, p.cg_tolerance, p.cg_max_iterations);
-        for ((x, v), dv) in state
-            .positions
-            .iter_mut()
-            .zip(&mut state.velocities)
-            .zip(&dv)
-        {
-            *v += dv;
-            *x += dt * *v;
+        for i in 0..n {
+            m.row[i + 1] = m.row[i + 1].max(m.row[i]);
         }
-        state.last_cg_iterations = iters;
+        m
+    }
+
+    /// out = self * x for each of the three columns (column-major n x 3).
+    fn mul_cols(&self, x: &[f64], out: &mut [f64]) {
+        let n = self.n;
+        let (x0, rest) = x.split_at(n);
+        let (x1, x2) = rest.split_at(n);
+        for i in 0..n {
+            let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
+            for k in self.row[i] as usize..self.row[i + 1] as usize {
+                let j = self.col[k] as usize;
+                let w = self.val[k];
+                a += w * x0[j];
+                b += w * x1[j];
+                c += w * x2[j];
+            }
+            out[i] = a;
+            out[n + i] = b;
+            out[2 * n + i] = c;
+        }
     }
 }
 
-fn dot(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x.dot(y)).sum()
+/// The constant part of the implicit system for one model and step: K' and A = M + dt C' +
+/// dt^2 K' (scalar, shared by the three axes), and A's sparse Cholesky factorisation.
+struct Factor {
+    k: ScalarCsr,
+    a: ScalarCsr,
+    llt: faer::sparse::linalg::solvers::Llt<usize, f64>,
 }
 
-/// Jacobi-preconditioned conjugate gradient on an SPD operator; returns (solution, iterations).
-fn pcg<F: Fn(&[Vector3<f64>], &mut [Vector3<f64>])>(
-    apply: &F,
-    b: &[Vector3<f64>],
-    inv_diag: &[Vector3<f64>],
-    tol: f64,
-    max_iter: usize,
-) -> (Vec<Vector3<f64>>, usize) {
-    let n = b.len();
-    let mut x = vec![Vector3::zeros(); n];
-    let mut r = b.to_vec();
-    let b_norm = dot(b, b).sqrt();
+impl Factor {
+    fn new(model: &LatticeModel, dt: f64) -> Self {
+        let n = model.node_count();
+        let p = &model.params;
+        let mut ke = Vec::with_capacity(2 * model.stiffeners.len() + n);
+        let mut ae = Vec::with_capacity(2 * model.stiffeners.len() + n);
+        for i in 0..n {
+            let a = model.attachment[i];
+            let kd = a * p.attachment_stiffness;
+            ke.push((i as u32, i as u32, kd));
+            ae.push((
+                i as u32,
+                i as u32,
+                model.masses[i] + dt * a * p.attachment_damping + dt * dt * kd,
+            ));
+        }
+        for s in &model.stiffeners {
+            let (i, j) = (s.i as u32, s.j as u32);
+            let sa = dt * s.damping + dt * dt * s.stiffness;
+            for (r, c, sign) in [(i, i, 1.0), (j, j, 1.0), (i, j, -1.0), (j, i, -1.0)] {
+                ke.push((r, c, sign * s.stiffness));
+                ae.push((r, c, sign * sa));
+            }
+        }
+        let k = ScalarCsr::from_entries(n, ke);
+        let a = ScalarCsr::from_entries(n, ae);
+        let mut trip = Vec::with_capacity(a.val.len());
+        for r in 0..n {
+            for q in a.row[r] as usize..a.row[r + 1] as usize {
+                trip.push(faer::sparse::Triplet::new(r, a.col[q] as usize, a.val[q]));
+            }
+        }
+        let mat = faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip)
+            .expect("valid sparse pattern");
+        let llt = mat
+            .sp_cholesky(faer::Side::Lower)
+            .expect("M + dt C' + dt^2 K' is symmetric positive definite (masses > 0)");
+        Factor { k, a, llt }
+    }
+
+    /// x <- A^-1 x for the three columns of x (column-major n x 3).
+    fn solve_in_place(&self, x: &mut [f64]) {
+        use faer::linalg::solvers::Solve;
+        let n = self.a.n;
+        let m = faer::MatMut::from_column_major_slice_mut(x, n, 3);
+        self.llt.solve_in_place(m);
+    }
+}
+
+/// One node in contact with an obstacle: its implicit block k n n^T (in K) and s n n^T (in A).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Contact {
+    node: usize,
+    normal: Vector3<f64>,
+    k: f64,
+    s: f64,
+}
+
+/// Scratch buffers of the step (no allocation per step once sized).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct StepWork {
+    force: Vec<Vector3<f64>>,
+    v_col: Vec<f64>,
+    tmp: Vec<f64>,
+    b: Vec<f64>,
+    x: Vec<f64>,
+    r: Vec<f64>,
+    z: Vec<f64>,
+    d: Vec<f64>,
+    ad: Vec<f64>,
+    contacts: Vec<Contact>,
+}
+
+impl StepWork {
+    fn resize(&mut self, n: usize) {
+        if self.force.len() != n {
+            self.force = vec![Vector3::zeros(); n];
+            for v in [
+                &mut self.v_col,
+                &mut self.tmp,
+                &mut self.b,
+                &mut self.x,
+                &mut self.r,
+                &mut self.z,
+                &mut self.d,
+                &mut self.ad,
+            ] {
+                *v = vec![0.0; 3 * n];
+            }
+        }
+    }
+}
+
+/// The factorisation kept between steps, rebuilt when the step size or the model changes.
+#[derive(Default, Clone)]
+pub struct StepCache {
+    key: Option<(u64, u64)>,
+    factor: Option<std::sync::Arc<Factor>>,
+}
+
+impl std::fmt::Debug for StepCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("StepCache")
+            .field("factorised", &self.factor.is_some())
+            .finish()
+    }
+}
+
+/// Caches never make two states differ.
+impl PartialEq for StepCache {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl StepCache {
+    fn factor(&mut self, model: &LatticeModel, dt: f64) -> std::sync::Arc<Factor> {
+        let key = (dt.to_bits(), model.fingerprint());
+        if self.key != Some(key) || self.factor.is_none() {
+            self.factor = Some(std::sync::Arc::new(Factor::new(model, dt)));
+            self.key = Some(key);
+        }
+        self.factor.clone().expect("just built")
+    }
+}
+
+impl LatticeModel {
+    /// A hash of everything the implicit matrix depends on (masses, attachment, stiffeners,
+    /// parameters), to know when a cached factorisation is stale.
+    fn fingerprint(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        self.masses.len().hash(&mut h);
+        for m in self.masses.iter().chain(&self.attachment) {
+            m.to_bits().hash(&mut h);
+        }
+        self.stiffeners.len().hash(&mut h);
+        for s in &self.stiffeners {
+            (s.i, s.j, s.stiffness.to_bits(), s.damping.to_bits()).hash(&mut h);
+        }
+        let p = &self.params;
+        for x in [p.attachment_stiffness, p.attachment_damping] {
+            x.to_bits().hash(&mut h);
+        }
+        h.finish()
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// (A + D) y with D the contacts' blocks s n n^T.
+fn apply_with_contacts(f: &Factor, contacts: &[Contact], n: usize, y: &[f64], out: &mut [f64]) {
+    f.a.mul_cols(y, out);
+    for c in contacts {
+        let i = c.node;
+        let yn = c.normal.x * y[i] + c.normal.y * y[n + i] + c.normal.z * y[2 * n + i];
+        for k in 0..3 {
+            out[k * n + i] += c.s * yn * c.normal[k];
+        }
+    }
+}
+
+/// Conjugate gradients on (A + D) x = b preconditioned by A^-1 (the factorisation), starting from
+/// `ws.x`; stops when |r| <= tol |b|. Returns the iterations used.
+fn pcg_contacts(f: &Factor, ws: &mut StepWork, n: usize, tol: f64, max_iter: usize) -> usize {
+    let b_norm = dot(&ws.b, &ws.b).sqrt();
     if b_norm == 0.0 {
-        return (x, 0);
+        ws.x.iter_mut().for_each(|x| *x = 0.0);
+        return 0;
     }
-    let mut z: Vec<Vector3<f64>> = r
-        .iter()
-        .zip(inv_diag)
-        .map(|(r, d)| r.component_mul(d))
-        .collect();
-    let mut d = z.clone();
-    let mut rz = dot(&r, &z);
-    let mut ad = vec![Vector3::zeros(); n];
+    apply_with_contacts(f, &ws.contacts, n, &ws.x, &mut ws.ad);
+    for i in 0..3 * n {
+        ws.r[i] = ws.b[i] - ws.ad[i];
+    }
+    if dot(&ws.r, &ws.r).sqrt() <= tol * b_norm {
+        return 0;
+    }
+    ws.z.copy_from_slice(&ws.r);
+    f.solve_in_place(&mut ws.z);
+    ws.d.copy_from_slice(&ws.z);
+    let mut rz = dot(&ws.r, &ws.z);
     for it in 0..max_iter {
-        apply(&d, &mut ad);
-        let alpha = rz / dot(&d, &ad);
-        for i in 0..n {
-            x[i] += alpha * d[i];
-            r[i] -= alpha * ad[i];
+        apply_with_contacts(f, &ws.contacts, n, &ws.d, &mut ws.ad);
+        let alpha = rz / dot(&ws.d, &ws.ad);
+        for i in 0..3 * n {
+            ws.x[i] += alpha * ws.d[i];
+            ws.r[i] -= alpha * ws.ad[i];
         }
-        if dot(&r, &r).sqrt() <= tol * b_norm {
-            return (x, it + 1);
+        if dot(&ws.r, &ws.r).sqrt() <= tol * b_norm {
+            return it + 1;
         }
-        for i in 0..n {
-            z[i] = r[i].component_mul(&inv_diag[i]);
-        }
-        let rz_new = dot(&r, &z);
+        ws.z.copy_from_slice(&ws.r);
+        f.solve_in_place(&mut ws.z);
+        let rz_new = dot(&ws.r, &ws.z);
         let beta = rz_new / rz;
         rz = rz_new;
-        for i in 0..n {
-            d[i] = z[i] + beta * d[i];
+        for i in 0..3 * n {
+            ws.d[i] = ws.z[i] + beta * ws.d[i];
         }
     }
-    (x, max_iter)
+    max_iter
 }
 
 #[cfg(test)]

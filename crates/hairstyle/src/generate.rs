@@ -1,0 +1,959 @@
+//! Hairstyle generation: guide Super-Helices rooted on the scalp and render strands bound to them.
+//!
+//! ## What is generated
+//! - **Guides** (a few hundred): the local layer's Super-Helices ([`strand::StrandModel`] +
+//!   [`strand::StrandState`]), reduced model, rooted at scalp points spread evenly
+//!   ([`Head::scalp_even`]), root tangent along the scalp normal. Each guide is the axis of a
+//!   wisp, groomed as a planar curve: it leaves the scalp along the normal, turns over the arc
+//!   [`HairstyleParams::lift`] to lie along the scalp, wraps around the head at the lifted
+//!   radius until it points as steeply down as its plane allows, then goes straight. Its plane
+//!   holds the scalp normal and the combing direction [`HairstyleParams::flow`] projected onto
+//!   the scalp; the hanging part leans out by [`HairstyleParams::hang_tilt`] (more where needed
+//!   to clear the body). The model's rest coordinates are the **sag-free rest shape** of that groomed state
+//!   ([`strand::statics::sag_free_rest`]): the groomed guide is in static equilibrium under
+//!   gravity (the stability flag is kept in [`Guide::stable`]).
+//! - **Render strands** (>= 100,000): polylines of a fixed vertex count rooted at random scalp
+//!   points (uniform in area), each bound to its `guides_per_render` nearest guides (by root
+//!   distance, weights ~ 1/(d + 1 mm)^2, summing to 1) with a per-vertex offset, so that vertex j
+//!   is `sum_k w_k G_k(u_j) + offset_j` (G_k(u): guide k's centreline at the fraction u of its
+//!   length); at the generated (rest) guide shapes this reproduces the strand exactly, and when
+//!   the guides move the strand follows ([`RenderStrands::follow`]). They are also bound to the
+//!   lattice with [`Hairstyle::bind`] (quadratic B-spline FFD).
+//!
+//! ## Curliness (the paper's future work: a high-level property)
+//! Curliness c in [0, 1] sets the natural curl as a helix of radius R and curl index
+//! CI = (strand length) / (end-to-end length), both interpolated over the range of natural hair
+//! (DESIGN.md section 7, after Loussouarn et al. 2007: curl radius 0.6 to 16 cm):
+//! - R(c) = R_max (R_min / R_max)^c, R_max = 0.16 m, R_min = 0.006 m (log-linear);
+//! - CI(c) = 1 + 1.5 c (1: straight, 2.5: tight curls; an assumption within the range of curl
+//!   indices of natural hair, not a fit);
+//! - a helix of radius R and pitch 2 pi C has curl index sqrt(R^2 + C^2) / C, so
+//!   C = R / sqrt(CI^2 - 1); its Darboux vector in the material frame is
+//!   (twist, bend) = (C, R) / (R^2 + C^2), the **rest twist and rest bend** of a curly strand
+//!   (exact: a Super-Helix with this constant Darboux vector is that helix, of radius
+//!   bend / (twist^2 + bend^2) = R). c = 0 is straight (twist = bend = 0) and the map is
+//!   continuous there (C grows without bound as CI -> 1).
+//!
+//! Guides are wisp axes; a curly wisp is shorter than its hair: guide length = L / CI. Render
+//! strands curl about their interpolated wisp axis as that helix (radius R, pitch 2 pi C; the
+//! radius fades in over the first [`CURL_RAMP`] from the root and is capped at
+//! [`HairstyleParams::max_curl_amplitude`], because a strand in a hairstyle does not leave its wisp
+//! by more than a few cm: loose curls of larger radius are drawn as waves of that amplitude).
+//! [`Curl`] gives the numbers for the local layer's curly strands.
+
+use crate::formats::HairCurves;
+use crate::head::{Head, HeadError, HeadParams, ScalpPoint};
+use lattice::ffd::{Binding, FfdError, FfdLattice};
+use nalgebra::{Point3, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use strand::kinematics::{frame_at, segment_frames};
+use strand::statics::sag_free_rest;
+use strand::{HairType, ModelKind, RootFrame, StrandError, StrandModel, StrandState};
+use thiserror::Error;
+
+/// Largest natural curl radius of the curliness map (c = 0+), m (DESIGN.md section 7).
+pub const CURL_RADIUS_MAX: f64 = 0.16;
+/// Smallest natural curl radius of the curliness map (c = 1), m (DESIGN.md section 7).
+pub const CURL_RADIUS_MIN: f64 = 0.006;
+/// Curl index CI = strand length / end-to-end length at curliness 1 (1 at curliness 0).
+pub const CURL_INDEX_MAX: f64 = 2.5;
+/// Arc length from the root over which a render strand's curl radius fades in, m.
+pub const CURL_RAMP: f64 = 0.01;
+/// Smallest gap (m) kept between a render strand vertex (other than the root) and the head surface.
+pub const RENDER_GAP: f64 = 0.001;
+
+/// Errors of hairstyle generation.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum GenerateError {
+    /// A parameter is out of range; `field` names it.
+    #[error("invalid hairstyle parameter `{field}`: {reason}")]
+    InvalidParameter {
+        /// Parameter name.
+        field: &'static str,
+        /// What is wrong, with the value.
+        reason: String,
+    },
+    /// The head parameters are invalid.
+    #[error(transparent)]
+    Head(#[from] HeadError),
+    /// A guide strand could not be built.
+    #[error("guide {guide}: {source}")]
+    Strand {
+        /// Guide index.
+        guide: usize,
+        /// The strand crate's error.
+        source: StrandError,
+    },
+    /// A hair file's strand cannot be used as a render strand.
+    #[error("strand {strand} of the hair file: {reason}")]
+    BadStrand {
+        /// Strand index in the file.
+        strand: usize,
+        /// What is wrong.
+        reason: String,
+    },
+    /// Binding to the lattice failed.
+    #[error(transparent)]
+    Ffd(#[from] FfdError),
+}
+
+/// Parameters of hairstyle generation. Every length in m.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HairstyleParams {
+    /// Hair type preset of the strand crate ([`HairType::by_name`]): fibre section, stiffness,
+    /// density. Default "caucasian".
+    pub hair_type: String,
+    /// Hair length (arc length of a strand), m. Default 0.2 m.
+    pub length: f64,
+    /// Curliness in [0, 1] (see the module docs for the map to rest twist and bend). Default 0.
+    pub curliness: f64,
+    /// Number of guide strands (Super-Helices). Default 300.
+    pub guide_count: usize,
+    /// Helical segments per guide. Default 12.
+    pub guide_segments: usize,
+    /// Number of render strands. Default 100,000.
+    pub render_count: usize,
+    /// Vertices per render strand (root included), >= 2. Default 32.
+    pub render_vertices: usize,
+    /// Guides each render strand follows, 1 to 8. Default 3.
+    pub guides_per_render: usize,
+    /// Centreline samples per guide used to interpolate render strands, >= 2. Default 64.
+    pub guide_samples: usize,
+    /// Relative random shortening of render strands: length in [(1 - j) L, L]. Default 0.1.
+    pub length_jitter: f64,
+    /// Arc length over which a guide turns from the scalp normal to the scalp's tangent, m.
+    /// Default 0.015 m (the hair stands about 1 cm off the scalp).
+    pub lift: f64,
+    /// Extra gap between the wrapped hair layer and the head, m. Default 0.003 m.
+    pub clearance: f64,
+    /// Direction (head frame, any length) from the head centre to the point hair is combed away
+    /// from: a guide at p leaves the scalp along the projection of (p - |p| d) onto the scalp, so
+    /// hair flows away from that point over the head. Default (0, 0.6, 0.8): the front of the
+    /// hairline, giving swept-back hair that leaves the face free.
+    pub flow: Vector3<f64>,
+    /// Angle by which the hanging part of a guide leans outwards from the steepest descent,
+    /// radians; increased in 5 degree steps (up to 50 degrees more) for a guide that would
+    /// otherwise pass through the body. Default 5 deg.
+    pub hang_tilt: f64,
+    /// Largest curl radius drawn on render strands, m. Default 0.015 m.
+    pub max_curl_amplitude: f64,
+    /// Random seed; the same seed gives the same hairstyle. Default 1.
+    pub seed: u64,
+    /// The head.
+    pub head: HeadParams,
+}
+
+impl Default for HairstyleParams {
+    fn default() -> Self {
+        Self {
+            hair_type: "caucasian".into(),
+            length: 0.2,
+            curliness: 0.0,
+            guide_count: 300,
+            guide_segments: 12,
+            render_count: 100_000,
+            render_vertices: 32,
+            guides_per_render: 3,
+            guide_samples: 64,
+            length_jitter: 0.1,
+            lift: 0.015,
+            clearance: 0.003,
+            flow: Vector3::new(0.0, 0.6, 0.8),
+            hang_tilt: 5f64.to_radians(),
+            max_curl_amplitude: 0.015,
+            seed: 1,
+            head: HeadParams::default(),
+        }
+    }
+}
+
+impl HairstyleParams {
+    /// Checks every field, naming the first bad one.
+    pub fn validate(&self) -> Result<(), GenerateError> {
+        let bad = |field, reason: String| Err(GenerateError::InvalidParameter { field, reason });
+        if HairType::by_name(&self.hair_type).is_none() {
+            let names: Vec<&str> = HairType::ALL.iter().map(|h| h.name).collect();
+            return bad(
+                "hair_type",
+                format!(
+                    "unknown preset {:?}; known: {}",
+                    self.hair_type,
+                    names.join(", ")
+                ),
+            );
+        }
+        if !(self.length > 0.0 && self.length <= 2.0) {
+            return bad(
+                "length",
+                format!("must be in (0, 2] m, got {}", self.length),
+            );
+        }
+        if !(0.0..=1.0).contains(&self.curliness) {
+            return bad(
+                "curliness",
+                format!("must be in [0, 1], got {}", self.curliness),
+            );
+        }
+        if !(1..=100_000).contains(&self.guide_count) {
+            return bad(
+                "guide_count",
+                format!("must be in 1..=100000, got {}", self.guide_count),
+            );
+        }
+        if !(1..=256).contains(&self.guide_segments) {
+            return bad(
+                "guide_segments",
+                format!("must be in 1..=256, got {}", self.guide_segments),
+            );
+        }
+        if self.render_count > 10_000_000 {
+            return bad(
+                "render_count",
+                format!("must be at most 10,000,000, got {}", self.render_count),
+            );
+        }
+        if !(2..=1024).contains(&self.render_vertices) {
+            return bad(
+                "render_vertices",
+                format!("must be in 2..=1024, got {}", self.render_vertices),
+            );
+        }
+        if !(1..=8).contains(&self.guides_per_render) || self.guides_per_render > self.guide_count {
+            return bad(
+                "guides_per_render",
+                format!(
+                    "must be in 1..=8 and at most guide_count, got {}",
+                    self.guides_per_render
+                ),
+            );
+        }
+        if !(2..=4096).contains(&self.guide_samples) {
+            return bad(
+                "guide_samples",
+                format!("must be in 2..=4096, got {}", self.guide_samples),
+            );
+        }
+        if !(0.0..1.0).contains(&self.length_jitter) {
+            return bad(
+                "length_jitter",
+                format!("must be in [0, 1), got {}", self.length_jitter),
+            );
+        }
+        if !(self.lift > 0.0 && self.lift.is_finite()) {
+            return bad("lift", format!("must be > 0 m, got {}", self.lift));
+        }
+        if !(self.clearance >= 0.0 && self.clearance.is_finite()) {
+            return bad(
+                "clearance",
+                format!("must be >= 0 m, got {}", self.clearance),
+            );
+        }
+        if !(self.flow.iter().all(|x| x.is_finite()) && self.flow.norm() > 0.0) {
+            return bad(
+                "flow",
+                format!("must be a finite non-zero vector, got {:?}", self.flow),
+            );
+        }
+        if !(self.hang_tilt.abs() <= std::f64::consts::FRAC_PI_2) {
+            return bad(
+                "hang_tilt",
+                format!("must be in [-pi/2, pi/2] rad, got {}", self.hang_tilt),
+            );
+        }
+        if !(self.max_curl_amplitude >= 0.0 && self.max_curl_amplitude.is_finite()) {
+            return bad(
+                "max_curl_amplitude",
+                format!("must be >= 0 m, got {}", self.max_curl_amplitude),
+            );
+        }
+        self.head.validate()?;
+        Ok(())
+    }
+
+    /// The hair type preset.
+    pub fn hair(&self) -> Result<HairType, GenerateError> {
+        self.validate()?;
+        Ok(HairType::by_name(&self.hair_type).expect("validated"))
+    }
+}
+
+/// The natural curl of a curliness value: helix radius and pitch, curl index, and the rest
+/// Darboux vector (twist, bend) of a Super-Helix with that shape.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Curl {
+    /// Helix radius R, m.
+    pub radius: f64,
+    /// Helix pitch 2 pi C (axial length of one turn), m.
+    pub pitch: f64,
+    /// Curl index CI = arc length / axial length (>= 1).
+    pub curl_index: f64,
+    /// Rest twist C / (R^2 + C^2), rad/m.
+    pub twist: f64,
+    /// Rest bend R / (R^2 + C^2), rad/m.
+    pub bend: f64,
+}
+
+impl Curl {
+    /// The curl of curliness `c` in [0, 1]; None for c = 0 (straight hair). See the module docs.
+    pub fn from_curliness(c: f64) -> Result<Option<Curl>, GenerateError> {
+        if !(0.0..=1.0).contains(&c) {
+            return Err(GenerateError::InvalidParameter {
+                field: "curliness",
+                reason: format!("must be in [0, 1], got {c}"),
+            });
+        }
+        if c == 0.0 {
+            return Ok(None);
+        }
+        let radius = CURL_RADIUS_MAX * (CURL_RADIUS_MIN / CURL_RADIUS_MAX).powf(c);
+        let curl_index = 1.0 + (CURL_INDEX_MAX - 1.0) * c;
+        let cc = radius / (curl_index * curl_index - 1.0).sqrt();
+        let d = radius * radius + cc * cc;
+        Ok(Some(Curl {
+            radius,
+            pitch: std::f64::consts::TAU * cc,
+            curl_index,
+            twist: cc / d,
+            bend: radius / d,
+        }))
+    }
+
+    /// Helix radius (m) of the Super-Helix rest Darboux vector: bend / (twist^2 + bend^2).
+    pub fn darboux_radius(&self) -> f64 {
+        self.bend / (self.twist * self.twist + self.bend * self.bend)
+    }
+}
+
+/// One guide strand: a Super-Helix rooted on the scalp.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Guide {
+    /// The strand model; its rest coordinates are the sag-free rest of the groomed state.
+    pub model: StrandModel,
+    /// The groomed state (at rest, root on the scalp, tangent along the scalp normal).
+    pub state: StrandState,
+    /// The scalp point the guide grows from.
+    pub root: ScalpPoint,
+    /// Whether the groomed state is a stable equilibrium of the sag-free model under gravity.
+    pub stable: bool,
+}
+
+impl Guide {
+    /// `samples` centreline points evenly spaced in arc length from root to tip, m.
+    pub fn samples(&self, samples: usize) -> Vec<Point3<f64>> {
+        sample_strand(&self.model, &self.state, samples)
+    }
+}
+
+/// Centreline of a strand at `samples` points evenly spaced in arc length, m.
+pub fn sample_strand(model: &StrandModel, state: &StrandState, samples: usize) -> Vec<Point3<f64>> {
+    let frames = segment_frames(model, state);
+    let n = samples.max(2);
+    (0..n)
+        .map(|j| {
+            let s = model.length * j as f64 / (n - 1) as f64;
+            Point3::from(frame_at(model, &state.q, &frames, s).position)
+        })
+        .collect()
+}
+
+/// The render strands: polylines with a fixed vertex count, bound to guides.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RenderStrands {
+    /// Vertices per strand (root first).
+    pub vertices_per_strand: usize,
+    /// Guide centreline samples the binding refers to (see [`RenderStrands::follow`]).
+    pub guide_samples: usize,
+    /// Guides each strand follows.
+    pub guides_per_strand: usize,
+    /// Vertex positions, m (head frame): strand i is `positions[i V .. (i + 1) V]`.
+    pub positions: Vec<[f32; 3]>,
+    /// Guide indices, `guides_per_strand` per strand.
+    pub guide_indices: Vec<u32>,
+    /// Guide weights (summing to 1 per strand), `guides_per_strand` per strand.
+    pub guide_weights: Vec<f32>,
+    /// Fraction of the guide's length each strand spans (<= 1), one per strand.
+    pub span: Vec<f32>,
+    /// Per-vertex offset from the weighted guide point, m; one per vertex.
+    pub offsets: Vec<[f32; 3]>,
+}
+
+impl RenderStrands {
+    /// Number of strands.
+    pub fn len(&self) -> usize {
+        self.span.len()
+    }
+
+    /// True if there are no strands.
+    pub fn is_empty(&self) -> bool {
+        self.span.is_empty()
+    }
+
+    /// The vertices of strand `i`.
+    pub fn strand(&self, i: usize) -> &[[f32; 3]] {
+        let v = self.vertices_per_strand;
+        &self.positions[i * v..(i + 1) * v]
+    }
+
+    /// Weighted guide point (the wisp axis) of vertex `j` of strand `i`, given guide centreline
+    /// samples `guides` (each with `guide_samples` points, m).
+    pub fn axis_point(&self, guides: &[Vec<Point3<f64>>], i: usize, j: usize) -> Point3<f64> {
+        let k = self.guides_per_strand;
+        let u = self.span[i] as f64 * j as f64 / (self.vertices_per_strand - 1) as f64;
+        let mut p = Vector3::zeros();
+        for g in 0..k {
+            let w = self.guide_weights[i * k + g] as f64;
+            p += w * lerp_samples(&guides[self.guide_indices[i * k + g] as usize], u).coords;
+        }
+        Point3::from(p)
+    }
+
+    /// Vertex positions (m) of every strand when the guides' centrelines are `guides` (each
+    /// `guide_samples` points, root to tip): `sum_k w_k G_k(u_j) + offset_j`. Written into `out`
+    /// (resized). Parallel (rayon). Errors if a guide has the wrong number of samples or an
+    /// index is out of range.
+    pub fn follow(
+        &self,
+        guides: &[Vec<Point3<f64>>],
+        out: &mut Vec<[f32; 3]>,
+    ) -> Result<(), GenerateError> {
+        if let Some((g, s)) = guides
+            .iter()
+            .enumerate()
+            .find(|(_, s)| s.len() != self.guide_samples)
+        {
+            return Err(GenerateError::InvalidParameter {
+                field: "guides",
+                reason: format!(
+                    "guide {g} has {} samples, expected {}",
+                    s.len(),
+                    self.guide_samples
+                ),
+            });
+        }
+        if let Some(&bad) = self
+            .guide_indices
+            .iter()
+            .find(|&&i| i as usize >= guides.len())
+        {
+            return Err(GenerateError::InvalidParameter {
+                field: "guides",
+                reason: format!(
+                    "binding refers to guide {bad} but {} guides were given",
+                    guides.len()
+                ),
+            });
+        }
+        let v = self.vertices_per_strand;
+        out.resize(self.positions.len(), [0.0; 3]);
+        out.par_chunks_mut(v).enumerate().for_each(|(i, strand)| {
+            for (j, o) in strand.iter_mut().enumerate() {
+                let a = self.axis_point(guides, i, j);
+                let off = self.offsets[i * v + j];
+                *o = [
+                    (a.x + off[0] as f64) as f32,
+                    (a.y + off[1] as f64) as f32,
+                    (a.z + off[2] as f64) as f32,
+                ];
+            }
+        });
+        Ok(())
+    }
+}
+
+/// Linear interpolation in evenly spaced samples at the fraction `u` in [0, 1] of the length.
+fn lerp_samples(s: &[Point3<f64>], u: f64) -> Point3<f64> {
+    let x = u.clamp(0.0, 1.0) * (s.len() - 1) as f64;
+    let i = (x as usize).min(s.len() - 2);
+    let t = x - i as f64;
+    s[i] + t * (s[i + 1] - s[i])
+}
+
+/// A generated (or loaded) hairstyle on the built-in head.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hairstyle {
+    /// The head it grows on.
+    pub head: Head,
+    /// The parameters it was generated with.
+    pub params: HairstyleParams,
+    /// The natural curl (None: straight hair).
+    pub curl: Option<Curl>,
+    /// Guide strands (Super-Helices).
+    pub guides: Vec<Guide>,
+    /// Render strands bound to the guides.
+    pub render: RenderStrands,
+}
+
+/// Groomed coordinates of a guide: bend only (planar curve), see the module docs.
+fn groomed_bends(
+    params: &HairstyleParams,
+    root: &ScalpPoint,
+    length: f64,
+    segments: usize,
+    tilt: f64,
+) -> (Vector3<f64>, Vec<f64>) {
+    let n = root.normal;
+    let proj = |v: Vector3<f64>| v - n * n.dot(&v);
+    let p = root.position.coords;
+    let away = p - params.flow.normalize() * p.norm();
+    let f = proj(away)
+        .try_normalize(1e-6 * p.norm())
+        .or_else(|| proj(-Vector3::y()).try_normalize(1e-6))
+        .unwrap_or_else(|| proj(Vector3::x()).normalize());
+    let m = n.cross(&f);
+    // steepest descent in the plane (n, f)
+    let down = -Vector3::z();
+    let ds = down - m * m.dot(&down);
+    // turning angle from the normal to the steepest descent, going round from the normal towards f
+    let psi_end = if ds.norm() > 1e-6 {
+        ds.dot(&f)
+            .atan2(ds.dot(&n))
+            .rem_euclid(std::f64::consts::TAU)
+    } else {
+        std::f64::consts::FRAC_PI_2
+    };
+    // hang slightly outwards (tilt) rather than straight down along the body
+    let psi_end = (psi_end - tilt).max(0.0);
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    let k1 = half_pi / params.lift;
+    let r1 = params.lift / half_pi;
+    let a1 = psi_end.min(half_pi) / k1;
+    let rho = root.position.coords.norm() + r1 + params.clearance;
+    let a2 = (psi_end - half_pi).max(0.0) * rho;
+    // integral of the curvature from 0 to s
+    let turned = |s: f64| -> f64 {
+        if s <= a1 {
+            k1 * s
+        } else if s <= a1 + a2 {
+            k1 * a1 + (s - a1) / rho
+        } else {
+            k1 * a1 + a2 / rho
+        }
+    };
+    let l = length / segments as f64;
+    let bends = (0..segments)
+        .map(|i| (turned((i + 1) as f64 * l) - turned(i as f64 * l)) / l)
+        .collect();
+    (m, bends)
+}
+
+fn build_guide(
+    params: &HairstyleParams,
+    hair: &HairType,
+    head: &Head,
+    length: f64,
+    index: usize,
+    root: ScalpPoint,
+) -> Result<Guide, GenerateError> {
+    let err = |source| GenerateError::Strand {
+        guide: index,
+        source,
+    };
+    let model = StrandModel::new(
+        ModelKind::Reduced,
+        length,
+        params.guide_segments,
+        hair.section().map_err(err)?,
+        hair.material().map_err(err)?,
+    )
+    .map_err(err)?;
+    // the groomed shape with the smallest outward tilt of the hanging part that keeps the guide
+    // outside the body (sampled at 64 points, first-order distance >= clearance / 2)
+    let mut state = None;
+    for step in 0..=10 {
+        let tilt = params.hang_tilt + step as f64 * 5f64.to_radians();
+        let (major, bends) = groomed_bends(params, &root, length, params.guide_segments, tilt);
+        let frame = RootFrame::new(root.position.coords, root.normal, major).map_err(err)?;
+        let mut s = StrandState::at_rest(&model, frame);
+        for (i, b) in bends.iter().enumerate() {
+            s.q[2 * i] = 0.0;
+            s.q[2 * i + 1] = *b;
+        }
+        let clear = sample_strand(&model, &s, 64)
+            .iter()
+            .skip(1)
+            .all(|p| head.signed_distance(p) >= 0.5 * params.clearance);
+        state = Some(s);
+        if clear {
+            break;
+        }
+    }
+    let state = state.expect("at least one try");
+    let (model, stable) = sag_free_rest(&model, &state, &[]).map_err(err)?;
+    Ok(Guide {
+        model,
+        state,
+        root,
+        stable,
+    })
+}
+
+/// Parallel-transported unit vector perpendicular to each tangent of a polyline.
+fn transported_normals(p: &[Point3<f64>]) -> Vec<(Vector3<f64>, Vector3<f64>)> {
+    let n = p.len();
+    let tangent = |j: usize| {
+        let (a, b) = if j == 0 {
+            (0, 1)
+        } else if j == n - 1 {
+            (n - 2, n - 1)
+        } else {
+            (j - 1, j + 1)
+        };
+        (p[b] - p[a]).try_normalize(1e-15).unwrap_or(Vector3::z())
+    };
+    let mut out = Vec::with_capacity(n);
+    let t0 = tangent(0);
+    let mut u = t0
+        .cross(&Vector3::z())
+        .try_normalize(1e-6)
+        .unwrap_or_else(|| t0.cross(&Vector3::x()).normalize());
+    for j in 0..n {
+        let t = tangent(j);
+        u = (u - t * t.dot(&u)).try_normalize(1e-9).unwrap_or_else(|| {
+            t.cross(&Vector3::x())
+                .try_normalize(1e-6)
+                .unwrap_or(Vector3::y())
+        });
+        out.push((u, t.cross(&u)));
+    }
+    out
+}
+
+/// k nearest guides (by root position) of `p`, with weights ~ 1/(d + 1 mm)^2 summing to 1.
+fn nearest_guides(roots: &[Point3<f64>], p: &Point3<f64>, k: usize) -> (Vec<u32>, Vec<f32>) {
+    let mut best: Vec<(f64, usize)> = Vec::with_capacity(k + 1);
+    for (g, r) in roots.iter().enumerate() {
+        let d = (r - p).norm_squared();
+        if best.len() < k || d < best[best.len() - 1].0 {
+            let at = best.partition_point(|&(x, _)| x <= d);
+            best.insert(at, (d, g));
+            best.truncate(k);
+        }
+    }
+    let w: Vec<f64> = best
+        .iter()
+        .map(|&(d, _)| 1.0 / (d.sqrt() + 1e-3).powi(2))
+        .collect();
+    let total: f64 = w.iter().sum();
+    (
+        best.iter().map(|&(_, g)| g as u32).collect(),
+        w.iter().map(|x| (x / total) as f32).collect(),
+    )
+}
+
+impl Hairstyle {
+    /// Generates a hairstyle. Deterministic for a given `params` (including the seed), whatever
+    /// the number of threads.
+    pub fn generate(params: &HairstyleParams) -> Result<Self, GenerateError> {
+        let hair = params.hair()?;
+        let head = Head::new(params.head)?;
+        let curl = Curl::from_curliness(params.curliness)?;
+        let guides = Self::build_guides(params, &hair, &head, curl.as_ref())?;
+        // roots: chunks of 1024 with their own random stream, so the result does not depend on threads
+        const CHUNK: usize = 1024;
+        let chunks = params.render_count.div_ceil(CHUNK);
+        let roots: Vec<ScalpPoint> = (0..chunks)
+            .into_par_iter()
+            .flat_map_iter(|c| {
+                let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+                rng.set_stream(c as u64 + 1);
+                let n = CHUNK.min(params.render_count - c * CHUNK);
+                head.scalp_random(n, &mut rng)
+            })
+            .collect();
+        if roots.len() != params.render_count {
+            return Err(GenerateError::InvalidParameter {
+                field: "head",
+                reason: format!(
+                    "could only sample {} of {} scalp points",
+                    roots.len(),
+                    params.render_count
+                ),
+            });
+        }
+        let guide_samples: Vec<Vec<Point3<f64>>> = guides
+            .par_iter()
+            .map(|g| g.samples(params.guide_samples))
+            .collect();
+        let guide_roots: Vec<Point3<f64>> = guides.iter().map(|g| g.root.position).collect();
+        let v = params.render_vertices;
+        let per: Vec<(Vec<u32>, Vec<f32>, f32, Vec<[f32; 3]>, Vec<[f32; 3]>)> = roots
+            .par_iter()
+            .enumerate()
+            .map(|(i, root)| {
+                let mut rng = ChaCha8Rng::seed_from_u64(params.seed ^ 0x9e37_79b9_7f4a_7c15);
+                rng.set_stream(i as u64);
+                let span = 1.0 - params.length_jitter * rng.random::<f64>();
+                let phase = std::f64::consts::TAU * rng.random::<f64>();
+                let (idx, w) =
+                    nearest_guides(&guide_roots, &root.position, params.guides_per_render);
+                let axis: Vec<Point3<f64>> = (0..v)
+                    .map(|j| {
+                        let u = span * j as f64 / (v - 1) as f64;
+                        let mut p = Vector3::zeros();
+                        for (g, wg) in idx.iter().zip(&w) {
+                            p += *wg as f64 * lerp_samples(&guide_samples[*g as usize], u).coords;
+                        }
+                        Point3::from(p)
+                    })
+                    .collect();
+                let shift = root.position - axis[0];
+                let mut path: Vec<Point3<f64>> = axis.iter().map(|a| a + shift).collect();
+                if let Some(c) = &curl {
+                    let frames = transported_normals(&path);
+                    let guide_len = guides[idx[0] as usize].model.length;
+                    let amp = c.radius.min(params.max_curl_amplitude);
+                    let cc = c.pitch / std::f64::consts::TAU;
+                    for (j, p) in path.iter_mut().enumerate() {
+                        let z = span * guide_len * j as f64 / (v - 1) as f64; // axial arc length
+                        let ramp = (z / CURL_RAMP).min(1.0);
+                        let ramp = ramp * ramp * (3.0 - 2.0 * ramp);
+                        let phi = phase + z / cc;
+                        let (a, b) = frames[j];
+                        *p += amp * ramp * (phi.cos() * a + phi.sin() * b);
+                    }
+                }
+                // keep every vertex but the root at least RENDER_GAP outside the body
+                for p in path.iter_mut().skip(1) {
+                    for _ in 0..4 {
+                        let d = head.signed_distance(p);
+                        if d >= RENDER_GAP {
+                            break;
+                        }
+                        let Some(nrm) = head.normal(p) else { break };
+                        *p += (RENDER_GAP - d.max(-0.05) + 1e-5) * nrm;
+                    }
+                }
+                let pos: Vec<[f32; 3]> = path
+                    .iter()
+                    .map(|p| [p.x as f32, p.y as f32, p.z as f32])
+                    .collect();
+                let off: Vec<[f32; 3]> = path
+                    .iter()
+                    .zip(&axis)
+                    .map(|(p, a)| [(p.x - a.x) as f32, (p.y - a.y) as f32, (p.z - a.z) as f32])
+                    .collect();
+                (idx, w, span as f32, pos, off)
+            })
+            .collect();
+        let mut render = RenderStrands {
+            vertices_per_strand: v,
+            guide_samples: params.guide_samples,
+            guides_per_strand: params.guides_per_render,
+            ..Default::default()
+        };
+        render.positions.reserve(v * per.len());
+        render.offsets.reserve(v * per.len());
+        for (idx, w, span, pos, off) in per {
+            render.guide_indices.extend(idx);
+            render.guide_weights.extend(w);
+            render.span.push(span);
+            render.positions.extend(pos);
+            render.offsets.extend(off);
+        }
+        Ok(Self {
+            head,
+            params: params.clone(),
+            curl,
+            guides,
+            render,
+        })
+    }
+
+    fn build_guides(
+        params: &HairstyleParams,
+        hair: &HairType,
+        head: &Head,
+        curl: Option<&Curl>,
+    ) -> Result<Vec<Guide>, GenerateError> {
+        let roots = head.scalp_even(params.guide_count);
+        if roots.len() != params.guide_count {
+            return Err(GenerateError::InvalidParameter {
+                field: "head",
+                reason: format!(
+                    "could only place {} of {} guide roots",
+                    roots.len(),
+                    params.guide_count
+                ),
+            });
+        }
+        let length = params.length / curl.map_or(1.0, |c| c.curl_index);
+        roots
+            .into_par_iter()
+            .enumerate()
+            .map(|(i, r)| build_guide(params, hair, head, length, i, r))
+            .collect()
+    }
+
+    /// Guide centrelines at their current states, `params.guide_samples` points each (m).
+    pub fn guide_samples(&self) -> Vec<Vec<Point3<f64>>> {
+        self.guides
+            .par_iter()
+            .map(|g| g.samples(self.params.guide_samples))
+            .collect()
+    }
+
+    /// FFD binding of every render strand vertex to `lattice` (vertices outside its embedded
+    /// volume are clamped onto it). Memory: 27 x 12 bytes per vertex.
+    pub fn bind(&self, lattice: &FfdLattice) -> Result<Binding, GenerateError> {
+        let pts: Vec<Point3<f64>> = self
+            .render
+            .positions
+            .iter()
+            .map(|p| Point3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+            .collect();
+        Ok(Binding::new_clamped(lattice, &pts)?)
+    }
+
+    /// Axis-aligned bounds (m) of the render strands and guides: (min, max).
+    pub fn bounds(&self) -> (Point3<f64>, Point3<f64>) {
+        let mut lo = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        let mut hi = -lo;
+        let mut add = |p: Point3<f64>| {
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        };
+        for p in &self.render.positions {
+            add(Point3::new(p[0] as f64, p[1] as f64, p[2] as f64));
+        }
+        for g in self.guide_samples() {
+            g.into_iter().for_each(&mut add);
+        }
+        (lo, hi)
+    }
+
+    /// The render strands as polylines (m), for writing with [`crate::formats`].
+    pub fn to_curves(&self) -> HairCurves {
+        let v = self.render.vertices_per_strand;
+        HairCurves::from_strands(
+            self.render
+                .positions
+                .chunks(v)
+                .map(|s| s.to_vec())
+                .collect(),
+        )
+    }
+
+    /// A hairstyle whose render strands are the strands of `curves` (m, head frame; each
+    /// resampled by arc length to `params.render_vertices` vertices; root first), bound to guides
+    /// generated with `params` (its render settings other than the vertex count are unused).
+    pub fn from_curves(
+        curves: &HairCurves,
+        params: &HairstyleParams,
+    ) -> Result<Self, GenerateError> {
+        let hair = params.hair()?;
+        let head = Head::new(params.head)?;
+        let curl = Curl::from_curliness(params.curliness)?;
+        let guides = Self::build_guides(params, &hair, &head, curl.as_ref())?;
+        let guide_samples: Vec<Vec<Point3<f64>>> = guides
+            .par_iter()
+            .map(|g| g.samples(params.guide_samples))
+            .collect();
+        let guide_roots: Vec<Point3<f64>> = guides.iter().map(|g| g.root.position).collect();
+        let v = params.render_vertices;
+        let per: Result<Vec<_>, GenerateError> = curves
+            .strands
+            .par_iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let pts: Vec<Point3<f64>> = s
+                    .iter()
+                    .map(|p| Point3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+                    .collect();
+                if pts.iter().any(|p| !p.iter().all(|x| x.is_finite())) {
+                    return Err(GenerateError::BadStrand {
+                        strand: i,
+                        reason: "non-finite vertex".into(),
+                    });
+                }
+                let path = resample(&pts, v).ok_or_else(|| GenerateError::BadStrand {
+                    strand: i,
+                    reason: format!(
+                        "needs at least 2 points and a non-zero length, has {} points",
+                        pts.len()
+                    ),
+                })?;
+                let length: f64 = pts.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+                let (idx, w) = nearest_guides(&guide_roots, &path[0], params.guides_per_render);
+                let span = (length / guides[idx[0] as usize].model.length).min(1.0);
+                let axis = (0..v).map(|j| {
+                    let u = span * j as f64 / (v - 1) as f64;
+                    let mut p = Vector3::zeros();
+                    for (g, wg) in idx.iter().zip(&w) {
+                        p += *wg as f64 * lerp_samples(&guide_samples[*g as usize], u).coords;
+                    }
+                    p
+                });
+                let off: Vec<[f32; 3]> = path
+                    .iter()
+                    .zip(axis)
+                    .map(|(p, a)| [(p.x - a.x) as f32, (p.y - a.y) as f32, (p.z - a.z) as f32])
+                    .collect();
+                let pos: Vec<[f32; 3]> = path
+                    .iter()
+                    .map(|p| [p.x as f32, p.y as f32, p.z as f32])
+                    .collect();
+                Ok((idx, w, span as f32, pos, off))
+            })
+            .collect();
+        let mut render = RenderStrands {
+            vertices_per_strand: v,
+            guide_samples: params.guide_samples,
+            guides_per_strand: params.guides_per_render,
+            ..Default::default()
+        };
+        for (idx, w, span, pos, off) in per? {
+            render.guide_indices.extend(idx);
+            render.guide_weights.extend(w);
+            render.span.push(span);
+            render.positions.extend(pos);
+            render.offsets.extend(off);
+        }
+        let mut params = params.clone();
+        params.render_count = render.len();
+        Ok(Self {
+            head,
+            params,
+            curl,
+            guides,
+            render,
+        })
+    }
+}
+
+/// `n` points evenly spaced in arc length along a polyline; None if it has fewer than 2 points
+/// or zero length.
+fn resample(p: &[Point3<f64>], n: usize) -> Option<Vec<Point3<f64>>> {
+    if p.len() < 2 {
+        return None;
+    }
+    let mut cum = vec![0.0];
+    for w in p.windows(2) {
+        cum.push(cum.last().unwrap() + (w[1] - w[0]).norm());
+    }
+    let total = *cum.last().unwrap();
+    if !(total > 0.0) {
+        return None;
+    }
+    let mut seg = 0;
+    Some(
+        (0..n)
+            .map(|j| {
+                let s = total * j as f64 / (n - 1) as f64;
+                while seg + 2 < cum.len() && cum[seg + 1] < s {
+                    seg += 1;
+                }
+                let len = cum[seg + 1] - cum[seg];
+                let t = if len > 0.0 {
+                    ((s - cum[seg]) / len).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                p[seg] + t * (p[seg + 1] - p[seg])
+            })
+            .collect(),
+    )
+}

@@ -19,7 +19,9 @@ uniform float curliness;          // [0,1]
 uniform float curlRadius;         // m at curliness 1
 attribute vec3 rest;              // rest position (head frame), m
 attribute vec3 restTangent;
-attribute vec4 binding;           // guide index, guide weight, arc fraction u in [0,1], phase
+attribute vec3 guides;            // the strand's three guides (indices; weight 0 for unused slots)
+attribute vec3 weights;           // their weights, summing to 1
+attribute vec2 arc;               // x: fraction u of the guides' length at this vertex, y: curl phase
 varying vec3 vTangent;
 varying vec3 vPosition;
 varying float vWet;
@@ -59,14 +61,15 @@ vec3 guideOffset(int g, float u) {
   return mix(da, db, x - float(a));
 }
 void main() {
-  int g = int(binding.x + 0.5);
-  float u = binding.z;
-  vec3 p = ffd(rest) + binding.y * guideOffset(g, u);
+  int g = int(guides.x + 0.5);
+  float u = arc.x;
+  vec3 p = ffd(rest) + weights.x * guideOffset(g, u) + weights.y * guideOffset(int(guides.y + 0.5), u)
+         + weights.z * guideOffset(int(guides.z + 0.5), u);
   vec3 t = normalize(restTangent);
   // Curliness: a helical offset about the strand, growing from the root.
   vec3 side = normalize(cross(t, abs(t.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
   vec3 side2 = cross(t, side);
-  float ang = u * 40.0 + binding.w;
+  float ang = u * 40.0 + arc.y;
   p += curliness * curlRadius * sqrt(u) * (cos(ang) * side + sin(ang) * side2);
   vec4 st = texelFetch(guideState, ivec2(g, 0), 0);
   vWet = st.r;
@@ -200,23 +203,27 @@ function floatTexture(w: number, h: number): THREE.DataTexture {
 
 /** Line segments for every strand: rest positions, rest tangents and the guide binding per vertex. */
 export function hairGeometry(scene: SceneMsg): THREE.BufferGeometry {
-  const nv = scene.verticesPerStrand, ns = scene.strands;
+  const nv = scene.verticesPerStrand, ns = scene.strands, k = scene.guidesPerStrand;
   const pos = scene.renderPositions;
   const tangent = new Float32Array(pos.length);
-  const binding = new Float32Array(4 * nv * ns);
+  const guides = new Float32Array(3 * nv * ns);
+  const weights = new Float32Array(3 * nv * ns);
+  const arc = new Float32Array(2 * nv * ns);
   const index = new Uint32Array(2 * (nv - 1) * ns);
-  let k = 0;
+  let n = 0;
   for (let s = 0; s < ns; s++) {
     const phase = ((s * 2654435761) >>> 0) / 4294967296 * 6.2832;
     for (let i = 0; i < nv; i++) {
       const v = s * nv + i;
       const a = s * nv + Math.max(0, i - 1), b = s * nv + Math.min(nv - 1, i + 1);
       for (let c = 0; c < 3; c++) tangent[3 * v + c] = pos[3 * b + c] - pos[3 * a + c];
-      binding[4 * v] = scene.renderGuide[s];
-      binding[4 * v + 1] = scene.renderWeight[s];
-      binding[4 * v + 2] = i / (nv - 1);
-      binding[4 * v + 3] = phase;
-      if (i + 1 < nv) { index[k++] = v; index[k++] = v + 1; }
+      for (let m = 0; m < Math.min(3, k); m++) {
+        guides[3 * v + m] = scene.renderGuide[s * k + m];
+        weights[3 * v + m] = scene.renderWeight[s * k + m];
+      }
+      arc[2 * v] = scene.renderSpan[s] * i / (nv - 1);
+      arc[2 * v + 1] = phase;
+      if (i + 1 < nv) { index[n++] = v; index[n++] = v + 1; }
     }
   }
   const g = new THREE.BufferGeometry();
@@ -224,9 +231,9 @@ export function hairGeometry(scene: SceneMsg): THREE.BufferGeometry {
   g.setAttribute('position', new THREE.BufferAttribute(pos, 3));
   g.setAttribute('rest', new THREE.BufferAttribute(pos, 3));
   g.setAttribute('restTangent', new THREE.BufferAttribute(tangent, 3));
-  g.setAttribute('binding', new THREE.BufferAttribute(binding, 4));
+  g.setAttribute('guides', new THREE.BufferAttribute(guides, 3));
+  g.setAttribute('weights', new THREE.BufferAttribute(weights, 3));
+  g.setAttribute('arc', new THREE.BufferAttribute(arc, 2));
   g.setIndex(new THREE.BufferAttribute(index, 1));
-  g.computeBoundingSphere();
-  if (g.boundingSphere) g.boundingSphere.radius *= 2; // the FFD may move the hair: do not cull it
   return g;
 }

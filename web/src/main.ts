@@ -95,6 +95,7 @@ function onScene(msg: P.SceneMsg): void {
   status.strands = msg.strands;
   const preset = document.getElementById('preset') as HTMLSelectElement;
   preset.innerHTML = msg.hairTypes.map((n, i) => `<option value="${i}">${n}</option>`).join('');
+  preset.value = String(msg.hairType);
   status.sceneLoaded = true;
 }
 

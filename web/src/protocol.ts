@@ -27,17 +27,20 @@ export const FORMATS = ['hair', 'data', 'tfx', 'usda'];
 export interface SceneMsg {
   verticesPerStrand: number;
   strands: number;
+  guidesPerStrand: number;
   guides: number;
   samples: number;
   latticeDims: [number, number, number];
   latticeOrigin: [number, number, number];
   latticeH: number;
   hairTypes: string[];
+  hairType: number;
   headPositions: Float32Array;
   headIndices: Uint32Array;
   renderPositions: Float32Array;
-  renderGuide: Uint32Array;
-  renderWeight: Float32Array;
+  renderGuide: Uint32Array; // guidesPerStrand per strand, nearest first
+  renderWeight: Float32Array; // guidesPerStrand per strand, summing to 1
+  renderSpan: Float32Array; // per strand: fraction of the guides' length it spans
 }
 
 export interface FrameMsg {
@@ -74,7 +77,7 @@ export function decodeScene(buf: ArrayBuffer): SceneMsg {
   let o = 2;
   const u32 = () => { const x = v.getUint32(o, true); o += 4; return x; };
   const f32 = () => { const x = v.getFloat32(o, true); o += 4; return x; };
-  const verticesPerStrand = u32(), strands = u32(), guides = u32(), samples = u32();
+  const verticesPerStrand = u32(), strands = u32(), guidesPerStrand = u32(), guides = u32(), samples = u32();
   const latticeDims: [number, number, number] = [u32(), u32(), u32()];
   const latticeOrigin: [number, number, number] = [f32(), f32(), f32()];
   const latticeH = f32();
@@ -85,15 +88,18 @@ export function decodeScene(buf: ArrayBuffer): SceneMsg {
     hairTypes.push(new TextDecoder().decode(new Uint8Array(buf, o, len)));
     o += len;
   }
+  const hairType = v.getUint8(o++);
   while (o % 4 !== 0) o++;
   const nHead = u32(), nIdx = u32();
   const headPositions = f32s(buf, o, 3 * nHead); o += 12 * nHead;
   const headIndices = u32s(buf, o, nIdx); o += 4 * nIdx;
   const nv = strands * verticesPerStrand;
   const renderPositions = f32s(buf, o, 3 * nv); o += 12 * nv;
-  const renderGuide = u32s(buf, o, strands); o += 4 * strands;
-  const renderWeight = f32s(buf, o, strands); o += 4 * strands;
-  return { verticesPerStrand, strands, guides, samples, latticeDims, latticeOrigin, latticeH, hairTypes, headPositions, headIndices, renderPositions, renderGuide, renderWeight };
+  const nb = strands * guidesPerStrand;
+  const renderGuide = u32s(buf, o, nb); o += 4 * nb;
+  const renderWeight = f32s(buf, o, nb); o += 4 * nb;
+  const renderSpan = f32s(buf, o, strands); o += 4 * strands;
+  return { verticesPerStrand, strands, guidesPerStrand, guides, samples, latticeDims, latticeOrigin, latticeH, hairTypes, hairType, headPositions, headIndices, renderPositions, renderGuide, renderWeight, renderSpan };
 }
 
 export function decodeFrame(buf: ArrayBuffer): FrameMsg {

@@ -51,11 +51,9 @@ export class View {
     hg.computeVertexNormals();
     this.headMesh = new THREE.Mesh(hg, new THREE.MeshStandardMaterial({ color: 0xd9b59a, roughness: 0.7 }));
     this.scene.add(this.headMesh);
-    // Head radius: the first metaball sphere (cranium) of the mesh.
+    // Head radius: the highest point of the mesh above the head's centre (the crown).
     let r = 0;
-    for (let i = 0; i < Math.min(msg.headPositions.length / 3, 425); i++) {
-      r = Math.max(r, Math.hypot(msg.headPositions[3 * i], msg.headPositions[3 * i + 1], msg.headPositions[3 * i + 2]));
-    }
+    for (let i = 0; i < msg.headPositions.length; i += 3) r = Math.max(r, msg.headPositions[i + 2]);
     this.hair = new HairMaterial(msg, r || 0.09);
     this.hairMesh = new THREE.LineSegments(hairGeometry(msg), this.hair.material);
     this.hairMesh.frustumCulled = false;

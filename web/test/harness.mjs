@@ -59,10 +59,12 @@ export async function launchBrowser() {
 /** Opens the viewer and waits until the scene is loaded and a few frames have been drawn. */
 export async function openViewer(browser, url) {
   const page = await browser.newPage({ viewport: { width: 1024, height: 720 } });
+  // Software rendering is slow (seconds per frame for the default scene): generous timeouts.
+  page.setDefaultTimeout(180_000);
   const logs = [];
   page.on('console', (m) => logs.push(m.text()));
   page.on('pageerror', (e) => logs.push(`pageerror: ${e.message}`));
-  await page.goto(url);
+  await page.goto(url, { waitUntil: 'domcontentloaded' });
   await page.waitForFunction(() => window.coiffure && window.coiffure.sceneLoaded && window.coiffure.framesRendered > 2 && window.coiffure.framesReceived > 2, null, { timeout: 120_000 });
   return { page, logs };
 }

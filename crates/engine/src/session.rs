@@ -31,7 +31,7 @@ use std::sync::mpsc::{channel, Receiver, Sender};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-use strand::{HairType, ModelKind, RootFrame, Strand, StrandModel};
+use strand::{HairType, Strand, StrandModel};
 use tools::contact::ToolPose;
 use tools::interaction::{ForceModel, LocalInteraction};
 use tools::shape::ToolShape;
@@ -131,18 +131,16 @@ pub struct Mesh {
     pub indices: Vec<u32>,
 }
 
-/// One guide strand: a Super-Helix rooted on the scalp, and its settled shape.
+/// One guide strand: a Super-Helix rooted on the scalp in its groomed state, and that shape.
 #[derive(Debug, Clone)]
 pub struct Guide {
-    /// Root frame in the head frame (position m, tangent, major axis).
-    pub root: RootFrame,
-    /// Strand length, m.
-    pub length: f64,
-    /// The settled centreline (at rest under gravity, head still), [`SceneOptions::samples`] points from root
-    /// to tip, head frame, m. Displacements are measured from this shape mapped through the lattice.
+    /// The strand model (rest coordinates: the sag-free rest of the groomed state).
+    pub model: StrandModel,
+    /// The groomed state (static equilibrium under gravity), head frame.
+    pub state: strand::StrandState,
+    /// The groomed centreline, [`Scene::samples`] points from root to tip evenly in arc length, head frame,
+    /// m. Displacements are measured from this shape mapped through the lattice.
     pub reference: Vec<Vector3<f64>>,
-    /// The settled coordinates (twist and bend per segment, rad/m) matching [`Guide::reference`].
-    pub settled: nalgebra::DVector<f64>,
 }
 
 /// Options of the built-in scene. Defaults give the README's default scene.
@@ -152,39 +150,54 @@ pub struct SceneOptions {
     pub render_strands: usize,
     /// Vertices per render strand. Default 12.
     pub render_vertices: usize,
-    /// Number of guide strands (candidates for the local layer). Default 96.
+    /// Number of guide strands (candidates for the local layer). Default 200.
     pub guides: usize,
-    /// Super-Helix segments per guide. Default 6.
+    /// Super-Helix segments per guide. Default 8.
     pub segments: usize,
-    /// Centreline samples per guide sent to the viewer (the displacement field). Default 13.
+    /// Centreline samples per guide (the displacement field sent to the viewer). Default 16.
     pub samples: usize,
-    /// Hair length, m. Default 0.22.
+    /// Hair length, m. Default 0.2.
     pub length: f64,
-    /// Head radius, m. Default 0.09.
-    pub head_radius: f64,
+    /// Curliness in [0, 1]. Default 0.
+    pub curliness: f64,
     /// Lattice cell size, m. Default 0.05.
     pub cell: f64,
-    /// Hair type. Default H1 (paper's Table 1).
-    pub hair_type: HairType,
+    /// Hair type (a [`HairType`] name). Default "caucasian".
+    pub hair_type: String,
+    /// Random seed of the hairstyle. Default 1.
+    pub seed: u64,
 }
 
 impl Default for SceneOptions {
     fn default() -> Self {
-        Self { render_strands: 100_000, render_vertices: 12, guides: 96, segments: 6, samples: 13, length: 0.22, head_radius: 0.09, cell: 0.05, hair_type: HairType::H1 }
+        Self { render_strands: 100_000, render_vertices: 12, guides: 200, segments: 8, samples: 16, length: 0.2, curliness: 0.0, cell: 0.05, hair_type: "caucasian".into(), seed: 1 }
     }
 }
 
-/// Render strands: rest polylines (head frame, f32) bound to the lattice (by the viewer's FFD) and to guides.
+/// Render strands: rest polylines (head frame, f32) bound to the lattice (by the viewer's FFD) and to guides
+/// (vertex j of strand i follows the weighted displacement of its guides at the fraction span_i j/(V-1) of
+/// their length).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RenderHair {
-    /// Vertices per strand (the same for every strand).
+    /// Vertices per strand V (the same for every strand).
     pub vertices_per_strand: usize,
+    /// Guides each strand follows.
+    pub guides_per_strand: usize,
     /// All vertices, strand after strand, m.
     pub positions: Vec<[f32; 3]>,
-    /// Guide whose displacement each strand follows (index into [`Scene::guides`]).
+    /// Guides of each strand (`guides_per_strand` per strand, nearest first).
     pub guide: Vec<u32>,
-    /// Weight of that guide's displacement, in [0, 1] (falls off with the distance between roots).
+    /// Their weights (sum 1 per strand).
     pub weight: Vec<f32>,
+    /// Fraction of the guides' length each strand spans.
+    pub span: Vec<f32>,
+}
+
+impl RenderHair {
+    /// Number of strands.
+    pub fn strands(&self) -> usize {
+        self.span.len()
+    }
 }
 
 /// The scene: head, hair, guides and lattice. Immutable once built; shared by the threads.
@@ -198,8 +211,6 @@ pub struct Scene {
     pub render: RenderHair,
     /// Guide strands.
     pub guides: Vec<Guide>,
-    /// Super-Helix model of a guide (length per guide is taken from [`Guide::length`]).
-    pub guide_segments: usize,
     /// Hair type of the guides.
     pub hair_type: HairType,
     /// The lattice (geometry, masses, stiffeners).
@@ -207,178 +218,53 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// The built-in scene: a head (metaball set and matching display mesh), a scalp cap, `render_strands`
-    /// strands draped over it and bound to the nearest guide, and the lattice around them.
+    /// The built-in scene: the built-in head (metaballs and display mesh) and a generated hairstyle
+    /// (`hairstyle::Hairstyle::generate`), with the lattice around it.
     pub fn builtin(opts: &SceneOptions) -> Result<Scene, SessionError> {
-        let bad = |m: String| Err(SessionError::Param(m));
-        if opts.render_strands == 0 || opts.render_vertices < 2 || opts.guides == 0 || opts.segments == 0 || opts.samples < 2 {
-            return bad(format!("render_strands, guides, segments must be > 0 and vertices, samples >= 2: {opts:?}"));
+        if opts.samples < 2 || !(opts.cell > 0.0) {
+            return Err(SessionError::Param(format!("samples must be >= 2 and cell > 0 m: {opts:?}")));
         }
-        if !(opts.length > 0.0 && opts.head_radius > 0.0 && opts.cell > 0.0) {
-            return bad(format!("length, head_radius and cell must be > 0 m: {opts:?}"));
-        }
-        let r = opts.head_radius;
-        let head = MetaballSet::head_neck_shoulders(r);
-        let head_mesh = metaball_spheres_mesh(&head, 0.25);
-        // Roots: a golden-angle spiral over the scalp cap (polar angle up to 105 degrees from the crown,
-        // leaving the face, y > 0 and low, bare).
-        let roots = scalp_roots(opts.render_strands, r);
-        let nv = opts.render_vertices;
-        let mut positions = Vec::with_capacity(roots.len() * nv);
-        for (i, n) in roots.iter().enumerate() {
-            for p in drape(n, r, opts.length * (0.9 + 0.2 * hash01(i as u64)), nv) {
-                positions.push([p.x as f32, p.y as f32, p.z as f32]);
-            }
-        }
-        // Guides: an even subset of the same spiral.
-        let guide_roots = scalp_roots(opts.guides, r);
-        let h = opts.hair_type;
-        let model = guide_model(&h, opts.length, opts.segments, 0.0)?;
-        let mut guides = Vec::with_capacity(guide_roots.len());
-        for n in &guide_roots {
-            let root = root_frame(n, r)?;
-            let (reference, settled) = settle(&model, &root, opts.samples)?;
-            guides.push(Guide { root, length: opts.length, reference, settled });
-        }
-        // Bind render strands to the nearest guide root (brute force over a small set).
-        let mut guide = Vec::with_capacity(roots.len());
-        let mut weight = Vec::with_capacity(roots.len());
-        let reach = 2.5 * r * (4.0 / opts.guides as f64).sqrt();
-        for n in &roots {
-            let (k, d) = guide_roots.iter().enumerate().map(|(k, g)| (k, (g - n).norm() * r)).fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
-            guide.push(k as u32);
-            weight.push((1.0 - d / reach).clamp(0.0, 1.0) as f32);
-        }
+        let params = hairstyle::HairstyleParams {
+            hair_type: opts.hair_type.clone(),
+            length: opts.length,
+            curliness: opts.curliness,
+            guide_count: opts.guides,
+            guide_segments: opts.segments,
+            render_count: opts.render_strands,
+            render_vertices: opts.render_vertices,
+            guide_samples: opts.samples.max(16),
+            seed: opts.seed,
+            ..Default::default()
+        };
+        let style = hairstyle::Hairstyle::generate(&params).map_err(|e| SessionError::Scene(e.to_string()))?;
+        let hair_type = HairType::by_name(&opts.hair_type).ok_or_else(|| SessionError::Param(format!("unknown hair type {:?}", opts.hair_type)))?;
+        let mesh = style.head.mesh();
+        let head_mesh = Mesh { positions: mesh.positions, indices: mesh.indices };
+        let guides: Vec<Guide> = style
+            .guides
+            .iter()
+            .map(|g| {
+                let reference = hairstyle::generate::sample_strand(&g.model, &g.state, opts.samples).into_iter().map(|p| p.coords).collect();
+                Guide { model: g.model.clone(), state: g.state.clone(), reference }
+            })
+            .collect();
+        let r = &style.render;
+        let render = RenderHair { vertices_per_strand: r.vertices_per_strand, guides_per_strand: r.guides_per_strand, positions: r.positions.clone(), guide: r.guide_indices.clone(), weight: r.guide_weights.clone(), span: r.span.clone() };
         // Lattice around the hair and head.
-        let (mut lo, mut hi) = (Point3::new(-r, -r, -r), Point3::new(r, r, r));
-        for p in &positions {
-            for a in 0..3 {
-                lo[a] = lo[a].min(p[a] as f64);
-                hi[a] = hi[a].max(p[a] as f64);
-            }
-        }
+        let (lo, hi) = style.bounds();
+        let rad = style.head.params.head_radius;
+        let lo = Point3::new(lo.x.min(-rad), lo.y.min(-rad), lo.z.min(-rad));
+        let hi = Point3::new(hi.x.max(rad), hi.y.max(rad), hi.z.max(rad));
         let ffd = FfdLattice::enclosing(lo, hi, opts.cell).map_err(|e| SessionError::Scene(e.to_string()))?;
-        let hair_mass = model.mass() * opts.render_strands as f64 * 1.0;
-        let lattice = lattice_for_hair(ffd, &positions, hair_mass, r)?;
-        Ok(Scene { head, head_mesh, render: RenderHair { vertices_per_strand: nv, positions, guide, weight }, guides, guide_segments: opts.segments, hair_type: h, lattice })
+        let hair_mass: f64 = style.guides.first().map_or(0.0, |g| g.model.mass()) * render.strands() as f64;
+        let lattice = lattice_for_hair(ffd, &render.positions, hair_mass.max(1e-6), rad)?;
+        Ok(Scene { head: style.head.body.clone(), head_mesh, render, guides, hair_type, lattice })
     }
 
     /// Samples per guide centreline.
     pub fn samples(&self) -> usize {
         self.guides.first().map_or(0, |g| g.reference.len())
     }
-}
-
-/// A cheap deterministic hash of `i` to [0, 1).
-fn hash01(i: u64) -> f64 {
-    let mut x = i.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x5851_F42D_4C95_7F2D;
-    x ^= x >> 29;
-    x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    x ^= x >> 32;
-    (x >> 11) as f64 / (1u64 << 53) as f64
-}
-
-/// `n` unit normals spread evenly (golden-angle spiral) over the scalp cap: polar angle from the crown up to
-/// 105 degrees at the back and sides, 60 degrees at the front (forehead).
-fn scalp_roots(n: usize, _r: f64) -> Vec<Vector3<f64>> {
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    let cmin = (105f64).to_radians().cos();
-    let mut out = Vec::with_capacity(n);
-    let mut i = 0u64;
-    while out.len() < n {
-        // Spread over cos(theta) in [cmin, 1], reject the forehead.
-        let k = i as f64 + 0.5;
-        let m = (n as f64) * 1.25;
-        let c = 1.0 - (1.0 - cmin) * (k / m).fract();
-        let s = (1.0 - c * c).max(0.0).sqrt();
-        let phi = golden * i as f64;
-        let v = Vector3::new(s * phi.cos(), s * phi.sin(), c);
-        i += 1;
-        if v.y > 0.3 && v.z < 0.55 {
-            continue;
-        }
-        out.push(v);
-    }
-    out
-}
-
-/// A draped polyline of `nv` vertices and length `len` from the scalp point `r n`: out along the normal, then
-/// bending down under gravity, kept 3 mm outside the head sphere.
-fn drape(n: &Vector3<f64>, r: f64, len: f64, nv: usize) -> Vec<Vector3<f64>> {
-    let mut p = n * r;
-    let mut out = vec![p];
-    let step = len / (nv - 1) as f64;
-    let mut dir = *n;
-    for _ in 1..nv {
-        dir = (dir + Vector3::new(0.0, 0.0, -0.7)).normalize();
-        p += dir * step;
-        let d = p.norm();
-        let min = r + 0.003 + 0.01 * (1.0 - n.z).max(0.0) * 0.5;
-        if d < min {
-            p *= min / d;
-        }
-        out.push(p);
-    }
-    out
-}
-
-/// The root frame at scalp normal `n`: tangent along the normal, major axis horizontal.
-fn root_frame(n: &Vector3<f64>, r: f64) -> Result<RootFrame, SessionError> {
-    let side = if n.x.abs() < 0.99 { Vector3::x().cross(n) } else { Vector3::y().cross(n) };
-    RootFrame::new(n * r, *n, side.normalize()).map_err(|e| SessionError::Scene(e.to_string()))
-}
-
-/// A guide's Super-Helix (reduced model) with curliness in [0, 1] mapped to rest bend up to 1/(1 cm) and
-/// rest twist up to 1/(2 cm).
-fn guide_model(h: &HairType, length: f64, segments: usize, curliness: f64) -> Result<StrandModel, SessionError> {
-    let section = h.section().map_err(|e| SessionError::Scene(e.to_string()))?;
-    let material = h.material().map_err(|e| SessionError::Scene(e.to_string()))?;
-    let (tw0, b0) = h.rest_curvature();
-    let c = curliness.clamp(0.0, 1.0);
-    let m = StrandModel::new(ModelKind::Reduced, length, segments, section, material).map_err(|e| SessionError::Scene(e.to_string()))?;
-    let mut m = m.with_uniform_rest(tw0 + c * 50.0, b0 + c * 100.0, 0.0);
-    m.air_drag = m.air_drag.max(2e-5);
-    Ok(m)
-}
-
-/// The settled centreline of a guide: its static equilibrium under gravity with the root still (damped
-/// Newton), `samples` points, head frame, and the coordinates of that equilibrium.
-fn settle(model: &StrandModel, root: &RootFrame, samples: usize) -> Result<(Vec<Vector3<f64>>, nalgebra::DVector<f64>), SessionError> {
-    let mut s = Strand::new(model.clone(), root.clone()).map_err(|e| SessionError::Scene(e.to_string()))?;
-    let eq = strand::statics::solve_equilibrium(model, &s.state, &[], &strand::statics::StaticOptions::default()).map_err(|e| SessionError::Scene(format!("guide equilibrium: {e}")))?;
-    s.state.q.copy_from(&eq.q);
-    Ok((centreline(&s, samples), s.state.q.clone()))
-}
-
-/// `samples` centreline points of a strand, root to tip.
-fn centreline(s: &Strand, samples: usize) -> Vec<Vector3<f64>> {
-    strand::kinematics::centerline(&s.model, &s.state, samples).into_iter().map(|(_, p)| p).collect()
-}
-
-/// Display mesh of a metaball set: each ball drawn as the sphere where its own field alone equals `t`.
-fn metaball_spheres_mesh(set: &MetaballSet, t: f64) -> Mesh {
-    let (nu, nv) = (24usize, 16usize);
-    let mut mesh = Mesh::default();
-    for b in &set.balls {
-        let rad = b.radius * (1.0 - t.sqrt()).sqrt();
-        let base = mesh.positions.len() as u32;
-        for j in 0..=nv {
-            let th = std::f64::consts::PI * j as f64 / nv as f64;
-            for i in 0..=nu {
-                let ph = 2.0 * std::f64::consts::PI * i as f64 / nu as f64;
-                let p = b.centre + Vector3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()) * rad;
-                mesh.positions.push([p.x as f32, p.y as f32, p.z as f32]);
-            }
-        }
-        for j in 0..nv as u32 {
-            for i in 0..nu as u32 {
-                let a = base + j * (nu as u32 + 1) + i;
-                let c = a + nu as u32 + 1;
-                mesh.indices.extend_from_slice(&[a, c, a + 1, a + 1, c, c + 1]);
-            }
-        }
-    }
-    mesh
 }
 
 /// A lattice model whose node masses share `hair_mass` (kg) by the render vertices each node's cell holds
@@ -608,14 +494,28 @@ impl HapticCore {
         })
     }
 
+    /// Every guide's strand in its groomed state, with the hair type's section and material and the
+    /// curliness (in [0, 1], [`hairstyle::Curl`]) added to the rest twist and bend.
     fn build_strands(scene: &Scene, h: &HairType, curliness: f64) -> Result<Vec<Strand>, SessionError> {
+        let err = |e: strand::StrandError| SessionError::Scene(e.to_string());
+        let curl = hairstyle::Curl::from_curliness(curliness.clamp(0.0, 1.0)).map_err(|e| SessionError::Scene(e.to_string()))?;
         scene.guides.iter().map(|g| {
-            let m = guide_model(h, g.length, scene.guide_segments, curliness)?;
-            let mut s = Strand::new(m, g.root.clone()).map_err(|e| SessionError::Scene(e.to_string()))?;
-            // Start from the settled shape (the reference), at rest.
-            if s.state.q.len() == g.settled.len() {
-                s.state.q.copy_from(&g.settled);
+            let mut m = g.model.clone();
+            if *h != scene.hair_type {
+                m.section = h.section().map_err(err)?;
+                m.material = h.material().map_err(err)?;
             }
+            if let Some(c) = curl.as_ref() {
+                let mut q = m.rest_coordinates();
+                for i in 0..m.segments {
+                    q[2 * i] += c.twist;
+                    q[2 * i + 1] += c.bend;
+                }
+                m.set_rest_coordinates(&q);
+            }
+            m.air_drag = m.air_drag.max(2e-5);
+            let mut s = Strand::new(m, g.state.root.clone()).map_err(err)?;
+            s.state.q.copy_from(&g.state.q);
             Ok(s)
         }).collect()
     }
@@ -734,7 +634,7 @@ impl HapticCore {
         // Roots follow the lattice.
         if nodes.len() == self.scene.lattice.node_count() {
             for (slot, &g) in self.active.iter().enumerate() {
-                let target = ffd_map(&self.scene.lattice.ffd, nodes, &self.scene.guides[g].root.position);
+                let target = ffd_map(&self.scene.lattice.ffd, nodes, &self.scene.guides[g].state.root.position);
                 let root = &mut self.interaction.strands[slot].state.root;
                 root.velocity = (target - root.position) / dt;
                 root.acceleration = Vector3::zeros();
@@ -802,8 +702,8 @@ impl HapticCore {
         for (slot, &g) in self.active.iter().enumerate() {
             out.active.push(g as u32);
             let s = &self.interaction.strands[slot];
-            let pts = strand::kinematics::centerline(&s.model, &s.state, samples);
-            for (k, (_, p)) in pts.into_iter().enumerate() {
+            let pts = centreline(s, samples);
+            for (k, p) in pts.into_iter().enumerate() {
                 let reference = self.scene.guides[g].reference[k];
                 let base = if ok { ffd_map(&self.scene.lattice.ffd, &lattice.positions, &reference) } else { reference };
                 let d = p - base;
@@ -831,6 +731,11 @@ impl HapticCore {
     pub fn cut(&self) -> &[f32] {
         &self.cut
     }
+}
+
+/// `samples` centreline points of a strand evenly in arc length, root to tip, m.
+fn centreline(s: &Strand, samples: usize) -> Vec<Vector3<f64>> {
+    hairstyle::generate::sample_strand(&s.model, &s.state, samples).into_iter().map(|p| p.coords).collect()
 }
 
 /// FFD of a head-frame point through lattice nodes (clamped to the embedded volume), m.
@@ -1056,7 +961,7 @@ mod tests {
     use super::*;
 
     fn small_scene() -> Arc<Scene> {
-        let o = SceneOptions { render_strands: 2000, guides: 24, ..SceneOptions::default() };
+        let o = SceneOptions { render_strands: 2000, guides: 60, ..SceneOptions::default() };
         Arc::new(Scene::builtin(&o).unwrap())
     }
 
@@ -1070,21 +975,27 @@ mod tests {
     }
 
     #[test]
-    fn builtin_scene_is_outside_the_head_and_inside_the_lattice() {
-        // Every render vertex is outside the head sphere (radius 0.09 m, tolerance 1 mm) and inside the
-        // lattice's embedded volume, so the viewer's FFD reproduces it at rest.
+    fn builtin_scene_is_inside_the_lattice_and_guides_start_at_their_reference() {
+        // Every render vertex is inside the lattice's embedded volume, so the viewer's FFD reproduces it at
+        // rest (to 1e-9 m in f64); each guide's strand starts exactly on its reference centreline.
         let s = small_scene();
         let f = &s.lattice.ffd;
         for p in &s.render.positions {
             let q = Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-            assert!(q.norm() > 0.09 - 1e-3, "{q:?}");
             assert!(f.weights(&Point3::from(q)).is_ok(), "{q:?} outside the lattice");
             let back = ffd_map(f, &s.lattice.rest, &q);
             assert!((back - q).norm() < 1e-9, "FFD at rest reproduces the point: {back:?} vs {q:?}");
         }
         assert_eq!(s.render.positions.len(), 2000 * 12);
-        assert!(s.render.weight.iter().all(|w| (0.0..=1.0).contains(w)));
-        assert!(s.guides.iter().all(|g| g.reference.len() == 13));
+        assert_eq!(s.render.guide.len(), 2000 * s.render.guides_per_strand);
+        assert!(s.render.guide.iter().all(|&g| (g as usize) < s.guides.len()));
+        assert!(s.guides.iter().all(|g| g.reference.len() == 16));
+        let strands = HapticCore::build_strands(&s, &s.hair_type, 0.0).unwrap();
+        for (st, g) in strands.iter().zip(&s.guides) {
+            for (a, b) in centreline(st, 16).iter().zip(&g.reference) {
+                assert!((a - b).norm() < 1e-12);
+            }
+        }
     }
 
     #[test]

@@ -239,11 +239,12 @@ pub fn encode_file(format: usize, bytes: &[u8]) -> Vec<u8> {
 /// binding (layout in docs/protocol.md).
 pub fn encode_scene(s: &Scene) -> Vec<u8> {
     let r = &s.render;
-    let strands = r.guide.len();
+    let strands = r.strands();
     let f = &s.lattice.ffd;
-    let mut w = W::new(server::SCENE, 64 + 12 * (s.head_mesh.positions.len() + r.positions.len()) + 4 * s.head_mesh.indices.len() + 8 * strands);
+    let mut w = W::new(server::SCENE, 64 + 12 * (s.head_mesh.positions.len() + r.positions.len()) + 4 * s.head_mesh.indices.len() + 8 * r.guide.len() + 4 * strands);
     w.u32(r.vertices_per_strand as u32);
     w.u32(strands as u32);
+    w.u32(r.guides_per_strand as u32);
     w.u32(s.guides.len() as u32);
     w.u32(s.samples() as u32);
     w.u32(f.nx as u32);
@@ -257,6 +258,8 @@ pub fn encode_scene(s: &Scene) -> Vec<u8> {
         w.u8(h.name.len() as u8);
         w.0.extend_from_slice(h.name.as_bytes());
     }
+    let current = names.iter().position(|h| h.name == s.hair_type.name).unwrap_or(0);
+    w.u8(current as u8);
     while w.0.len() % 4 != 0 {
         w.u8(0);
     }
@@ -274,7 +277,7 @@ pub fn encode_scene(s: &Scene) -> Vec<u8> {
     for g in &r.guide {
         w.u32(*g);
     }
-    for x in &r.weight {
+    for x in r.weight.iter().chain(r.span.iter()) {
         w.0.extend_from_slice(&x.to_le_bytes());
     }
     w.0

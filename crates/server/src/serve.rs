@@ -41,7 +41,7 @@ pub struct ServeArgs {
     #[arg(long, default_value_t = 100_000)]
     pub render_strands: usize,
     /// Number of guide strands.
-    #[arg(long, default_value_t = 96)]
+    #[arg(long, default_value_t = 200)]
     pub guides: usize,
     /// Visual frames per second sent to viewers.
     #[arg(long, default_value_t = 60.0)]
@@ -86,6 +86,8 @@ struct App {
     next_id: AtomicU64,
     started: Instant,
     latest_lattice: Mutex<Vec<[f32; 3]>>,
+    /// Latest (kept length per guide, active guides, their displacements, samples per guide).
+    latest_guides: Mutex<(Vec<f32>, Vec<u32>, Vec<nalgebra::Vector3<f64>>, usize)>,
 }
 
 impl App {
@@ -115,7 +117,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let opts = SceneOptions { render_strands: args.render_strands, guides: args.guides, ..SceneOptions::default() };
     let scene = Arc::new(Scene::builtin(&opts).context("building the built-in scene")?);
-    tracing::info!("scene: {} render strands, {} guides, {} lattice nodes, built in {:.2} s", scene.render.guide.len(), scene.guides.len(), scene.lattice.node_count(), t0.elapsed().as_secs_f64());
+    tracing::info!("scene: {} render strands, {} guides, {} lattice nodes, built in {:.2} s", scene.render.strands(), scene.guides.len(), scene.lattice.node_count(), t0.elapsed().as_secs_f64());
     let params = SessionParams { record: args.record.is_some(), ..SessionParams::default() };
     let (session, io) = Session::start(scene.clone(), params).context("starting the session")?;
     let SessionIo { device, commands, lattice, haptic } = io;
@@ -132,6 +134,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         next_id: AtomicU64::new(1),
         started: Instant::now(),
         latest_lattice: Mutex::new(Vec::new()),
+        latest_guides: Mutex::new((Vec::new(), Vec::new(), Vec::new(), 2)),
     });
 
     // Frame pump thread.
@@ -149,6 +152,10 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
             if let Ok(mut l) = app_p.latest_lattice.lock() {
                 l.clear();
                 l.extend(lat.positions.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]));
+            }
+            if let Ok(mut g) = app_p.latest_guides.lock() {
+                let samples = if hap.active.is_empty() { 2 } else { (hap.displacement.len() / hap.active.len()).max(2) };
+                *g = (hap.cut.clone(), hap.active.clone(), hap.displacement.clone(), samples);
             }
             st.bytes += msg.len() as u64;
             let _ = frame_tx.send(Arc::new(msg));
@@ -347,18 +354,38 @@ fn save(app: &App, format: usize) -> Result<Vec<u8>, String> {
     let nodes: Vec<nalgebra::Point3<f64>> = app.latest_lattice.lock().unwrap().iter().map(|p| nalgebra::Point3::new(p[0] as f64, p[1] as f64, p[2] as f64)).collect();
     let nodes = if nodes.len() == scene.lattice.node_count() { nodes } else { scene.lattice.rest.clone() };
     let nv = scene.render.vertices_per_strand;
+    let (cut, active, disp, samples) = app.latest_guides.lock().unwrap().clone();
+    let k = scene.render.guides_per_strand;
     let strands: Vec<Vec<[f32; 3]>> = scene
         .render
         .positions
         .chunks(nv)
-        .map(|s| {
+        .enumerate()
+        .map(|(i, s)| {
+            let g0 = scene.render.guide[i * k] as usize;
+            let keep = cut.get(g0).copied().unwrap_or(1.0);
             s.iter()
-                .map(|p| {
-                    let q = engine::session::ffd_map(&scene.lattice.ffd, &nodes, &nalgebra::Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64));
+                .enumerate()
+                .filter(|(j, _)| (*j as f32 / (nv - 1) as f32) * scene.render.span[i] <= keep + 1e-4)
+                .map(|(j, p)| {
+                    let mut q = engine::session::ffd_map(&scene.lattice.ffd, &nodes, &nalgebra::Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64));
+                    // Active guides' displacement, as the viewer adds it.
+                    let u = scene.render.span[i] as f64 * j as f64 / (nv - 1) as f64;
+                    for m in 0..k {
+                        let g = scene.render.guide[i * k + m];
+                        if let Some(a) = active.iter().position(|&x| x == g) {
+                            let x = u * (samples - 1) as f64;
+                            let lo = (x.floor() as usize).min(samples - 1);
+                            let hi = (lo + 1).min(samples - 1);
+                            let d = disp[a * samples + lo] * (1.0 - (x - lo as f64)) + disp[a * samples + hi] * (x - lo as f64);
+                            q += d * scene.render.weight[i * k + m] as f64;
+                        }
+                    }
                     [q.x as f32, q.y as f32, q.z as f32]
                 })
                 .collect()
         })
+        .filter(|s: &Vec<[f32; 3]>| s.len() >= 2)
         .collect();
     let f = hairstyle::formats::Format::from_path(Path::new(&format!("x.{}", protocol::FORMATS[format]))).expect("known extension");
     f.write(&hairstyle::HairCurves::from_strands(strands)).map_err(|e| format!("cannot write {}: {e}", protocol::FORMATS[format]))

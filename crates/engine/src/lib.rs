@@ -8,3 +8,5 @@
 pub mod local_session;
 pub mod path;
 pub mod scenario;
+pub mod record;
+pub mod session;

@@ -2,7 +2,9 @@
 
 mod demo;
 mod files_cmd;
+mod protocol;
 mod run_cmd;
+mod serve;
 mod strand_cmd;
 
 use clap::{Parser, Subcommand};
@@ -18,6 +20,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// The visuo-haptic app: serve the browser viewer and the live session (http://127.0.0.1:8080).
+    Serve(serve::ServeArgs),
     /// Headless run of the built-in default scene: a few strands hanging from a moving root.
     Demo(demo::DemoArgs),
     /// Simulate or solve the statics of one strand described by a TOML spec file.
@@ -39,6 +43,7 @@ fn main() -> ExitCode {
         .init();
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Serve(args) => serve::run(&args),
         Command::Demo(args) => demo::run(&args),
         Command::Strand(args) => strand_cmd::run(&args),
         Command::Run(args) => run_cmd::run(&args),

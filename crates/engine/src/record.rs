@@ -1,0 +1,184 @@
+//! Records of live sessions: per haptic step, the device reading, the lattice version it used, the viewer
+//! commands applied before it and the force sent back; plus the global steps at which the lattice was reset.
+//! [`crate::session::replay`] reproduces the force trace from a record.
+//!
+//! File format (little-endian, f64 kept exactly): magic `CFREC1\0\0`, f64 haptic rate (Hz), u64 number of
+//! resets then each u64 global version, u64 number of steps, then per step: u8 has-reading; if 1: f64 time,
+//! 3 f64 position (m), 9 f64 rotation (column-major), u32 buttons; u64 lattice version; 3 f64 force (N);
+//! u8 number of commands, each: u8 kind (0 tool: u8 id; 1 hair: u8 type, f64 curliness, f64 ease; 2 reset).
+
+use crate::session::{Command, Tool};
+use haptics::device::DeviceReading;
+use nalgebra::{Matrix3, Vector3};
+
+const MAGIC: &[u8; 8] = b"CFREC1\0\0";
+
+/// One haptic step as recorded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepRecord {
+    /// The device reading the step received (None: no input yet).
+    pub reading: Option<DeviceReading>,
+    /// Version of the lattice snapshot the step read.
+    pub lattice_version: u64,
+    /// Viewer commands applied just before the step.
+    pub commands: Vec<Command>,
+    /// Force sent to the device, N.
+    pub force: Vector3<f64>,
+}
+
+/// A recorded session.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Record {
+    /// Haptic rate, Hz.
+    pub rate_hz: f64,
+    /// Global versions produced right after a lattice reset.
+    pub global_resets: Vec<u64>,
+    /// Every haptic step, in order.
+    pub steps: Vec<StepRecord>,
+}
+
+/// Errors reading a record.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum RecordError {
+    /// The bytes end early or hold a bad value; names the byte offset.
+    #[error("bad session record at byte {offset}: {what}")]
+    Bad {
+        /// Byte offset.
+        offset: usize,
+        /// What is wrong.
+        what: String,
+    },
+}
+
+impl Record {
+    /// An empty record at `rate_hz`.
+    pub fn new(rate_hz: f64) -> Self {
+        Self { rate_hz, global_resets: Vec::new(), steps: Vec::new() }
+    }
+
+    /// The forces in order, N.
+    pub fn forces(&self) -> Vec<Vector3<f64>> {
+        self.steps.iter().map(|s| s.force).collect()
+    }
+
+    /// Serialises the record.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut b = Vec::with_capacity(64 + self.steps.len() * 130);
+        b.extend_from_slice(MAGIC);
+        b.extend_from_slice(&self.rate_hz.to_le_bytes());
+        b.extend_from_slice(&(self.global_resets.len() as u64).to_le_bytes());
+        for v in &self.global_resets {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b.extend_from_slice(&(self.steps.len() as u64).to_le_bytes());
+        let f = |b: &mut Vec<u8>, x: f64| b.extend_from_slice(&x.to_le_bytes());
+        for s in &self.steps {
+            match &s.reading {
+                None => b.push(0),
+                Some(r) => {
+                    b.push(1);
+                    f(&mut b, r.time);
+                    r.position.iter().for_each(|&x| f(&mut b, x));
+                    r.rotation.iter().for_each(|&x| f(&mut b, x));
+                    b.extend_from_slice(&r.buttons.to_le_bytes());
+                }
+            }
+            b.extend_from_slice(&s.lattice_version.to_le_bytes());
+            s.force.iter().for_each(|&x| f(&mut b, x));
+            b.push(s.commands.len().min(255) as u8);
+            for c in s.commands.iter().take(255) {
+                match *c {
+                    Command::SelectTool(t) => b.extend_from_slice(&[0, t as u8]),
+                    Command::SetHair { hair_type, curliness, combing_ease } => {
+                        b.extend_from_slice(&[1, hair_type]);
+                        f(&mut b, curliness);
+                        f(&mut b, combing_ease);
+                    }
+                    Command::Reset => b.push(2),
+                }
+            }
+        }
+        b
+    }
+
+    /// Parses a record; errors name the byte offset.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, RecordError> {
+        let mut r = Reader { b: bytes, at: 0 };
+        if r.take(8)? != MAGIC {
+            return Err(RecordError::Bad { offset: 0, what: "not a Coiffure session record (magic CFREC1)".into() });
+        }
+        let rate_hz = r.f64()?;
+        if !(rate_hz > 0.0 && rate_hz.is_finite()) {
+            return Err(RecordError::Bad { offset: 8, what: format!("haptic rate {rate_hz} Hz must be > 0") });
+        }
+        let n = r.u64()? as usize;
+        let mut global_resets = Vec::with_capacity(n.min(1 << 16));
+        for _ in 0..n {
+            global_resets.push(r.u64()?);
+        }
+        let n = r.u64()? as usize;
+        let mut steps = Vec::with_capacity(n.min(1 << 20));
+        for _ in 0..n {
+            let reading = match r.u8()? {
+                0 => None,
+                1 => {
+                    let time = r.f64()?;
+                    let position = Vector3::new(r.f64()?, r.f64()?, r.f64()?);
+                    let mut m = [0.0; 9];
+                    for x in &mut m {
+                        *x = r.f64()?;
+                    }
+                    let buttons = u32::from_le_bytes(r.take(4)?.try_into().unwrap());
+                    Some(DeviceReading { time, position, rotation: Matrix3::from_column_slice(&m), buttons })
+                }
+                k => return Err(RecordError::Bad { offset: r.at - 1, what: format!("reading flag {k} (0 or 1)") }),
+            };
+            let lattice_version = r.u64()?;
+            let force = Vector3::new(r.f64()?, r.f64()?, r.f64()?);
+            let nc = r.u8()?;
+            let mut commands = Vec::with_capacity(nc as usize);
+            for _ in 0..nc {
+                let at = r.at;
+                commands.push(match r.u8()? {
+                    0 => {
+                        let id = r.u8()?;
+                        Command::SelectTool(Tool::from_id(id).ok_or(RecordError::Bad { offset: at + 1, what: format!("tool id {id}") })?)
+                    }
+                    1 => Command::SetHair { hair_type: r.u8()?, curliness: r.f64()?, combing_ease: r.f64()? },
+                    2 => Command::Reset,
+                    k => return Err(RecordError::Bad { offset: at, what: format!("command kind {k}") }),
+                });
+            }
+            steps.push(StepRecord { reading, lattice_version, commands, force });
+        }
+        if r.at != bytes.len() {
+            return Err(RecordError::Bad { offset: r.at, what: format!("{} trailing bytes", bytes.len() - r.at) });
+        }
+        Ok(Record { rate_hz, global_resets, steps })
+    }
+}
+
+struct Reader<'a> {
+    b: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize) -> Result<&'a [u8], RecordError> {
+        if self.at + n > self.b.len() {
+            return Err(RecordError::Bad { offset: self.at, what: format!("truncated: {n} more bytes expected") });
+        }
+        let s = &self.b[self.at..self.at + n];
+        self.at += n;
+        Ok(s)
+    }
+    fn u8(&mut self) -> Result<u8, RecordError> {
+        Ok(self.take(1)?[0])
+    }
+    fn u64(&mut self) -> Result<u64, RecordError> {
+        Ok(u64::from_le_bytes(self.take(8)?.try_into().unwrap()))
+    }
+    fn f64(&mut self) -> Result<f64, RecordError> {
+        Ok(f64::from_le_bytes(self.take(8)?.try_into().unwrap()))
+    }
+}

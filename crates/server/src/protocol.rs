@@ -1,0 +1,373 @@
+//! The viewer's WebSocket protocol (binary, little-endian; docs/protocol.md is the specification).
+//!
+//! Every message starts with a type byte and a protocol version byte ([`VERSION`]); f32 on the wire.
+//! Client messages are parsed by [`parse_client`], which never panics: a short, long or unknown message is an
+//! [`WireError`] that the server answers with an [`encode_error`] message while the connection stays up.
+
+use engine::session::{Command, HapticSnapshot, LatticeSnapshot, Scene, Tool};
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+
+/// Protocol version carried by every message.
+pub const VERSION: u8 = 1;
+
+/// Client -> server message types.
+pub mod client {
+    /// Device pose from the mouse: 3 f32 position (m), 4 f32 quaternion (x, y, z, w), u32 buttons.
+    pub const POSE: u8 = 0x01;
+    /// Ask to control the tool (no payload).
+    pub const TAKE_CONTROL: u8 = 0x02;
+    /// u8 tool id.
+    pub const SELECT_TOOL: u8 = 0x03;
+    /// u8 hair type, f32 curliness, f32 combing ease.
+    pub const SET_HAIR: u8 = 0x04;
+    /// Reset the scene (no payload).
+    pub const RESET: u8 = 0x05;
+    /// u8 format, then the file's bytes.
+    pub const LOAD: u8 = 0x06;
+    /// u8 format: ask for the current hairstyle as a file.
+    pub const SAVE: u8 = 0x07;
+    /// u32 token: answered by PONG with the same token.
+    pub const PING: u8 = 0x08;
+}
+
+/// Server -> client message types.
+pub mod server {
+    /// The scene, once at connect (and again after a load).
+    pub const SCENE: u8 = 0x81;
+    /// One visual frame.
+    pub const FRAME: u8 = 0x82;
+    /// An error: u16 code, u16 length, UTF-8 text.
+    pub const ERROR: u8 = 0x83;
+    /// Control state: u8 you-control, u32 viewers connected.
+    pub const CONTROL: u8 = 0x84;
+    /// A saved file: u8 format, then the bytes.
+    pub const FILE: u8 = 0x85;
+    /// u32 token echoed.
+    pub const PONG: u8 = 0x86;
+}
+
+/// Error codes of ERROR messages.
+pub mod code {
+    /// Too short, too long or a bad value.
+    pub const MALFORMED: u16 = 1;
+    /// Unknown message type.
+    pub const UNKNOWN_TYPE: u16 = 2;
+    /// Version byte not [`super::VERSION`].
+    pub const BAD_VERSION: u16 = 3;
+    /// Only the controlling viewer may do this.
+    pub const NOT_CONTROLLER: u16 = 4;
+    /// A hairstyle file could not be read or written.
+    pub const FILE: u16 = 5;
+    /// A text frame (the protocol is binary).
+    pub const TEXT: u16 = 6;
+}
+
+/// File formats by wire id (the server's formats).
+pub const FORMATS: [&str; 4] = ["hair", "data", "tfx", "usda"];
+
+/// A parsed client message.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ClientMessage {
+    /// Device pose.
+    Pose {
+        /// Position, m.
+        position: Vector3<f64>,
+        /// Rotation (tool frame to world).
+        rotation: Matrix3<f64>,
+        /// Button bits.
+        buttons: u32,
+    },
+    /// Take control.
+    TakeControl,
+    /// A session command.
+    Command(Command),
+    /// Load a hairstyle: format index into [`FORMATS`], bytes.
+    Load(usize, Vec<u8>),
+    /// Save the hairstyle in a format (index into [`FORMATS`]).
+    Save(usize),
+    /// Ping.
+    Ping(u32),
+}
+
+/// Why a client message was refused.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WireError {
+    /// Error code ([`code`]).
+    pub code: u16,
+    /// Human-readable explanation.
+    pub message: String,
+}
+
+fn err(code: u16, message: String) -> WireError {
+    WireError { code, message }
+}
+
+fn f32_at(b: &[u8], i: usize) -> f32 {
+    f32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
+}
+
+/// Parses a client message.
+pub fn parse_client(b: &[u8]) -> Result<ClientMessage, WireError> {
+    if b.len() < 2 {
+        return Err(err(code::MALFORMED, format!("message of {} bytes; every message starts with a type byte and a version byte", b.len())));
+    }
+    let (kind, version, p) = (b[0], b[1], &b[2..]);
+    if version != VERSION {
+        return Err(err(code::BAD_VERSION, format!("protocol version {version} not supported (this server speaks {VERSION})")));
+    }
+    let need = |n: usize, name: &str| -> Result<(), WireError> {
+        if p.len() != n {
+            Err(err(code::MALFORMED, format!("{name} needs a {n}-byte payload, got {}", p.len())))
+        } else {
+            Ok(())
+        }
+    };
+    match kind {
+        client::POSE => {
+            need(32, "POSE")?;
+            let v: Vec<f64> = (0..7).map(|k| f32_at(p, 4 * k) as f64).collect();
+            if v.iter().any(|x| !x.is_finite()) {
+                return Err(err(code::MALFORMED, "POSE holds a non-finite number".into()));
+            }
+            let q = Quaternion::new(v[6], v[3], v[4], v[5]);
+            if q.norm() < 1e-6 {
+                return Err(err(code::MALFORMED, "POSE quaternion has zero length".into()));
+            }
+            let rotation = UnitQuaternion::from_quaternion(q).to_rotation_matrix().into_inner();
+            let buttons = u32::from_le_bytes([p[28], p[29], p[30], p[31]]);
+            Ok(ClientMessage::Pose { position: Vector3::new(v[0], v[1], v[2]), rotation, buttons })
+        }
+        client::TAKE_CONTROL => need(0, "TAKE_CONTROL").map(|_| ClientMessage::TakeControl),
+        client::SELECT_TOOL => {
+            need(1, "SELECT_TOOL")?;
+            let t = Tool::from_id(p[0]).ok_or_else(|| err(code::MALFORMED, format!("tool id {} unknown (0-5)", p[0])))?;
+            Ok(ClientMessage::Command(Command::SelectTool(t)))
+        }
+        client::SET_HAIR => {
+            need(9, "SET_HAIR")?;
+            if p[0] as usize >= strand::HairType::ALL.len() {
+                return Err(err(code::MALFORMED, format!("hair type {} unknown (0-{})", p[0], strand::HairType::ALL.len() - 1)));
+            }
+            let (c, e) = (f32_at(p, 1) as f64, f32_at(p, 5) as f64);
+            if !(c.is_finite() && e.is_finite()) {
+                return Err(err(code::MALFORMED, "SET_HAIR holds a non-finite number".into()));
+            }
+            Ok(ClientMessage::Command(Command::SetHair { hair_type: p[0], curliness: c.clamp(0.0, 1.0), combing_ease: e.clamp(0.0, 1.0) }))
+        }
+        client::RESET => need(0, "RESET").map(|_| ClientMessage::Command(Command::Reset)),
+        client::LOAD => {
+            if p.is_empty() || p[0] as usize >= FORMATS.len() {
+                return Err(err(code::MALFORMED, "LOAD needs a format byte (0 .hair, 1 .data, 2 .tfx, 3 .usda) and the file".into()));
+            }
+            Ok(ClientMessage::Load(p[0] as usize, p[1..].to_vec()))
+        }
+        client::SAVE => {
+            need(1, "SAVE")?;
+            if p[0] as usize >= FORMATS.len() {
+                return Err(err(code::MALFORMED, format!("format {} unknown (0-3)", p[0])));
+            }
+            Ok(ClientMessage::Save(p[0] as usize))
+        }
+        client::PING => {
+            need(4, "PING")?;
+            Ok(ClientMessage::Ping(u32::from_le_bytes([p[0], p[1], p[2], p[3]])))
+        }
+        other => Err(err(code::UNKNOWN_TYPE, format!("unknown message type 0x{other:02x}"))),
+    }
+}
+
+struct W(Vec<u8>);
+impl W {
+    fn new(kind: u8, cap: usize) -> Self {
+        let mut v = Vec::with_capacity(cap + 2);
+        v.push(kind);
+        v.push(VERSION);
+        W(v)
+    }
+    fn u8(&mut self, x: u8) {
+        self.0.push(x);
+    }
+    fn u16(&mut self, x: u16) {
+        self.0.extend_from_slice(&x.to_le_bytes());
+    }
+    fn u32(&mut self, x: u32) {
+        self.0.extend_from_slice(&x.to_le_bytes());
+    }
+    fn f32(&mut self, x: f64) {
+        self.0.extend_from_slice(&(x as f32).to_le_bytes());
+    }
+    fn v3(&mut self, v: &Vector3<f64>) {
+        v.iter().for_each(|&x| self.f32(x));
+    }
+}
+
+/// ERROR message.
+pub fn encode_error(e: &WireError) -> Vec<u8> {
+    let text = e.message.as_bytes();
+    let n = text.len().min(u16::MAX as usize);
+    let mut w = W::new(server::ERROR, 4 + n);
+    w.u16(e.code);
+    w.u16(n as u16);
+    w.0.extend_from_slice(&text[..n]);
+    w.0
+}
+
+/// CONTROL message.
+pub fn encode_control(you: bool, viewers: u32) -> Vec<u8> {
+    let mut w = W::new(server::CONTROL, 5);
+    w.u8(you as u8);
+    w.u32(viewers);
+    w.0
+}
+
+/// PONG message.
+pub fn encode_pong(token: u32) -> Vec<u8> {
+    let mut w = W::new(server::PONG, 4);
+    w.u32(token);
+    w.0
+}
+
+/// FILE message.
+pub fn encode_file(format: usize, bytes: &[u8]) -> Vec<u8> {
+    let mut w = W::new(server::FILE, 1 + bytes.len());
+    w.u8(format as u8);
+    w.0.extend_from_slice(bytes);
+    w.0
+}
+
+/// SCENE message: counts, lattice geometry, hair-type names, head mesh, render strands and their guide
+/// binding (layout in docs/protocol.md).
+pub fn encode_scene(s: &Scene) -> Vec<u8> {
+    let r = &s.render;
+    let strands = r.strands();
+    let f = &s.lattice.ffd;
+    let mut w = W::new(server::SCENE, 64 + 12 * (s.head_mesh.positions.len() + r.positions.len()) + 4 * s.head_mesh.indices.len() + 8 * r.guide.len() + 4 * strands);
+    w.u32(r.vertices_per_strand as u32);
+    w.u32(strands as u32);
+    w.u32(r.guides_per_strand as u32);
+    w.u32(s.guides.len() as u32);
+    w.u32(s.samples() as u32);
+    w.u32(f.nx as u32);
+    w.u32(f.ny as u32);
+    w.u32(f.nz as u32);
+    w.v3(&f.origin.coords);
+    w.f32(f.h);
+    let names = strand::HairType::ALL;
+    w.u8(names.len() as u8);
+    for h in names {
+        w.u8(h.name.len() as u8);
+        w.0.extend_from_slice(h.name.as_bytes());
+    }
+    let current = names.iter().position(|h| h.name == s.hair_type.name).unwrap_or(0);
+    w.u8(current as u8);
+    while w.0.len() % 4 != 0 {
+        w.u8(0);
+    }
+    w.u32(s.head_mesh.positions.len() as u32);
+    w.u32(s.head_mesh.indices.len() as u32);
+    for p in &s.head_mesh.positions {
+        p.iter().for_each(|&x| w.0.extend_from_slice(&x.to_le_bytes()));
+    }
+    for i in &s.head_mesh.indices {
+        w.u32(*i);
+    }
+    for p in &r.positions {
+        p.iter().for_each(|&x| w.0.extend_from_slice(&x.to_le_bytes()));
+    }
+    for g in &r.guide {
+        w.u32(*g);
+    }
+    for x in r.weight.iter().chain(r.span.iter()) {
+        w.0.extend_from_slice(&x.to_le_bytes());
+    }
+    w.0
+}
+
+/// Byte offset of the FRAME flags byte (bit 0: the receiving viewer controls the tool), patched per viewer.
+pub const FRAME_FLAGS_OFFSET: usize = 11;
+
+/// FRAME message: what changed since the last frame (never the render strands).
+pub fn encode_frame(seq: u32, lat: &LatticeSnapshot, h: &HapticSnapshot) -> Vec<u8> {
+    let nodes = lat.positions.len();
+    let guides = h.wetness.len();
+    let mut w = W::new(server::FRAME, 80 + 12 * nodes + 4 * h.active.len() + 12 * h.displacement.len() + 8 * guides);
+    w.u32(seq);
+    w.f32(h.time);
+    w.u8(h.tool);
+    w.u8(0); // flags, patched per viewer
+    w.u16(h.contacts.min(u16::MAX as u32) as u16);
+    w.v3(&h.tool_position);
+    let q = UnitQuaternion::from_matrix(&h.tool_rotation);
+    w.f32(q.i);
+    w.f32(q.j);
+    w.f32(q.k);
+    w.f32(q.w);
+    w.v3(&h.device_position);
+    w.v3(&h.force);
+    w.u32(lat.version as u32);
+    w.u32(nodes as u32);
+    for p in &lat.positions {
+        w.v3(&p.coords);
+    }
+    let samples = if h.active.is_empty() { 0 } else { h.displacement.len() / h.active.len() };
+    w.u32(h.active.len() as u32);
+    w.u32(samples as u32);
+    for g in &h.active {
+        w.u32(*g);
+    }
+    for d in &h.displacement {
+        w.v3(d);
+    }
+    w.u32(guides as u32);
+    for x in &h.wetness {
+        w.0.extend_from_slice(&x.to_le_bytes());
+    }
+    for x in &h.cut {
+        w.0.extend_from_slice(&x.to_le_bytes());
+    }
+    w.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn malformed_and_unknown_messages_are_errors_not_panics() {
+        assert_eq!(parse_client(&[]).unwrap_err().code, code::MALFORMED);
+        assert_eq!(parse_client(&[0x01]).unwrap_err().code, code::MALFORMED);
+        assert_eq!(parse_client(&[0x01, 9]).unwrap_err().code, code::BAD_VERSION);
+        assert_eq!(parse_client(&[0x7f, 1]).unwrap_err().code, code::UNKNOWN_TYPE);
+        assert_eq!(parse_client(&[client::POSE, 1, 0, 0]).unwrap_err().code, code::MALFORMED);
+        assert_eq!(parse_client(&[client::SELECT_TOOL, 1, 6]).unwrap_err().code, code::MALFORMED);
+        let mut nan = vec![client::POSE, 1];
+        for x in [f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0] {
+            nan.extend_from_slice(&x.to_le_bytes());
+        }
+        nan.extend_from_slice(&0u32.to_le_bytes());
+        assert_eq!(parse_client(&nan).unwrap_err().code, code::MALFORMED);
+        // Every prefix of a good message fails cleanly.
+        let mut good = vec![client::POSE, 1];
+        for x in [0.1f32, -0.2, 0.3, 0.0, 0.0, 0.0, 1.0] {
+            good.extend_from_slice(&x.to_le_bytes());
+        }
+        good.extend_from_slice(&1u32.to_le_bytes());
+        for n in 0..good.len() {
+            assert!(parse_client(&good[..n]).is_err());
+        }
+        match parse_client(&good).unwrap() {
+            ClientMessage::Pose { position, rotation, buttons } => {
+                assert!((position - Vector3::new(0.1, -0.2, 0.3)).norm() < 1e-6);
+                assert!((rotation - Matrix3::identity()).norm() < 1e-12);
+                assert_eq!(buttons, 1);
+            }
+            m => panic!("{m:?}"),
+        }
+    }
+
+    #[test]
+    fn error_message_layout() {
+        let b = encode_error(&WireError { code: 2, message: "abc".into() });
+        assert_eq!(b, vec![server::ERROR, VERSION, 2, 0, 3, 0, b'a', b'b', b'c']);
+    }
+}

@@ -1,0 +1,392 @@
+//! `coiffure serve`: the live session behind an HTTP server (the built viewer) and a WebSocket (`/ws`, binary
+//! protocol in docs/protocol.md). One frame pump thread reads the session's latest snapshots at the frame
+//! rate, encodes one FRAME message and hands it to every viewer; each viewer's task sends it on. Several
+//! viewers may watch; the first to connect controls the tool until it leaves or another sends TAKE_CONTROL.
+
+use crate::protocol::{self, ClientMessage, WireError};
+use anyhow::{anyhow, Context};
+use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::extract::State;
+use axum::response::IntoResponse;
+use axum::routing::get;
+use axum::Router;
+use clap::Args;
+use engine::record::Record;
+use engine::session::{Command, Scene, SceneOptions, Session, SessionIo, SessionParams};
+use futures_util::{SinkExt, StreamExt};
+use haptics::backends::VirtualHandle;
+use haptics::device::DeviceReading;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::Sender;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+use tokio::sync::{mpsc, watch};
+use tower_http::services::ServeDir;
+
+/// Arguments of `coiffure serve`.
+#[derive(Debug, Args)]
+pub struct ServeArgs {
+    /// Address to bind.
+    #[arg(long, default_value = "127.0.0.1")]
+    pub addr: std::net::IpAddr,
+    /// Port (0: any free port; the chosen one is printed).
+    #[arg(long, default_value_t = 8080)]
+    pub port: u16,
+    /// Folder of the built viewer (default: web/dist here, else beside the sources).
+    #[arg(long)]
+    pub web: Option<PathBuf>,
+    /// Number of render strands of the built-in hairstyle.
+    #[arg(long, default_value_t = 100_000)]
+    pub render_strands: usize,
+    /// Number of guide strands.
+    #[arg(long, default_value_t = 200)]
+    pub guides: usize,
+    /// Visual frames per second sent to viewers.
+    #[arg(long, default_value_t = 60.0)]
+    pub fps: f64,
+    /// Record the device input to this file (written when the server stops) for replay.
+    #[arg(long)]
+    pub record: Option<PathBuf>,
+    /// Stop by itself after this many seconds (for benchmarks and scripts).
+    #[arg(long)]
+    pub duration: Option<f64>,
+}
+
+/// The viewer folder: `--web`, else `./web/dist`, else `web/dist` beside the sources.
+fn viewer_dir(arg: &Option<PathBuf>) -> anyhow::Result<PathBuf> {
+    let candidates: Vec<PathBuf> = match arg {
+        Some(p) => vec![p.clone()],
+        None => vec![PathBuf::from("web/dist"), Path::new(env!("CARGO_MANIFEST_DIR")).join("../../web/dist")],
+    };
+    for c in &candidates {
+        if c.join("index.html").is_file() {
+            return Ok(c.clone());
+        }
+    }
+    Err(anyhow!(
+        "the viewer is not built: {} has no index.html. Build it with `npm --prefix web ci && npm --prefix web run build` (from the repository root), or pass --web DIR",
+        candidates[0].display()
+    ))
+}
+
+struct Control {
+    controller: Option<u64>,
+    viewers: Vec<(u64, mpsc::UnboundedSender<Vec<u8>>)>,
+}
+
+struct App {
+    scene_msg: Mutex<Arc<Vec<u8>>>,
+    scene: Mutex<Arc<Scene>>,
+    frames: watch::Receiver<Arc<Vec<u8>>>,
+    device: Mutex<VirtualHandle>,
+    commands: Mutex<Sender<Command>>,
+    control: Mutex<Control>,
+    next_id: AtomicU64,
+    started: Instant,
+    latest_lattice: Mutex<Vec<[f32; 3]>>,
+    /// Latest (kept length per guide, active guides, their displacements, samples per guide).
+    latest_guides: Mutex<(Vec<f32>, Vec<u32>, Vec<nalgebra::Vector3<f64>>, usize)>,
+}
+
+impl App {
+    fn broadcast_control(&self) {
+        let c = self.control.lock().unwrap();
+        let n = c.viewers.len() as u32;
+        for (id, tx) in &c.viewers {
+            let _ = tx.send(protocol::encode_control(c.controller == Some(*id), n));
+        }
+    }
+}
+
+/// Frame pump statistics (information, logged at the end).
+#[derive(Default)]
+struct PumpStats {
+    frames: u64,
+    encode_seconds: f64,
+    bytes: u64,
+}
+
+/// Runs the server until Ctrl-C (or `--duration`).
+pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
+    let web = viewer_dir(&args.web)?;
+    if !(args.fps > 0.0 && args.fps <= 240.0) {
+        return Err(anyhow!("--fps must be in (0, 240], got {}", args.fps));
+    }
+    let t0 = Instant::now();
+    let opts = SceneOptions { render_strands: args.render_strands, guides: args.guides, ..SceneOptions::default() };
+    let scene = Arc::new(Scene::builtin(&opts).context("building the built-in scene")?);
+    tracing::info!("scene: {} render strands, {} guides, {} lattice nodes, built in {:.2} s", scene.render.strands(), scene.guides.len(), scene.lattice.node_count(), t0.elapsed().as_secs_f64());
+    let params = SessionParams { record: args.record.is_some(), ..SessionParams::default() };
+    let (session, io) = Session::start(scene.clone(), params).context("starting the session")?;
+    let SessionIo { device, commands, lattice, haptic } = io;
+    let scene_msg = Arc::new(protocol::encode_scene(&scene));
+    let (frame_tx, frame_rx) = watch::channel(Arc::new(Vec::new()));
+    let stop = Arc::new(AtomicBool::new(false));
+    let app = Arc::new(App {
+        scene_msg: Mutex::new(scene_msg),
+        scene: Mutex::new(scene),
+        frames: frame_rx,
+        device: Mutex::new(device),
+        commands: Mutex::new(commands),
+        control: Mutex::new(Control { controller: None, viewers: Vec::new() }),
+        next_id: AtomicU64::new(1),
+        started: Instant::now(),
+        latest_lattice: Mutex::new(Vec::new()),
+        latest_guides: Mutex::new((Vec::new(), Vec::new(), Vec::new(), 2)),
+    });
+
+    // Frame pump thread.
+    let (stop_p, app_p, fps) = (stop.clone(), app.clone(), args.fps);
+    let pump = std::thread::Builder::new().name("coiffure-frames".into()).spawn(move || {
+        let (mut lattice, mut haptic) = (lattice, haptic);
+        let mut st = PumpStats::default();
+        let period = Duration::from_secs_f64(1.0 / fps);
+        let start = Instant::now();
+        while !stop_p.load(Ordering::Relaxed) {
+            let c0 = cpu_time();
+            let w0 = Instant::now();
+            let (lat, hap) = (lattice.read(), haptic.read());
+            let msg = protocol::encode_frame(st.frames as u32, lat, hap);
+            if let Ok(mut l) = app_p.latest_lattice.lock() {
+                l.clear();
+                l.extend(lat.positions.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]));
+            }
+            if let Ok(mut g) = app_p.latest_guides.lock() {
+                let samples = if hap.active.is_empty() { 2 } else { (hap.displacement.len() / hap.active.len()).max(2) };
+                *g = (hap.cut.clone(), hap.active.clone(), hap.displacement.clone(), samples);
+            }
+            st.bytes += msg.len() as u64;
+            let _ = frame_tx.send(Arc::new(msg));
+            st.encode_seconds += match (c0, cpu_time()) {
+                (Some(a), Some(b)) => b - a,
+                _ => w0.elapsed().as_secs_f64(),
+            };
+            st.frames += 1;
+            let next = start + period * st.frames as u32;
+            let now = Instant::now();
+            if next > now {
+                std::thread::sleep(next - now);
+            }
+        }
+        st
+    })?;
+
+    let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build()?;
+    let addr = SocketAddr::new(args.addr, args.port);
+    let duration = args.duration;
+    let served = rt.block_on(async move {
+        let router = Router::new().route("/ws", get(ws_handler)).fallback_service(ServeDir::new(&web)).with_state(app.clone());
+        let listener = tokio::net::TcpListener::bind(addr).await.with_context(|| format!("cannot bind {addr}"))?;
+        let local = listener.local_addr()?;
+        println!("coiffure serve: listening on http://{local}/ (viewer from {})", web.display());
+        use std::io::Write;
+        let _ = std::io::stdout().flush();
+        let shutdown = async move {
+            match duration {
+                Some(d) => tokio::time::sleep(Duration::from_secs_f64(d.max(0.0))).await,
+                None => {
+                    let _ = tokio::signal::ctrl_c().await;
+                }
+            }
+        };
+        axum::serve(listener, router).with_graceful_shutdown(shutdown).await.context("server failed")?;
+        anyhow::Ok(())
+    });
+    stop.store(true, Ordering::Relaxed);
+    let st = pump.join().map_err(|_| anyhow!("the frame thread panicked"))?;
+    let report = session.stop();
+    let f = st.frames.max(1) as f64;
+    println!(
+        "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame); haptic loop: {} steps, step mean {:.1} us, p99 {:.0} us, p99.9 {:.0} us, {} misses; global: {} steps, mean {:.2} ms",
+        st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, report.haptic.steps, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, report.haptic.misses, report.global_steps, 1e3 * report.global_step_mean
+    );
+    if let (Some(path), Some(rec)) = (&args.record, report.record) {
+        write_record(path, &rec)?;
+        println!("record: {} haptic steps written to {}", rec.steps.len(), path.display());
+    }
+    served
+}
+
+fn write_record(path: &Path, rec: &Record) -> anyhow::Result<()> {
+    crate::ensure_parent(path)?;
+    std::fs::write(path, rec.to_bytes()).with_context(|| format!("cannot write the record {}", path.display()))
+}
+
+/// CPU time of the calling thread, s, or None if the clock is unavailable.
+fn cpu_time() -> Option<f64> {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: clock_gettime writes one timespec into the valid, exclusively borrowed `ts`.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    (rc == 0).then(|| ts.tv_sec as f64 + 1e-9 * ts.tv_nsec as f64)
+}
+
+async fn ws_handler(ws: WebSocketUpgrade, State(app): State<Arc<App>>) -> impl IntoResponse {
+    ws.max_message_size(64 << 20).on_upgrade(move |socket| viewer(socket, app))
+}
+
+/// One viewer: sends the scene, then frames; handles its messages.
+async fn viewer(socket: WebSocket, app: Arc<App>) {
+    let id = app.next_id.fetch_add(1, Ordering::Relaxed);
+    let (mut sink, mut stream) = socket.split();
+    let (tx, mut rx) = mpsc::unbounded_channel::<Vec<u8>>();
+    {
+        let mut c = app.control.lock().unwrap();
+        c.viewers.push((id, tx.clone()));
+        if c.controller.is_none() {
+            c.controller = Some(id);
+        }
+    }
+    let scene = app.scene_msg.lock().unwrap().clone();
+    if sink.send(Message::Binary((*scene).clone().into())).await.is_err() {
+        leave(&app, id);
+        return;
+    }
+    app.broadcast_control();
+    let mut frames = app.frames.clone();
+    let app_w = app.clone();
+    let writer = tokio::spawn(async move {
+        loop {
+            tokio::select! {
+                changed = frames.changed() => {
+                    if changed.is_err() { break; }
+                    let f = frames.borrow_and_update().clone();
+                    if f.is_empty() { continue; }
+                    let mut bytes = (*f).clone();
+                    let you = app_w.control.lock().map(|c| c.controller == Some(id)).unwrap_or(false);
+                    bytes[protocol::FRAME_FLAGS_OFFSET] = you as u8;
+                    if sink.send(Message::Binary(bytes.into())).await.is_err() { break; }
+                }
+                m = rx.recv() => {
+                    match m {
+                        Some(b) => if sink.send(Message::Binary(b.into())).await.is_err() { break; },
+                        None => break,
+                    }
+                }
+            }
+        }
+    });
+    while let Some(Ok(msg)) = stream.next().await {
+        let reply = match msg {
+            Message::Binary(b) => handle(&app, id, &b),
+            Message::Text(_) => Some(protocol::encode_error(&WireError { code: protocol::code::TEXT, message: "text frames are not part of the protocol; send binary messages (docs/protocol.md)".into() })),
+            Message::Close(_) => break,
+            _ => None,
+        };
+        if let Some(r) = reply {
+            if tx.send(r).is_err() {
+                break;
+            }
+        }
+    }
+    writer.abort();
+    leave(&app, id);
+}
+
+fn leave(app: &App, id: u64) {
+    {
+        let mut c = app.control.lock().unwrap();
+        c.viewers.retain(|v| v.0 != id);
+        if c.controller == Some(id) {
+            c.controller = c.viewers.first().map(|v| v.0);
+        }
+    }
+    app.broadcast_control();
+}
+
+/// Handles one binary message; returns the reply, if any.
+fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
+    let msg = match protocol::parse_client(bytes) {
+        Ok(m) => m,
+        Err(e) => {
+            tracing::debug!("viewer {id}: {}", e.message);
+            return Some(protocol::encode_error(&e));
+        }
+    };
+    let controls = app.control.lock().unwrap().controller == Some(id);
+    let not_controller = || Some(protocol::encode_error(&WireError { code: protocol::code::NOT_CONTROLLER, message: "another viewer controls the tool; send TAKE_CONTROL first".into() }));
+    match msg {
+        ClientMessage::Ping(t) => Some(protocol::encode_pong(t)),
+        ClientMessage::TakeControl => {
+            app.control.lock().unwrap().controller = Some(id);
+            app.broadcast_control();
+            None
+        }
+        ClientMessage::Pose { position, rotation, buttons } => {
+            if !controls {
+                return not_controller();
+            }
+            let time = app.started.elapsed().as_secs_f64();
+            app.device.lock().unwrap().push(DeviceReading { time, position, rotation, buttons });
+            None
+        }
+        ClientMessage::Command(c) => {
+            if !controls {
+                return not_controller();
+            }
+            let _ = app.commands.lock().unwrap().send(c);
+            None
+        }
+        ClientMessage::Save(format) => match save(app, format) {
+            Ok(b) => Some(protocol::encode_file(format, &b)),
+            Err(e) => Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message: e })),
+        },
+        ClientMessage::Load(format, bytes) => {
+            if !controls {
+                return not_controller();
+            }
+            let f = hairstyle::formats::Format::from_path(Path::new(&format!("x.{}", protocol::FORMATS[format]))).expect("known extension");
+            match f.read(&bytes) {
+                Ok(c) => Some(protocol::encode_error(&WireError {
+                    code: protocol::code::FILE,
+                    message: format!("read {} strands, {} points; replacing the live hairstyle is not supported yet", c.strands.len(), c.num_points()),
+                })),
+                Err(e) => Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message: format!("cannot read the {} file: {e}", protocol::FORMATS[format]) })),
+            }
+        }
+    }
+}
+
+/// The current hairstyle (render strands through the latest lattice, cut strands shortened) as file bytes.
+fn save(app: &App, format: usize) -> Result<Vec<u8>, String> {
+    let scene = app.scene.lock().unwrap().clone();
+    let nodes: Vec<nalgebra::Point3<f64>> = app.latest_lattice.lock().unwrap().iter().map(|p| nalgebra::Point3::new(p[0] as f64, p[1] as f64, p[2] as f64)).collect();
+    let nodes = if nodes.len() == scene.lattice.node_count() { nodes } else { scene.lattice.rest.clone() };
+    let nv = scene.render.vertices_per_strand;
+    let (cut, active, disp, samples) = app.latest_guides.lock().unwrap().clone();
+    let k = scene.render.guides_per_strand;
+    let strands: Vec<Vec<[f32; 3]>> = scene
+        .render
+        .positions
+        .chunks(nv)
+        .enumerate()
+        .map(|(i, s)| {
+            let g0 = scene.render.guide[i * k] as usize;
+            let keep = cut.get(g0).copied().unwrap_or(1.0);
+            s.iter()
+                .enumerate()
+                .filter(|(j, _)| (*j as f32 / (nv - 1) as f32) * scene.render.span[i] <= keep + 1e-4)
+                .map(|(j, p)| {
+                    let mut q = engine::session::ffd_map(&scene.lattice.ffd, &nodes, &nalgebra::Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64));
+                    // Active guides' displacement, as the viewer adds it.
+                    let u = scene.render.span[i] as f64 * j as f64 / (nv - 1) as f64;
+                    for m in 0..k {
+                        let g = scene.render.guide[i * k + m];
+                        if let Some(a) = active.iter().position(|&x| x == g) {
+                            let x = u * (samples - 1) as f64;
+                            let lo = (x.floor() as usize).min(samples - 1);
+                            let hi = (lo + 1).min(samples - 1);
+                            let d = disp[a * samples + lo] * (1.0 - (x - lo as f64)) + disp[a * samples + hi] * (x - lo as f64);
+                            q += d * scene.render.weight[i * k + m] as f64;
+                        }
+                    }
+                    [q.x as f32, q.y as f32, q.z as f32]
+                })
+                .collect()
+        })
+        .filter(|s: &Vec<[f32; 3]>| s.len() >= 2)
+        .collect();
+    let f = hairstyle::formats::Format::from_path(Path::new(&format!("x.{}", protocol::FORMATS[format]))).expect("known extension");
+    f.write(&hairstyle::HairCurves::from_strands(strands)).map_err(|e| format!("cannot write {}: {e}", protocol::FORMATS[format]))
+}

@@ -1,0 +1,234 @@
+// The Coiffure viewer: connects to the server's WebSocket, draws the scene, drives the tool with the mouse.
+import * as THREE from 'three';
+import * as P from './protocol';
+import { View } from './scene';
+import { ForcePlot } from './plot';
+import { MouseDevice, TOOL_NAMES, toolModel, toolQuaternion } from './tools';
+
+/** State exposed for the end-to-end tests and for curious users (window.coiffure). */
+interface Status {
+  webgl2: boolean;
+  connected: boolean;
+  sceneLoaded: boolean;
+  framesReceived: number;
+  framesRendered: number;
+  youControl: boolean;
+  viewers: number;
+  lastForce: number;
+  peakForce: number;
+  contacts: number;
+  maxDisplacement: number;
+  wetnessMean: number;
+  cutMin: number;
+  tool: number;
+  errors: P.ErrorMsg[];
+  frameTimes: number[];
+  strands: number;
+  lastFile: { format: number; bytes: number } | null;
+  send: (b: ArrayBuffer) => void;
+}
+
+const canvas = document.getElementById('view') as HTMLCanvasElement;
+const statusEl = document.getElementById('status') as HTMLSpanElement;
+const view = new View(canvas);
+const plot = new ForcePlot(document.getElementById('plot') as HTMLCanvasElement);
+const device = new MouseDevice(view.camera, canvas, view.controls.target);
+
+const status: Status = {
+  webgl2: view.renderer.getContext() instanceof WebGL2RenderingContext,
+  connected: false, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
+  lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, tool: 0, errors: [], frameTimes: [], strands: 0,
+  lastFile: null,
+  send: (b) => { if (ws.readyState === WebSocket.OPEN) ws.send(b); },
+};
+(window as unknown as { coiffure: Status }).coiffure = status;
+
+// Tool, force arrow, device ghost.
+let toolGroup = toolModel(0);
+view.scene.add(toolGroup);
+const arrow = new THREE.ArrowHelper(new THREE.Vector3(0, 0, 1), new THREE.Vector3(), 0.05, 0xff5533, 0.012, 0.008);
+arrow.visible = false;
+view.scene.add(arrow);
+const ghost = new THREE.Mesh(new THREE.SphereGeometry(0.003, 12, 8), new THREE.MeshBasicMaterial({ color: 0x88ff88, transparent: true, opacity: 0.5 }));
+view.scene.add(ghost);
+
+const url = new URL('/ws', window.location.href);
+url.protocol = url.protocol === 'https:' ? 'wss:' : 'ws:';
+const ws = new WebSocket(url);
+ws.binaryType = 'arraybuffer';
+ws.onopen = () => { status.connected = true; statusEl.textContent = 'connected'; };
+ws.onclose = () => { status.connected = false; statusEl.textContent = 'disconnected (is coiffure serve running?)'; };
+ws.onmessage = (ev) => {
+  const buf = ev.data as ArrayBuffer;
+  const type = new Uint8Array(buf)[0];
+  switch (type) {
+    case P.Server.SCENE: onScene(P.decodeScene(buf)); break;
+    case P.Server.FRAME: onFrame(P.decodeFrame(buf)); break;
+    case P.Server.ERROR: {
+      const e = P.decodeError(buf);
+      status.errors.push(e);
+      statusEl.textContent = `server: ${e.message}`;
+      break;
+    }
+    case P.Server.CONTROL: {
+      const v = new DataView(buf);
+      status.youControl = v.getUint8(2) === 1;
+      status.viewers = v.getUint32(3, true);
+      statusEl.textContent = `${status.youControl ? 'you control the tool' : 'watching'} (${status.viewers} viewer${status.viewers === 1 ? '' : 's'})`;
+      break;
+    }
+    case P.Server.FILE: {
+      const format = new Uint8Array(buf)[2];
+      const blob = new Blob([buf.slice(3)]);
+      status.lastFile = { format, bytes: blob.size };
+      const a = document.createElement('a');
+      a.href = URL.createObjectURL(blob);
+      a.download = `hairstyle.${P.FORMATS[format]}`;
+      a.click();
+      break;
+    }
+  }
+};
+
+function onScene(msg: P.SceneMsg): void {
+  view.load(msg);
+  status.strands = msg.strands;
+  const preset = document.getElementById('preset') as HTMLSelectElement;
+  preset.innerHTML = msg.hairTypes.map((n, i) => `<option value="${i}">${n}</option>`).join('');
+  preset.value = String(msg.hairType);
+  status.sceneLoaded = true;
+}
+
+const scratch = new THREE.Vector3();
+function onFrame(f: P.FrameMsg): void {
+  status.framesReceived++;
+  status.youControl = f.youControl;
+  const hair = view.hair;
+  if (hair) {
+    hair.setLattice(f.nodes);
+    hair.setGuides(f.active, f.samples, f.displacement, f.wetness, f.cut);
+  }
+  for (let i = 0; i < f.displacement.length; i += 3) {
+    status.maxDisplacement = Math.max(status.maxDisplacement, Math.hypot(f.displacement[i], f.displacement[i + 1], f.displacement[i + 2]));
+  }
+  status.wetnessMean = f.wetness.reduce((a, b) => a + b, 0) / Math.max(1, f.wetness.length);
+  status.cutMin = f.cut.reduce((a, b) => Math.min(a, b), 1);
+  const fm = Math.hypot(...f.force);
+  status.lastForce = fm;
+  status.peakForce = Math.max(status.peakForce, fm);
+  status.contacts = f.contacts;
+  plot.push(fm);
+  device.setForce(fm);
+  if (f.tool !== status.tool) setTool(f.tool, false);
+  // Pseudo-haptic cursor: the tool is drawn where the proxy is, which lags behind the mouse under force.
+  toolGroup.position.set(...f.toolPosition);
+  toolGroup.quaternion.set(...f.toolQuaternion);
+  ghost.position.set(...f.devicePosition);
+  arrow.visible = fm > 1e-4;
+  if (arrow.visible) {
+    scratch.set(...f.force).normalize();
+    arrow.position.set(...f.toolPosition);
+    arrow.setDirection(scratch);
+    arrow.setLength(Math.min(0.15, 0.02 + 0.3 * fm), 0.012, 0.008);
+  }
+}
+
+function setTool(t: number, send: boolean): void {
+  status.tool = t;
+  view.scene.remove(toolGroup);
+  toolGroup = toolModel(t);
+  view.scene.add(toolGroup);
+  document.querySelectorAll<HTMLButtonElement>('#tools button').forEach((b) => b.classList.toggle('active', Number(b.dataset.tool) === t));
+  if (send) status.send(P.encodeSelectTool(t));
+}
+
+// Toolbar.
+document.querySelectorAll<HTMLButtonElement>('#tools button').forEach((b) => b.addEventListener('click', () => setTool(Number(b.dataset.tool), true)));
+const presetEl = document.getElementById('preset') as HTMLSelectElement;
+const curlEl = document.getElementById('curliness') as HTMLInputElement;
+const easeEl = document.getElementById('ease') as HTMLInputElement;
+function sendHair(): void {
+  const c = Number(curlEl.value);
+  if (view.hair) view.hair.material.uniforms.curliness.value = c;
+  status.send(P.encodeSetHair(Number(presetEl.value) || 0, c, Number(easeEl.value)));
+}
+[presetEl, curlEl, easeEl].forEach((e) => e.addEventListener('change', sendHair));
+curlEl.addEventListener('input', () => { if (view.hair) view.hair.material.uniforms.curliness.value = Number(curlEl.value); });
+document.getElementById('reset')!.addEventListener('click', () => {
+  status.send(P.encodeEmpty(P.Client.RESET));
+  view.hair?.resetGuides();
+  plot.peak = 0;
+});
+document.getElementById('take')!.addEventListener('click', () => status.send(P.encodeEmpty(P.Client.TAKE_CONTROL)));
+document.getElementById('save')!.addEventListener('click', () => {
+  status.send(P.encodeSave(Number((document.getElementById('save-format') as HTMLSelectElement).value)));
+});
+document.getElementById('load')!.addEventListener('change', async (ev) => {
+  const file = (ev.target as HTMLInputElement).files?.[0];
+  if (!file) return;
+  const ext = file.name.split('.').pop()?.toLowerCase() ?? '';
+  const format = P.FORMATS.indexOf(ext);
+  if (format < 0) { statusEl.textContent = `unknown hair file type .${ext} (use .hair, .data, .tfx or .usda)`; return; }
+  status.send(P.encodeLoad(format, await file.arrayBuffer()));
+});
+
+// The mouse drives the device.
+canvas.addEventListener('contextmenu', (e) => e.preventDefault());
+canvas.addEventListener('pointerdown', (e) => { if (e.button === 0) { canvas.setPointerCapture(e.pointerId); device.down(e); } });
+canvas.addEventListener('pointerup', (e) => { if (e.button === 0) device.up(e); });
+canvas.addEventListener('pointermove', (e) => device.move(e));
+
+function sendPose(): void {
+  if (!status.youControl || ws.readyState !== WebSocket.OPEN) return;
+  const q = toolQuaternion(view.camera);
+  status.send(P.encodePose(device.target, q, device.pressed ? 1 : 0));
+}
+
+let last = performance.now();
+function frame(now: number): void {
+  status.frameTimes.push(now - last);
+  if (status.frameTimes.length > 600) status.frameTimes.shift();
+  last = now;
+  sendPose();
+  view.render();
+  plot.draw();
+  if (status.sceneLoaded) status.framesRendered++;
+  requestAnimationFrame(frame);
+}
+requestAnimationFrame(frame);
+console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
+
+// Hooks for the end-to-end tests: project a world point to client pixels, pixel statistics of the frame.
+(window as unknown as { coiffureDebug: unknown }).coiffureDebug = {
+  project(x: number, y: number, z: number): [number, number] {
+    const v = new THREE.Vector3(x, y, z).project(view.camera);
+    const r = canvas.getBoundingClientRect();
+    return [r.left + (v.x + 1) / 2 * r.width, r.top + (1 - v.y) / 2 * r.height];
+  },
+  /** Renders once with and once without the hair; returns the fraction of pixels the hair changes and the
+   * fraction of pixels that are not background. */
+  hairPixelStats(): { hairFraction: number; nonBackground: number; pixels: number } {
+    const read = (): Uint8ClampedArray => {
+      view.render();
+      const c = document.createElement('canvas');
+      c.width = canvas.width; c.height = canvas.height;
+      const ctx = c.getContext('2d')!;
+      ctx.drawImage(canvas, 0, 0);
+      return ctx.getImageData(0, 0, c.width, c.height).data;
+    };
+    const hairObj = view.scene.children.find((o) => (o as THREE.LineSegments).isLineSegments && o !== arrow);
+    const withHair = read();
+    if (hairObj) hairObj.visible = false;
+    const without = read();
+    if (hairObj) hairObj.visible = true;
+    let changed = 0, nonBg = 0;
+    const n = withHair.length / 4;
+    for (let i = 0; i < n; i++) {
+      const d = Math.abs(withHair[4 * i] - without[4 * i]) + Math.abs(withHair[4 * i + 1] - without[4 * i + 1]) + Math.abs(withHair[4 * i + 2] - without[4 * i + 2]);
+      if (d > 24) changed++;
+      const b = Math.abs(withHair[4 * i] - 0x1d) + Math.abs(withHair[4 * i + 1] - 0x1f) + Math.abs(withHair[4 * i + 2] - 0x24);
+      if (b > 24) nonBg++;
+    }
+    return { hairFraction: changed / n, nonBackground: nonBg / n, pixels: n };
+  },
+};

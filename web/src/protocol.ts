@@ -1,0 +1,183 @@
+// The WebSocket protocol (docs/protocol.md): binary, little-endian, [type u8][version u8] then the payload.
+
+export const VERSION = 1;
+
+export const Client = {
+  POSE: 0x01,
+  TAKE_CONTROL: 0x02,
+  SELECT_TOOL: 0x03,
+  SET_HAIR: 0x04,
+  RESET: 0x05,
+  LOAD: 0x06,
+  SAVE: 0x07,
+  PING: 0x08,
+} as const;
+
+export const Server = {
+  SCENE: 0x81,
+  FRAME: 0x82,
+  ERROR: 0x83,
+  CONTROL: 0x84,
+  FILE: 0x85,
+  PONG: 0x86,
+} as const;
+
+export const FORMATS = ['hair', 'data', 'tfx', 'usda'];
+
+export interface SceneMsg {
+  verticesPerStrand: number;
+  strands: number;
+  guidesPerStrand: number;
+  guides: number;
+  samples: number;
+  latticeDims: [number, number, number];
+  latticeOrigin: [number, number, number];
+  latticeH: number;
+  hairTypes: string[];
+  hairType: number;
+  headPositions: Float32Array;
+  headIndices: Uint32Array;
+  renderPositions: Float32Array;
+  renderGuide: Uint32Array; // guidesPerStrand per strand, nearest first
+  renderWeight: Float32Array; // guidesPerStrand per strand, summing to 1
+  renderSpan: Float32Array; // per strand: fraction of the guides' length it spans
+}
+
+export interface FrameMsg {
+  seq: number;
+  time: number;
+  tool: number;
+  youControl: boolean;
+  contacts: number;
+  toolPosition: [number, number, number];
+  toolQuaternion: [number, number, number, number];
+  devicePosition: [number, number, number];
+  force: [number, number, number];
+  latticeVersion: number;
+  nodes: Float32Array; // 3 per node
+  active: Uint32Array;
+  samples: number;
+  displacement: Float32Array; // 3 per sample, active.length * samples samples
+  wetness: Float32Array;
+  cut: Float32Array;
+}
+
+export interface ErrorMsg { code: number; message: string }
+
+/** Copies `n` little-endian f32 starting at byte `at` (handles unaligned offsets). */
+function f32s(buf: ArrayBuffer, at: number, n: number): Float32Array {
+  return new Float32Array(buf.slice(at, at + 4 * n));
+}
+function u32s(buf: ArrayBuffer, at: number, n: number): Uint32Array {
+  return new Uint32Array(buf.slice(at, at + 4 * n));
+}
+
+export function decodeScene(buf: ArrayBuffer): SceneMsg {
+  const v = new DataView(buf);
+  let o = 2;
+  const u32 = () => { const x = v.getUint32(o, true); o += 4; return x; };
+  const f32 = () => { const x = v.getFloat32(o, true); o += 4; return x; };
+  const verticesPerStrand = u32(), strands = u32(), guidesPerStrand = u32(), guides = u32(), samples = u32();
+  const latticeDims: [number, number, number] = [u32(), u32(), u32()];
+  const latticeOrigin: [number, number, number] = [f32(), f32(), f32()];
+  const latticeH = f32();
+  const nTypes = v.getUint8(o++);
+  const hairTypes: string[] = [];
+  for (let i = 0; i < nTypes; i++) {
+    const len = v.getUint8(o++);
+    hairTypes.push(new TextDecoder().decode(new Uint8Array(buf, o, len)));
+    o += len;
+  }
+  const hairType = v.getUint8(o++);
+  while (o % 4 !== 0) o++;
+  const nHead = u32(), nIdx = u32();
+  const headPositions = f32s(buf, o, 3 * nHead); o += 12 * nHead;
+  const headIndices = u32s(buf, o, nIdx); o += 4 * nIdx;
+  const nv = strands * verticesPerStrand;
+  const renderPositions = f32s(buf, o, 3 * nv); o += 12 * nv;
+  const nb = strands * guidesPerStrand;
+  const renderGuide = u32s(buf, o, nb); o += 4 * nb;
+  const renderWeight = f32s(buf, o, nb); o += 4 * nb;
+  const renderSpan = f32s(buf, o, strands); o += 4 * strands;
+  return { verticesPerStrand, strands, guidesPerStrand, guides, samples, latticeDims, latticeOrigin, latticeH, hairTypes, hairType, headPositions, headIndices, renderPositions, renderGuide, renderWeight, renderSpan };
+}
+
+export function decodeFrame(buf: ArrayBuffer): FrameMsg {
+  const v = new DataView(buf);
+  let o = 2;
+  const u32 = () => { const x = v.getUint32(o, true); o += 4; return x; };
+  const f32 = () => { const x = v.getFloat32(o, true); o += 4; return x; };
+  const seq = u32();
+  const time = f32();
+  const tool = v.getUint8(o++);
+  const youControl = (v.getUint8(o++) & 1) === 1;
+  const contacts = v.getUint16(o, true); o += 2;
+  const toolPosition: [number, number, number] = [f32(), f32(), f32()];
+  const toolQuaternion: [number, number, number, number] = [f32(), f32(), f32(), f32()];
+  const devicePosition: [number, number, number] = [f32(), f32(), f32()];
+  const force: [number, number, number] = [f32(), f32(), f32()];
+  const latticeVersion = u32();
+  const nNodes = u32();
+  const nodes = f32s(buf, o, 3 * nNodes); o += 12 * nNodes;
+  const nActive = u32();
+  const samples = u32();
+  const active = u32s(buf, o, nActive); o += 4 * nActive;
+  const displacement = f32s(buf, o, 3 * nActive * samples); o += 12 * nActive * samples;
+  const nGuides = u32();
+  const wetness = f32s(buf, o, nGuides); o += 4 * nGuides;
+  const cut = f32s(buf, o, nGuides); o += 4 * nGuides;
+  return { seq, time, tool, youControl, contacts, toolPosition, toolQuaternion, devicePosition, force, latticeVersion, nodes, active, samples, displacement, wetness, cut };
+}
+
+export function decodeError(buf: ArrayBuffer): ErrorMsg {
+  const v = new DataView(buf);
+  const code = v.getUint16(2, true);
+  const len = v.getUint16(4, true);
+  return { code, message: new TextDecoder().decode(new Uint8Array(buf, 6, len)) };
+}
+
+function header(type: number, payload: number): [ArrayBuffer, DataView] {
+  const b = new ArrayBuffer(2 + payload);
+  const v = new DataView(b);
+  v.setUint8(0, type);
+  v.setUint8(1, VERSION);
+  return [b, v];
+}
+
+export function encodePose(p: { x: number; y: number; z: number }, q: { x: number; y: number; z: number; w: number }, buttons: number): ArrayBuffer {
+  const [b, v] = header(Client.POSE, 32);
+  [p.x, p.y, p.z, q.x, q.y, q.z, q.w].forEach((x, i) => v.setFloat32(2 + 4 * i, x, true));
+  v.setUint32(30, buttons, true);
+  return b;
+}
+
+export function encodeEmpty(type: number): ArrayBuffer {
+  return header(type, 0)[0];
+}
+
+export function encodeSelectTool(tool: number): ArrayBuffer {
+  const [b, v] = header(Client.SELECT_TOOL, 1);
+  v.setUint8(2, tool);
+  return b;
+}
+
+export function encodeSetHair(type: number, curliness: number, ease: number): ArrayBuffer {
+  const [b, v] = header(Client.SET_HAIR, 9);
+  v.setUint8(2, type);
+  v.setFloat32(3, curliness, true);
+  v.setFloat32(7, ease, true);
+  return b;
+}
+
+export function encodeSave(format: number): ArrayBuffer {
+  const [b, v] = header(Client.SAVE, 1);
+  v.setUint8(2, format);
+  return b;
+}
+
+export function encodeLoad(format: number, file: ArrayBuffer): ArrayBuffer {
+  const [b, v] = header(Client.LOAD, 1 + file.byteLength);
+  v.setUint8(2, format);
+  new Uint8Array(b, 3).set(new Uint8Array(file));
+  return b;
+}

@@ -1,0 +1,84 @@
+// Test harness: starts the real release server on a free port and Debian's headless Chromium
+// (playwright-core, never a downloaded browser).
+import { spawn } from 'node:child_process';
+import { mkdirSync } from 'node:fs';
+import { dirname, join, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { chromium } from 'playwright-core';
+
+const here = dirname(fileURLToPath(import.meta.url));
+export const webDir = resolve(here, '..');
+export const repoDir = resolve(webDir, '..');
+export const artifacts = join(webDir, 'test-artifacts');
+mkdirSync(artifacts, { recursive: true });
+
+const binary = process.env.COIFFURE_BIN ?? join(process.env.CARGO_TARGET_DIR ?? join(repoDir, 'target'), 'release', 'coiffure');
+const chromiumPath = process.env.CHROMIUM ?? '/usr/bin/chromium';
+
+/** Starts `coiffure serve --port 0 ...extra`; resolves with { url, proc, output() } once it listens. */
+export function startServer(extra = []) {
+  return new Promise((resolveStart, reject) => {
+    const proc = spawn(binary, ['serve', '--port', '0', '--web', join(webDir, 'dist'), ...extra], { cwd: repoDir, stdio: ['ignore', 'pipe', 'pipe'] });
+    let out = '';
+    let err = '';
+    const timer = setTimeout(() => reject(new Error(`server did not start within 120 s:\n${out}\n${err}`)), 120_000);
+    proc.stdout.on('data', (d) => {
+      out += d;
+      const m = out.match(/listening on (http:\/\/[^ ]+)/);
+      if (m) {
+        clearTimeout(timer);
+        resolveStart({ url: m[1], proc, output: () => out, errors: () => err });
+      }
+    });
+    proc.stderr.on('data', (d) => { err += d; });
+    proc.on('error', (e) => { clearTimeout(timer); reject(new Error(`cannot run ${binary}: ${e.message} (build it with cargo build --release -p coiffure-server)`)); });
+    proc.on('exit', (code) => { clearTimeout(timer); reject(new Error(`server exited with ${code} before listening:\n${out}\n${err}`)); });
+  });
+}
+
+/** Stops the server with SIGINT (graceful: it prints its statistics) and returns its stdout. */
+export function stopServer(server) {
+  return new Promise((res) => {
+    server.proc.removeAllListeners('exit');
+    server.proc.on('exit', () => res(server.output()));
+    server.proc.kill('SIGINT');
+    setTimeout(() => { server.proc.kill('SIGKILL'); }, 10_000);
+  });
+}
+
+export async function launchBrowser() {
+  return chromium.launch({
+    executablePath: chromiumPath,
+    headless: true,
+    args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-background-networking',
+      '--disable-component-update', '--disable-sync', '--no-first-run', '--disable-quic'],
+    // playwright gives every launch a fresh temporary profile (the --user-data-dir of ENVIRONMENT.md).
+  });
+}
+
+/** Opens the viewer and waits until the scene is loaded and a few frames have been drawn. */
+export async function openViewer(browser, url) {
+  const page = await browser.newPage({ viewport: { width: 1024, height: 720 } });
+  // Software rendering is slow (seconds per frame for the default scene): generous timeouts.
+  page.setDefaultTimeout(180_000);
+  const logs = [];
+  page.on('console', (m) => logs.push(m.text()));
+  page.on('pageerror', (e) => logs.push(`pageerror: ${e.message}`));
+  await page.goto(url, { waitUntil: 'domcontentloaded' });
+  await page.waitForFunction(() => window.coiffure && window.coiffure.sceneLoaded && window.coiffure.framesRendered > 2 && window.coiffure.framesReceived > 2, null, { timeout: 120_000 });
+  return { page, logs };
+}
+
+/** Drags with the left button from world point a to world point b in `steps` steps (ms between steps). */
+export async function dragWorld(page, a, b, steps = 40, pause = 30) {
+  const pa = await page.evaluate((p) => window.coiffureDebug.project(...p), a);
+  const pb = await page.evaluate((p) => window.coiffureDebug.project(...p), b);
+  await page.mouse.move(pa[0], pa[1]);
+  await page.mouse.down();
+  for (let i = 1; i <= steps; i++) {
+    const t = i / steps;
+    await page.mouse.move(pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1]));
+    await page.waitForTimeout(pause);
+  }
+  await page.mouse.up();
+}

@@ -1,0 +1,112 @@
+// End-to-end tests of `coiffure serve` and the viewer in headless Chromium (software WebGL2).
+import { after, before, describe, test } from 'node:test';
+import assert from 'node:assert/strict';
+import { writeFileSync } from 'node:fs';
+import { join } from 'node:path';
+import { artifacts, dragWorld, launchBrowser, openViewer, startServer, stopServer } from './harness.mjs';
+
+describe('the default scene (100k render strands)', () => {
+  let server, browser;
+  before(async () => { server = await startServer(); browser = await launchBrowser(); });
+  after(async () => { await browser?.close(); if (server) console.log(await stopServer(server)); });
+
+  test('the page loads, WebGL2 works and hair is drawn', async () => {
+    const { page, logs } = await openViewer(browser, server.url);
+    const s = await page.evaluate(() => ({ webgl2: window.coiffure.webgl2, strands: window.coiffure.strands, errors: window.coiffure.errors }));
+    assert.equal(s.webgl2, true, 'WebGL2 context');
+    assert.equal(s.strands, 100000, 'the default hairstyle has 100k render strands');
+    assert.deepEqual(s.errors, []);
+    await page.screenshot({ path: join(artifacts, 'default-scene.png'), timeout: 180_000 });
+    // Pixel statistics: the hair must change a sizeable part of the frame (not a blank or head-only frame).
+    const px = await page.evaluate(() => window.coiffureDebug.hairPixelStats());
+    console.log('pixel statistics', px);
+    assert.ok(px.hairFraction > 0.03, `hair covers ${px.hairFraction} of the frame`);
+    assert.ok(px.nonBackground > px.hairFraction * 0.9, 'the frame is not blank');
+    // Viewer frame time in software rendering (information for bench/RESULTS.md): the first frames after
+    // this point, however slow SwiftShader is.
+    await page.evaluate(() => { window.coiffure.frameTimes.length = 0; });
+    await page.waitForFunction(() => window.coiffure.frameTimes.length >= 4, null, { timeout: 300_000, polling: 500 });
+    const times = await page.evaluate(() => window.coiffure.frameTimes.slice(1));
+    times.sort((a, b) => a - b);
+    const median = times[Math.floor(times.length / 2)];
+    writeFileSync(join(artifacts, 'frame-times-default.json'), JSON.stringify({ strands: 100000, frames: times.length, median_ms: median, times_ms: times }));
+    console.log(`viewer frame time, default scene, software rendering: median ${median.toFixed(1)} ms over ${times.length} frames`);
+    assert.ok(!logs.some((l) => l.startsWith('pageerror')), logs.join('\n'));
+  });
+});
+
+describe('interaction (5k render strands for speed in software rendering)', () => {
+  let server, browser, page;
+  before(async () => {
+    server = await startServer(['--render-strands', '5000']);
+    browser = await launchBrowser();
+    ({ page } = await openViewer(browser, server.url));
+  });
+  after(async () => { await browser?.close(); if (server) console.log(await stopServer(server)); });
+
+  test('a malformed or unknown WebSocket message is answered with an error and the connection stays up', async () => {
+    const before = await page.evaluate(() => window.coiffure.framesReceived);
+    await page.evaluate(() => window.coiffure.send(new Uint8Array([0x7f, 1]).buffer));
+    await page.evaluate(() => window.coiffure.send(new Uint8Array([0x01, 1, 0, 0, 0]).buffer));
+    await page.evaluate(() => window.coiffure.send(new Uint8Array([0x01]).buffer));
+    await page.waitForFunction(() => window.coiffure.errors.length >= 3, null, { timeout: 10_000 });
+    const errors = await page.evaluate(() => window.coiffure.errors);
+    assert.equal(errors[0].code, 2, 'unknown type');
+    assert.match(errors[0].message, /unknown message type 0x7f/);
+    assert.equal(errors[1].code, 1, 'malformed POSE');
+    assert.match(errors[1].message, /POSE needs a 32-byte payload/);
+    assert.equal(errors[2].code, 1, 'too short');
+    await page.waitForFunction((n) => window.coiffure.framesReceived > n + 5 && window.coiffure.connected, before, { timeout: 10_000 });
+  });
+
+  test('dragging the comb through the hair gives a force in the plot and moves strands', async () => {
+    assert.equal(await page.evaluate(() => window.coiffure.youControl), true, 'the first viewer controls');
+    await page.evaluate(() => { window.coiffure.peakForce = 0; window.coiffure.maxDisplacement = 0; });
+    // Down the back of the head, through the hanging hair.
+    await dragWorld(page, [0.0, -0.1, 0.06], [0.0, -0.1, -0.12], 50, 40);
+    await page.waitForTimeout(300);
+    await page.screenshot({ path: join(artifacts, 'after-comb.png') });
+    const s = await page.evaluate(() => ({ peak: window.coiffure.peakForce, moved: window.coiffure.maxDisplacement }));
+    console.log('comb stroke', s);
+    assert.ok(s.peak > 1e-3, `peak force ${s.peak} N`);
+    assert.ok(s.moved > 1e-3, `largest strand displacement ${s.moved} m`);
+  });
+
+  test('scissors shorten strands', async () => {
+    await page.evaluate(() => document.querySelector('button[data-tool="2"]').click());
+    await page.waitForFunction(() => window.coiffure.tool === 2);
+    await dragWorld(page, [0.05, -0.1, -0.06], [-0.05, -0.1, -0.06], 40, 40);
+    await page.waitForFunction(() => window.coiffure.cutMin < 0.99, null, { timeout: 10_000 });
+    await page.screenshot({ path: join(artifacts, 'after-scissors.png') });
+  });
+
+  test('the sprayer wets the hair and the dryer lowers the wetness', async () => {
+    await page.evaluate(() => document.querySelector('button[data-tool="4"]').click());
+    await page.waitForFunction(() => window.coiffure.tool === 4);
+    await dragWorld(page, [0.0, -0.1, 0.02], [0.0, -0.1, -0.04], 40, 50);
+    await page.waitForTimeout(300);
+    const wet = await page.evaluate(() => window.coiffure.wetnessMean);
+    assert.ok(wet > 0, `wetness after spraying ${wet}`);
+    await page.screenshot({ path: join(artifacts, 'after-sprayer.png') });
+    await page.evaluate(() => document.querySelector('button[data-tool="3"]').click());
+    await page.waitForFunction(() => window.coiffure.tool === 3);
+    await dragWorld(page, [0.0, -0.1, 0.02], [0.0, -0.1, -0.04], 40, 50);
+    await page.waitForTimeout(300);
+    const dried = await page.evaluate(() => window.coiffure.wetnessMean);
+    console.log('wetness', { wet, dried });
+    assert.ok(dried < wet, `wetness after drying ${dried} < ${wet}`);
+  });
+
+  test('a second viewer watches; it controls only after TAKE_CONTROL', async () => {
+    const { page: second } = await openViewer(browser, server.url);
+    await second.waitForFunction(() => window.coiffure.viewers === 2);
+    assert.equal(await second.evaluate(() => window.coiffure.youControl), false);
+    await second.evaluate(() => window.coiffure.send(new Uint8Array([0x05, 1]).buffer)); // RESET from a watcher
+    await second.waitForFunction(() => window.coiffure.errors.some((e) => e.code === 4), null, { timeout: 10_000 });
+    await second.evaluate(() => document.getElementById('take').click());
+    await second.waitForFunction(() => window.coiffure.youControl === true, null, { timeout: 10_000 });
+    await page.waitForFunction(() => window.coiffure.youControl === false, null, { timeout: 10_000 });
+    await second.close();
+    await page.waitForFunction(() => window.coiffure.youControl === true, null, { timeout: 10_000 });
+  });
+});

@@ -459,18 +459,19 @@ impl LatticeModel {
                 let target = head * self.rest[i];
                 let f = self.masses[i] * p.gravity
                     - a * (p.attachment_stiffness * (x[i] - target) + p.attachment_damping * v[i]);
-                ws.force[i] = f;
+                // force[i] holds f - dt K' v (K' v of the attachment: a k_a v_i)
+                ws.force[i] = f - (dt * a * p.attachment_stiffness) * v[i];
             }
             for s in &self.stiffeners {
+                let dv = v[s.j] - v[s.i];
+                // -dt K' v of the stiffener on node i: dt k_s (v_j - v_i) (on j: the opposite)
+                let mut f = (dt * s.stiffness) * dv;
                 let d = x[s.j] - x[s.i];
                 let len = d.norm();
-                if len <= 0.0 {
-                    continue;
+                if len > 0.0 {
+                    let u = d * (1.0 / len);
+                    f += (s.stiffness * (len - s.rest_length) + s.damping * dv.dot(&u)) * u;
                 }
-                let u = d / len;
-                let f = (s.stiffness * (len - s.rest_length)
-                    + s.damping * (v[s.j] - v[s.i]).dot(&u))
-                    * u;
                 ws.force[s.i] += f;
                 ws.force[s.j] -= f;
             }
@@ -500,13 +501,7 @@ impl LatticeModel {
             // b = dt (f - dt K' v) (column-major n x 3: all x, then all y, then all z)
             for c in 0..3 {
                 for i in 0..n {
-                    ws.v_col[c * n + i] = v[i][c];
-                }
-            }
-            factor.k.mul_cols(&ws.v_col, &mut ws.tmp);
-            for c in 0..3 {
-                for i in 0..n {
-                    ws.b[c * n + i] = dt * (ws.force[i][c] - dt * ws.tmp[c * n + i]);
+                    ws.b[c * n + i] = dt * ws.force[i][c];
                 }
             }
             for ct in &ws.contacts {
@@ -661,11 +656,10 @@ fn grid_nested_dissection(nx: usize, ny: usize, nz: usize, reach: usize) -> Vec<
     out
 }
 
-/// The constant part of the implicit system for one model and step: K' and A = M + dt C' +
+/// The constant part of the implicit system for one model and step: A = M + dt C' +
 /// dt^2 K' (scalar, shared by the three axes), and A's sparse Cholesky factorisation
 /// (symbolic part and values of L, faer's low-level API so the solve's scratch can be kept).
 struct Factor {
-    k: ScalarCsr,
     a: ScalarCsr,
     symbolic: faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
     l_values: Vec<f64>,
@@ -676,12 +670,10 @@ impl Factor {
         use faer::sparse::linalg::cholesky as chol;
         let n = model.node_count();
         let p = &model.params;
-        let mut ke = Vec::with_capacity(2 * model.stiffeners.len() + n);
         let mut ae = Vec::with_capacity(2 * model.stiffeners.len() + n);
         for i in 0..n {
             let a = model.attachment[i];
             let kd = a * p.attachment_stiffness;
-            ke.push((i as u32, i as u32, kd));
             ae.push((
                 i as u32,
                 i as u32,
@@ -692,11 +684,9 @@ impl Factor {
             let (i, j) = (s.i as u32, s.j as u32);
             let sa = dt * s.damping + dt * dt * s.stiffness;
             for (r, c, sign) in [(i, i, 1.0), (j, j, 1.0), (i, j, -1.0), (j, i, -1.0)] {
-                ke.push((r, c, sign * s.stiffness));
                 ae.push((r, c, sign * sa));
             }
         }
-        let k = ScalarCsr::from_entries(n, ke);
         let a = ScalarCsr::from_entries(n, ae);
         let mut trip = Vec::with_capacity(a.val.len());
         for r in 0..n {
@@ -766,7 +756,6 @@ impl Factor {
             )
             .expect("M + dt C' + dt^2 K' is symmetric positive definite (masses > 0)");
         Factor {
-            k,
             a,
             symbolic,
             l_values,
@@ -837,8 +826,6 @@ struct Contact {
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct StepWork {
     force: Vec<Vector3<f64>>,
-    v_col: Vec<f64>,
-    tmp: Vec<f64>,
     b: Vec<f64>,
     x: Vec<f64>,
     r: Vec<f64>,
@@ -854,8 +841,6 @@ impl StepWork {
         if self.force.len() != n {
             self.force = vec![Vector3::zeros(); n];
             for v in [
-                &mut self.v_col,
-                &mut self.tmp,
                 &mut self.b,
                 &mut self.x,
                 &mut self.r,

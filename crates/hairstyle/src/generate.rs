@@ -172,101 +172,111 @@ impl Default for HairstyleParams {
 impl HairstyleParams {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), GenerateError> {
-        let bad = |field, reason: String| Err(GenerateError::InvalidParameter { field, reason });
         if HairType::by_name(&self.hair_type).is_none() {
             let names: Vec<&str> = HairType::ALL.iter().map(|h| h.name).collect();
-            return bad(
-                "hair_type",
-                format!(
-                    "unknown preset {:?}; known: {}",
-                    self.hair_type,
-                    names.join(", ")
-                ),
+            let reason = format!(
+                "unknown preset {:?}; known: {}",
+                self.hair_type,
+                names.join(", ")
             );
+            return Err(GenerateError::InvalidParameter {
+                field: "hair_type",
+                reason,
+            });
         }
-        if !(self.length > 0.0 && self.length <= 2.0) {
-            return bad(
+        // Each rule: (holds, field, what the field must be, the value given).
+        let rules: [(bool, &'static str, &str, String); 14] = [
+            (
+                self.length > 0.0 && self.length <= 2.0,
                 "length",
-                format!("must be in (0, 2] m, got {}", self.length),
-            );
-        }
-        if !(0.0..=1.0).contains(&self.curliness) {
-            return bad(
+                "in (0, 2] m",
+                format!("{}", self.length),
+            ),
+            (
+                (0.0..=1.0).contains(&self.curliness),
                 "curliness",
-                format!("must be in [0, 1], got {}", self.curliness),
-            );
-        }
-        if !(1..=100_000).contains(&self.guide_count) {
-            return bad(
+                "in [0, 1]",
+                format!("{}", self.curliness),
+            ),
+            (
+                (1..=100_000).contains(&self.guide_count),
                 "guide_count",
-                format!("must be in 1..=100000, got {}", self.guide_count),
-            );
-        }
-        if !(1..=256).contains(&self.guide_segments) {
-            return bad(
+                "in 1..=100000",
+                format!("{}", self.guide_count),
+            ),
+            (
+                (1..=256).contains(&self.guide_segments),
                 "guide_segments",
-                format!("must be in 1..=256, got {}", self.guide_segments),
-            );
-        }
-        if self.render_count > 10_000_000 {
-            return bad(
+                "in 1..=256",
+                format!("{}", self.guide_segments),
+            ),
+            (
+                self.render_count <= 10_000_000,
                 "render_count",
-                format!("must be at most 10,000,000, got {}", self.render_count),
-            );
-        }
-        if !(2..=1024).contains(&self.render_vertices) {
-            return bad(
+                "at most 10,000,000",
+                format!("{}", self.render_count),
+            ),
+            (
+                (2..=1024).contains(&self.render_vertices),
                 "render_vertices",
-                format!("must be in 2..=1024, got {}", self.render_vertices),
-            );
-        }
-        if !(1..=8).contains(&self.guides_per_render) || self.guides_per_render > self.guide_count {
-            return bad(
+                "in 2..=1024",
+                format!("{}", self.render_vertices),
+            ),
+            (
+                (1..=8).contains(&self.guides_per_render)
+                    && self.guides_per_render <= self.guide_count,
                 "guides_per_render",
-                format!(
-                    "must be in 1..=8 and at most guide_count, got {}",
-                    self.guides_per_render
-                ),
-            );
-        }
-        if !(2..=4096).contains(&self.guide_samples) {
-            return bad(
+                "in 1..=8 and at most guide_count",
+                format!("{}", self.guides_per_render),
+            ),
+            (
+                (2..=4096).contains(&self.guide_samples),
                 "guide_samples",
-                format!("must be in 2..=4096, got {}", self.guide_samples),
-            );
-        }
-        if !(0.0..1.0).contains(&self.length_jitter) {
-            return bad(
+                "in 2..=4096",
+                format!("{}", self.guide_samples),
+            ),
+            (
+                (0.0..1.0).contains(&self.length_jitter),
                 "length_jitter",
-                format!("must be in [0, 1), got {}", self.length_jitter),
-            );
-        }
-        if !(self.lift > 0.0 && self.lift.is_finite()) {
-            return bad("lift", format!("must be > 0 m, got {}", self.lift));
-        }
-        if !(self.clearance >= 0.0 && self.clearance.is_finite()) {
-            return bad(
+                "in [0, 1)",
+                format!("{}", self.length_jitter),
+            ),
+            (
+                self.lift > 0.0 && self.lift.is_finite(),
+                "lift",
+                "> 0 m",
+                format!("{}", self.lift),
+            ),
+            (
+                self.clearance >= 0.0 && self.clearance.is_finite(),
                 "clearance",
-                format!("must be >= 0 m, got {}", self.clearance),
-            );
-        }
-        if !(self.flow.iter().all(|x| x.is_finite()) && self.flow.norm() > 0.0) {
-            return bad(
+                ">= 0 m",
+                format!("{}", self.clearance),
+            ),
+            (
+                self.flow.iter().all(|x| x.is_finite()) && self.flow.norm() > 0.0,
                 "flow",
-                format!("must be a finite non-zero vector, got {:?}", self.flow),
-            );
-        }
-        if !(self.hang_tilt.abs() <= std::f64::consts::FRAC_PI_2) {
-            return bad(
+                "a finite non-zero vector",
+                format!("{:?}", self.flow),
+            ),
+            (
+                self.hang_tilt.abs() <= std::f64::consts::FRAC_PI_2,
                 "hang_tilt",
-                format!("must be in [-pi/2, pi/2] rad, got {}", self.hang_tilt),
-            );
-        }
-        if !(self.max_curl_amplitude >= 0.0 && self.max_curl_amplitude.is_finite()) {
-            return bad(
+                "in [-pi/2, pi/2] rad",
+                format!("{}", self.hang_tilt),
+            ),
+            (
+                self.max_curl_amplitude >= 0.0 && self.max_curl_amplitude.is_finite(),
                 "max_curl_amplitude",
-                format!("must be >= 0 m, got {}", self.max_curl_amplitude),
-            );
+                ">= 0 m",
+                format!("{}", self.max_curl_amplitude),
+            ),
+        ];
+        if let Some((_, field, rule, got)) = rules.into_iter().find(|r| !r.0) {
+            return Err(GenerateError::InvalidParameter {
+                field,
+                reason: format!("must be {rule}, got {got}"),
+            });
         }
         self.head.validate()?;
         Ok(())

@@ -1,8 +1,9 @@
 //! Benchmark of the haptic loop: a comb drawn at 0.2 m/s through N hanging strands of 16 segments (full
 //! model, constraint contacts), 1 kHz, one haptic thread. Prints step-time mean, p99, p99.9, max and deadline
 //! misses, then the mean time per step of each phase of the interaction step. Run:
-//! `cargo run --release -p coiffure-engine --example haptic_loop_bench [-- [full|reduced] N...]`
-//! (default: full model, 16 32 64 strands).
+//! `cargo run --release -p coiffure-engine --example haptic_loop_bench [-- [full|reduced] [nobatch] N...]`
+//! (default: full model, 16 32 64 strands). Reduced strands are prepared four at a time (SIMD batches,
+//! `LocalInteraction::use_batches`) unless `nobatch` is given.
 
 use engine::local_session::run_local_session;
 use haptics::backends::ScriptedDevice;
@@ -18,7 +19,8 @@ fn main() {
     let kind = if args.iter().any(|a| a == "reduced") { ModelKind::Reduced } else { ModelKind::Full };
     let counts: Vec<usize> = args.iter().filter_map(|a| a.parse().ok()).collect();
     let counts = if counts.is_empty() { vec![16, 32, 64] } else { counts };
-    println!("model: {kind:?}");
+    let batches = !args.iter().any(|a| a == "nobatch");
+    println!("model: {kind:?}, batches: {batches}");
     println!("| strands x 16 segments | steps | step mean | p99 | p99.9 | max | misses | contact steps | peak device force | peak hair force |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
     let mut phases = Vec::new();
@@ -32,7 +34,8 @@ fn main() {
             })
             .collect();
         let pose = ToolPose { position: Vector3::new(0.0004, -0.02, 0.22), rotation: Matrix3::identity() };
-        let it = LocalInteraction::new(strands, ToolShape::builtin("comb").unwrap(), pose, ForceModel::Constraint { friction: h.friction_coefficient(), options: Default::default() });
+        let mut it = LocalInteraction::new(strands, ToolShape::builtin("comb").unwrap(), pose, ForceModel::Constraint { friction: h.friction_coefficient(), options: Default::default() });
+        it.use_batches = batches;
         let script = |t: f64| Some(DeviceReading { time: t, position: Vector3::new(0.0004, -0.02 + 0.2 * t, 0.22), rotation: Matrix3::identity(), buttons: 0 });
         let steps = 2000;
         let (s, dev, c) = run_local_session(1000.0, ScriptedDevice::new(script), DeviceProfile::PHANTOM_DESKTOP, it, steps).unwrap();

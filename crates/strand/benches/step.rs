@@ -1,9 +1,11 @@
 //! Cost of one 1 ms step against the number of segments, both models, one core.
 //! Run: `cargo bench -p coiffure-strand --bench step`. Throughput is reported in segment-steps per second.
+//! `batch_1ms/Reduced` steps 4 reduced strands at once ([`strand::StrandBatch`], SIMD lanes); its time is per
+//! batch of 4 and its throughput counts the segment-steps of all 4 strands.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use nalgebra::Vector3;
-use strand::{HairType, ModelKind, RootFrame, Strand, StrandModel};
+use strand::{HairType, ModelKind, RootFrame, Strand, StrandBatch, StrandModel};
 
 fn strand(kind: ModelKind, segments: usize) -> Strand {
     let h = HairType::CAUCASIAN;
@@ -38,9 +40,28 @@ fn step(c: &mut Criterion) {
     }
 }
 
+fn batch(c: &mut Criterion) {
+    let mut group = c.benchmark_group("batch_1ms/Reduced");
+    for n in [4usize, 8, 16, 32, 64] {
+        group.throughput(Throughput::Elements(4 * n as u64));
+        let fresh = || (0..4).map(|_| strand(ModelKind::Reduced, n)).collect::<Vec<_>>();
+        let mut strands = fresh();
+        let mut batch = StrandBatch::new(n, 2);
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                let mut refs: Vec<&mut Strand> = strands.iter_mut().collect();
+                if batch.step(1e-3, &mut refs, &[]).is_err() {
+                    strands = fresh();
+                }
+            })
+        });
+    }
+    group.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().sample_size(30).measurement_time(std::time::Duration::from_secs(2)).warm_up_time(std::time::Duration::from_millis(500));
-    targets = step
+    targets = step, batch
 }
 criterion_main!(benches);

@@ -28,7 +28,7 @@ use crate::model::{gauss_legendre, StrandModel};
 use crate::state::StrandState;
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix3xX, Matrix6, SMatrix, SVector, Vector3};
 
-type Vector6 = SVector<f64, 6>;
+pub(crate) type Vector6 = SVector<f64, 6>;
 
 /// A force (and a torque) applied to the strand at arc length `s` (m from the root), world axes.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -116,27 +116,27 @@ impl Inertia {
 
 /// Kinematics of a frame: pose relative to the root origin, velocity and velocity-product acceleration.
 #[derive(Debug, Clone, Copy)]
-struct Motion {
-    rot: Matrix3<f64>,
-    x: Vector3<f64>,
-    v: Vector3<f64>,
-    a: Vector3<f64>,
-    w: Vector3<f64>,
-    alpha: Vector3<f64>,
+pub(crate) struct Motion {
+    pub(crate) rot: Matrix3<f64>,
+    pub(crate) x: Vector3<f64>,
+    pub(crate) v: Vector3<f64>,
+    pub(crate) a: Vector3<f64>,
+    pub(crate) w: Vector3<f64>,
+    pub(crate) alpha: Vector3<f64>,
 }
 
 /// A point inside segment `i` at arc length `sigma`: its motion and its own Jacobian columns
 /// (angular `w_k` and linear `u_k` velocity per unit `qdot_k` of that segment; `D` = 2 or 3 coordinates).
-struct PointKinematics<const D: usize> {
-    motion: Motion,
-    w_cols: SMatrix<f64, 3, D>,
-    u_cols: SMatrix<f64, 3, D>,
+pub(crate) struct PointKinematics<const D: usize> {
+    pub(crate) motion: Motion,
+    pub(crate) w_cols: SMatrix<f64, 3, D>,
+    pub(crate) u_cols: SMatrix<f64, 3, D>,
 }
 
 /// Pose, velocity and acceleration of the point at `sigma` in a segment starting at `start`, for a segment
 /// with `D` coordinates (`q`, `qdot` beyond `D` are zero).
 #[inline(always)]
-fn point_kinematics<const D: usize>(start: &Motion, q: &Vector3<f64>, qdot: &Vector3<f64>, sigma: f64) -> PointKinematics<D> {
+pub(crate) fn point_kinematics<const D: usize>(start: &Motion, q: &Vector3<f64>, qdot: &Vector3<f64>, sigma: f64) -> PointKinematics<D> {
     let sp = segment_kinematics(q, qdot, sigma);
     let r = start.rot * sp.offset;
     let qd = qdot.fixed_rows::<D>(0);
@@ -267,7 +267,7 @@ pub struct Dynamics {
     pub elastic_energy: f64,
 }
 
-fn wrench(force: &Vector3<f64>, torque: &Vector3<f64>, x: &Vector3<f64>) -> Vector6 {
+pub(crate) fn wrench(force: &Vector3<f64>, torque: &Vector3<f64>, x: &Vector3<f64>) -> Vector6 {
     let t = x.cross(force) + torque;
     Vector6::new(t.x, t.y, t.z, force.x, force.y, force.z)
 }
@@ -303,6 +303,14 @@ impl Dynamics {
             gravity_energy: 0.0,
             elastic_energy: 0.0,
         }
+    }
+
+    /// Sets segment `i`'s motion subspace and articulated-solve workspace `(U, D^-1, c)` (padded to 3 columns),
+    /// as [`Dynamics::sweep`] and [`Dynamics::solve_articulated`] would have left them; used by
+    /// [`crate::batch::StrandBatch`] to hand a lane's prepared step to the scalar constraint solver.
+    pub(crate) fn set_segment_solver(&mut self, i: usize, motion: Twists, articulated: (Twists, Matrix3<f64>, Vector3<f64>)) {
+        self.motion[i] = motion;
+        self.articulated[i] = articulated;
     }
 
     /// Total energy (kinetic + gravitational + elastic), J.

@@ -72,6 +72,12 @@ impl Strand {
         Ok(Self { model, state, integrator: Integrator::default(), dynamics, clamped_steps: 0, system: DMatrix::zeros(n, n), rhs: DVector::zeros(n), prepared: None })
     }
 
+    /// Whether a step begun by [`Strand::prepare_step`] (or [`crate::batch::StrandBatch::prepare`]) waits for
+    /// [`Strand::finish_step`].
+    pub fn has_prepared_step(&self) -> bool {
+        self.prepared.is_some()
+    }
+
     /// Total energy (kinetic + gravity + elastic) at the current state, J.
     pub fn energy(&mut self) -> f64 {
         self.dynamics.evaluate(&self.model, &self.state, &[], false);

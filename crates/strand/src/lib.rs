@@ -25,6 +25,7 @@
 //! ```
 
 pub mod analytic;
+pub mod batch;
 pub mod constraint;
 pub mod dynamics;
 pub mod error;
@@ -43,6 +44,7 @@ pub mod state;
 pub mod statics;
 pub mod styling;
 
+pub use batch::StrandBatch;
 pub use dynamics::PointForce;
 pub use error::StrandError;
 pub use hair_type::HairType;

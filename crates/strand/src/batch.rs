@@ -1,0 +1,971 @@
+//! Four reduced strands stepped at once, lane-parallel (SIMD, `f64x4`).
+//!
+//! [`StrandBatch`] performs exactly the linearly implicit Euler step of [`Strand::step`] for up to
+//! [`LANES`] reduced strands with the same number of segments and Gauss points: the same root-to-tip sweep
+//! (closed-form helix, velocity-product terms, gravity, air drag, rotary inertia, point forces), the same
+//! tip-to-root force sweep, elastic and damping forces, and the same O(N) articulated-body solve of
+//! `(M (1 + h c) + (h tau + h^2) K) dqdot = h F - h^2 K qdot`. Each lane holds one strand's numbers; the lanes
+//! never mix, so the strands may differ in length, section, material, rest shape, environment, root motion
+//! and point forces. The results equal the scalar step's to round-off (the sine and cosine of the SIMD
+//! library differ from the C library's in the last bits).
+//!
+//! The step is split as in the scalar constraint solver: [`StrandBatch::prepare`] evaluates the dynamics and
+//! the unconstrained velocities of every lane and leaves each strand with a prepared step (its
+//! `dynamics.frames` and `dynamics.points` sample the current centreline, as after [`Strand::prepare_step`]);
+//! [`Strand::finish_step`] then commits it. A strand that turns out to need constraints gets the lane's solver
+//! workspace with [`StrandBatch::hand_over`], so that `finish_step` with constraints runs without a second
+//! evaluation. [`StrandBatch::step`] is prepare and commit in one.
+//!
+//! Speed needs 256-bit registers: build with AVX2 (the workspace's `.cargo/config.toml` sets
+//! `target-cpu=x86-64-v3`); with SSE2 only, each `f64x4` operation is two 128-bit ones.
+
+use crate::constraint::ConstraintOptions;
+use crate::dynamics::{point_kinematics, wrench, Motion, PointForce};
+use crate::error::{Result, StrandError};
+use crate::integrator::{Integrator, Strand};
+use crate::kinematics::{locate, Frame, Twists};
+use crate::model::ModelKind;
+use nalgebra::{DVector, Matrix3, Vector3};
+use std::ops::{Add, AddAssign, Mul, Neg, Sub};
+use wide::{f64x4, CmpGt, CmpLt};
+
+/// Strands per batch (SIMD lanes).
+pub const LANES: usize = 4;
+
+type L = f64x4;
+
+#[inline(always)]
+fn sp(x: f64) -> L {
+    L::splat(x)
+}
+
+#[inline(always)]
+fn lane(x: L, j: usize) -> f64 {
+    x.as_array_ref()[j]
+}
+
+/// A 3-vector of lanes.
+#[derive(Debug, Clone, Copy)]
+struct V3 {
+    x: L,
+    y: L,
+    z: L,
+}
+
+impl V3 {
+    #[inline(always)]
+    fn new(x: L, y: L, z: L) -> Self {
+        Self { x, y, z }
+    }
+    #[inline(always)]
+    fn zero() -> Self {
+        Self::new(sp(0.0), sp(0.0), sp(0.0))
+    }
+    #[inline(always)]
+    fn dot(self, o: V3) -> L {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    #[inline(always)]
+    fn cross(self, o: V3) -> V3 {
+        V3::new(self.y * o.z - self.z * o.y, self.z * o.x - self.x * o.z, self.x * o.y - self.y * o.x)
+    }
+    #[inline(always)]
+    fn cmul(self, o: V3) -> V3 {
+        V3::new(self.x * o.x, self.y * o.y, self.z * o.z)
+    }
+    #[inline(always)]
+    fn norm_squared(self) -> L {
+        self.dot(self)
+    }
+    fn gather(v: [Vector3<f64>; LANES]) -> Self {
+        V3::new(L::from([v[0].x, v[1].x, v[2].x, v[3].x]), L::from([v[0].y, v[1].y, v[2].y, v[3].y]), L::from([v[0].z, v[1].z, v[2].z, v[3].z]))
+    }
+    #[inline(always)]
+    fn lane(self, j: usize) -> Vector3<f64> {
+        Vector3::new(lane(self.x, j), lane(self.y, j), lane(self.z, j))
+    }
+}
+
+impl Add for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn add(self, o: V3) -> V3 {
+        V3::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+impl AddAssign for V3 {
+    #[inline(always)]
+    fn add_assign(&mut self, o: V3) {
+        *self = *self + o;
+    }
+}
+impl Sub for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn sub(self, o: V3) -> V3 {
+        V3::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+impl Neg for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn neg(self) -> V3 {
+        V3::new(-self.x, -self.y, -self.z)
+    }
+}
+impl Mul<L> for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn mul(self, s: L) -> V3 {
+        V3::new(self.x * s, self.y * s, self.z * s)
+    }
+}
+
+/// A 3x3 matrix of lanes, row-major.
+#[derive(Debug, Clone, Copy)]
+struct M3 {
+    r: [[L; 3]; 3],
+}
+
+impl M3 {
+    #[inline(always)]
+    fn mul_v(&self, v: V3) -> V3 {
+        let r = &self.r;
+        V3::new(r[0][0] * v.x + r[0][1] * v.y + r[0][2] * v.z, r[1][0] * v.x + r[1][1] * v.y + r[1][2] * v.z, r[2][0] * v.x + r[2][1] * v.y + r[2][2] * v.z)
+    }
+    /// `self^T v`.
+    #[inline(always)]
+    fn tr_mul_v(&self, v: V3) -> V3 {
+        let r = &self.r;
+        V3::new(r[0][0] * v.x + r[1][0] * v.y + r[2][0] * v.z, r[0][1] * v.x + r[1][1] * v.y + r[2][1] * v.z, r[0][2] * v.x + r[1][2] * v.y + r[2][2] * v.z)
+    }
+    #[inline(always)]
+    fn mul_m(&self, o: &M3) -> M3 {
+        let mut out = [[sp(0.0); 3]; 3];
+        for (i, row) in out.iter_mut().enumerate() {
+            for (j, x) in row.iter_mut().enumerate() {
+                *x = self.r[i][0] * o.r[0][j] + self.r[i][1] * o.r[1][j] + self.r[i][2] * o.r[2][j];
+            }
+        }
+        M3 { r: out }
+    }
+    fn gather(m: [Matrix3<f64>; LANES]) -> Self {
+        let mut r = [[sp(0.0); 3]; 3];
+        for (i, row) in r.iter_mut().enumerate() {
+            for (j, x) in row.iter_mut().enumerate() {
+                *x = L::from([m[0][(i, j)], m[1][(i, j)], m[2][(i, j)], m[3][(i, j)]]);
+            }
+        }
+        M3 { r }
+    }
+    fn lane(&self, k: usize) -> Matrix3<f64> {
+        Matrix3::from_fn(|i, j| lane(self.r[i][j], k))
+    }
+}
+
+/// Motion of a frame, lane-wise (see `dynamics::Motion`).
+#[derive(Debug, Clone, Copy)]
+struct MotionL {
+    rot: M3,
+    x: V3,
+    v: V3,
+    a: V3,
+    w: V3,
+    alpha: V3,
+}
+
+impl MotionL {
+    fn lane(&self, j: usize) -> Motion {
+        Motion { rot: self.rot.lane(j), x: self.x.lane(j), v: self.v.lane(j), a: self.a.lane(j), w: self.w.lane(j), alpha: self.alpha.lane(j) }
+    }
+}
+
+/// `dynamics::PointKinematics::<2>`, lane-wise.
+struct PointL {
+    motion: MotionL,
+    w_cols: [V3; 2],
+    u_cols: [V3; 2],
+}
+
+/// Below this `u` the Taylor series of the helix coefficients are used (as in [`crate::helix`]).
+const SERIES_BELOW: f64 = 0.1;
+
+/// `helix::coefficients_with_rates`, lane-wise: `[a, b, c, db, dc, b_dot, c_dot, db_dot, dc_dot]`. Each lane
+/// takes the series or the closed form as the scalar code does; a branch no lane needs is skipped.
+#[inline(always)]
+fn coefficients_with_rates(u: L, u_dot: L) -> [L; 9] {
+    let below = u.cmp_lt(sp(SERIES_BELOW));
+    let series = || {
+        const A: [f64; 6] = [1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0];
+        const B: [f64; 6] = [0.5, -1.0 / 24.0, 1.0 / 720.0, -1.0 / 40320.0, 1.0 / 3628800.0, -1.0 / 479001600.0];
+        const C: [f64; 6] = [1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0, -1.0 / 6227020800.0];
+        const DB: [f64; 5] = [-1.0 / 24.0, 2.0 / 720.0, -3.0 / 40320.0, 4.0 / 3628800.0, -5.0 / 479001600.0];
+        const DC: [f64; 5] = [-1.0 / 120.0, 2.0 / 5040.0, -3.0 / 362880.0, 4.0 / 39916800.0, -5.0 / 6227020800.0];
+        let horner = |k: &[f64]| {
+            let (mut p, mut dp) = (sp(k[k.len() - 1]), sp(0.0));
+            for &c in k[..k.len() - 1].iter().rev() {
+                dp = dp * u + p;
+                p = p * u + sp(c);
+            }
+            (p, dp * u_dot)
+        };
+        let (b, c, db, dc, a) = (horner(&B), horner(&C), horner(&DB), horner(&DC), horner(&A).0);
+        [a, b.0, c.0, db.0, dc.0, b.1, c.1, db.1, dc.1]
+    };
+    let closed = || {
+        // Forward-mode dual numbers (value, rate) written out.
+        type D = (L, L);
+        let mul = |a: D, b: D| -> D { (a.0 * b.0, a.0 * b.1 + a.1 * b.0) };
+        let div = |a: D, b: D| -> D {
+            let inv = sp(1.0) / b.0;
+            (a.0 * inv, (a.1 * b.0 - a.0 * b.1) * inv * inv)
+        };
+        let sub = |a: D, b: D| -> D { (a.0 - b.0, a.1 - b.1) };
+        let scale = |a: D, s: f64| -> D { (a.0 * sp(s), a.1 * sp(s)) };
+        let ud: D = (u, u_dot);
+        let tr = u.sqrt();
+        let t: D = (tr, u_dot * (sp(0.5) / tr));
+        let (sn, cs) = t.0.sin_cos();
+        let s: D = (sn, t.1 * cs);
+        let one_minus_cos: D = (sp(1.0) - cs, t.1 * sn);
+        let b = div(one_minus_cos, ud);
+        let c = div(sub(t, s), mul(ud, t));
+        let uu2 = scale(mul(ud, ud), 2.0);
+        let db = div(sub(mul(t, s), scale(one_minus_cos, 2.0)), uu2);
+        let dc = div(sub(mul(t, one_minus_cos), scale(sub(t, s), 3.0)), mul(uu2, t));
+        [s.0 / t.0, b.0, c.0, db.0, dc.0, b.1, c.1, db.1, dc.1]
+    };
+    if below.all() {
+        series()
+    } else if below.none() {
+        closed()
+    } else {
+        let (s, c) = (series(), closed());
+        std::array::from_fn(|k| below.blend(s[k], c[k]))
+    }
+}
+
+/// What `helix::segment_kinematics` gives, lane-wise, for the reduced model (only the first two columns of
+/// the derivatives).
+struct SegmentL {
+    rotation: M3,
+    offset: V3,
+    angular: [V3; 2],
+    linear: [V3; 2],
+    angular_bias: V3,
+    linear_bias: V3,
+}
+
+/// `helix::segment_kinematics` lane-wise (same formulas, see there).
+#[inline(always)]
+fn segment_kinematics(omega: V3, rate: V3, sigma: L) -> SegmentL {
+    let zero = sp(0.0);
+    let two = sp(2.0);
+    let phi = omega * sigma;
+    let phi_dot = rate * sigma;
+    let nu = rate;
+    let u = phi.norm_squared();
+    let pn = phi.dot(nu);
+    let u_dot = two * sigma * pn;
+    let [a, b, c, db, dc, b_dot, c_dot, db_dot, dc_dot] = coefficients_with_rates(u, u_dot);
+    let (p0, p1, p2) = (phi.x, phi.y, phi.z);
+    let pe = V3::new(zero, p2, -p1);
+    let ppe = V3::new(p0 * p0 - u, p0 * p1, p0 * p2);
+    // E = 1 + a K + b (phi phi^T - u 1).
+    let diag = sp(1.0) - b * u;
+    let rotation = M3 {
+        r: [
+            [p0 * p0 * b + diag, -p2 * a + p0 * p1 * b, p1 * a + p0 * p2 * b],
+            [p2 * a + p1 * p0 * b, p1 * p1 * b + diag, -p0 * a + p1 * p2 * b],
+            [-p1 * a + p2 * p0 * b, p0 * a + p2 * p1 * b, p2 * p2 * b + diag],
+        ],
+    };
+    // angular = sigma (1 + b K + c (phi phi^T - u 1)), first two columns.
+    let diag = sp(1.0) - c * u;
+    let angular = [
+        V3::new(p0 * p0 * c + diag, p2 * b + p1 * p0 * c, -p1 * b + p2 * p0 * c) * sigma,
+        V3::new(-p2 * b + p0 * p1 * c, p1 * p1 * c + diag, p0 * b + p2 * p1 * c) * sigma,
+    ];
+    let offset = (V3::new(sp(1.0), zero, zero) + pe * b + ppe * c) * sigma;
+    // linear = sigma^2 [g phi^T - c [[0, 2 p1, 2 p2], [-p1, -p0, 0], [-p2, 0, -p0]] - b [e0]x], two columns.
+    let g = pe * (two * db) + ppe * (two * dc);
+    let s2 = sigma * sigma;
+    let linear = [
+        V3::new(g.x * p0, g.y * p0 + p1 * c, g.z * p0 + p2 * c) * s2,
+        V3::new(g.x * p1 - two * p1 * c, g.y * p1 + p0 * c, g.z * p1 - b) * s2,
+    ];
+    let pnu = phi.cross(nu);
+    let angular_bias = (pnu * b_dot + phi.cross(pnu) * c_dot + nu.cross(pnu) * (c * sigma)) * sigma;
+    let p_dot = sigma * nu.norm_squared();
+    let nue = V3::new(zero, nu.z, -nu.y);
+    let pde = V3::new(zero, phi_dot.z, -phi_dot.y);
+    let linear_bias = (pe * (two * (db_dot * pn + db * p_dot))
+        + pde * (two * db * pn)
+        + nue * b_dot
+        + ppe * (two * (dc_dot * pn + dc * p_dot))
+        + (phi_dot.cross(pe) + phi.cross(pde)) * (two * dc * pn)
+        + (nu.cross(pe) + phi.cross(nue)) * c_dot
+        + nu.cross(nue) * (two * c * sigma))
+        * s2;
+    SegmentL { rotation, offset, angular, linear, angular_bias, linear_bias }
+}
+
+/// `dynamics::point_kinematics::<2>` lane-wise.
+#[inline(always)]
+fn point_kinematics_l(start: &MotionL, omega: V3, rate: V3, sigma: L) -> PointL {
+    let sk = segment_kinematics(omega, rate, sigma);
+    let r = start.rot.mul_v(sk.offset);
+    let w_cols = [start.rot.mul_v(sk.angular[0]), start.rot.mul_v(sk.angular[1])];
+    let u_cols = [start.rot.mul_v(sk.linear[0]), start.rot.mul_v(sk.linear[1])];
+    let w_loc = w_cols[0] * rate.x + w_cols[1] * rate.y;
+    let v_loc = u_cols[0] * rate.x + u_cols[1] * rate.y;
+    let motion = MotionL {
+        rot: start.rot.mul_m(&sk.rotation),
+        x: start.x + r,
+        v: start.v + start.w.cross(r) + v_loc,
+        a: start.a + start.alpha.cross(r) + start.w.cross(start.w.cross(r) + v_loc * sp(2.0)) + start.rot.mul_v(sk.linear_bias),
+        w: start.w + w_loc,
+        alpha: start.alpha + start.w.cross(w_loc) + start.rot.mul_v(sk.angular_bias),
+    };
+    PointL { motion, w_cols, u_cols }
+}
+
+type L6 = [L; 6];
+
+#[inline(always)]
+fn dot6(a: &L6, b: &L6) -> L {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5]
+}
+
+/// Index of the symmetric 3x3 entry `(a, b)` in a 6-array `(00, 10, 20, 11, 21, 22)`.
+#[inline(always)]
+fn sym(a: usize, b: usize) -> usize {
+    let (a, b) = if a >= b { (a, b) } else { (b, a) };
+    match (a, b) {
+        (0, 0) => 0,
+        (1, 0) => 1,
+        (2, 0) => 2,
+        (1, 1) => 3,
+        (2, 1) => 4,
+        _ => 5,
+    }
+}
+
+/// Per-segment workspace (every field one value per lane).
+#[derive(Debug, Clone, Copy)]
+struct Segment {
+    /// Coordinates (twist, bend) and their rates.
+    q: [L; 2],
+    qdot: [L; 2],
+    rest: [L; 2],
+    /// Motion subspace: the two twists `(omega; v)` about the root position.
+    motion: [L6; 2],
+    q_own: [L; 2],
+    f_own: [L6; 2],
+    /// Own mass block `(00, 01, 11)`.
+    m_own: [L; 3],
+    wrench: L6,
+    /// Rigid inertia: mass, first moment, rotational inertia about the origin (symmetric, see [`sym`]).
+    mass: L,
+    first: V3,
+    inertia: L6,
+    /// Generalized forces, then the right-hand side, then the velocity change.
+    force: [L; 2],
+    b: [L; 2],
+    /// Articulated solve: `U` (two columns), `D^-1` `(00, 01, 11)`, `c`.
+    u: [L6; 2],
+    dinv: [L; 3],
+    c: [L; 2],
+}
+
+impl Segment {
+    fn zero() -> Self {
+        let z = sp(0.0);
+        Self {
+            q: [z; 2],
+            qdot: [z; 2],
+            rest: [z; 2],
+            motion: [[z; 6]; 2],
+            q_own: [z; 2],
+            f_own: [[z; 6]; 2],
+            m_own: [z; 3],
+            wrench: [z; 6],
+            mass: z,
+            first: V3::zero(),
+            inertia: [z; 6],
+            force: [z; 2],
+            b: [z; 2],
+            u: [[z; 6]; 2],
+            dinv: [z; 3],
+            c: [z; 2],
+        }
+    }
+}
+
+/// Workspace that steps up to [`LANES`] reduced strands of `segments` segments at once (see the module
+/// documentation). Allocate once, reuse every step.
+#[derive(Debug, Clone)]
+pub struct StrandBatch {
+    segments: usize,
+    quadrature_points: usize,
+    segs: Vec<Segment>,
+    frames: Vec<(M3, V3)>,
+    points: Vec<V3>,
+    /// Lanes filled by the last prepare.
+    lanes: usize,
+}
+
+/// Why a set of strands cannot share a batch, or None.
+fn batch_mismatch(segments: usize, quadrature_points: usize, strand: &Strand) -> Option<String> {
+    if strand.model.kind != ModelKind::Reduced {
+        return Some("only reduced strands can be batched".into());
+    }
+    if strand.integrator != Integrator::LinearlyImplicitEuler {
+        return Some("batched strands use the linearly implicit Euler integrator".into());
+    }
+    if strand.model.segments != segments || strand.dynamics.quadrature_nodes().len() != quadrature_points {
+        return Some(format!(
+            "the batch is for {segments} segments and {quadrature_points} Gauss points, the strand has {} and {}",
+            strand.model.segments,
+            strand.dynamics.quadrature_nodes().len()
+        ));
+    }
+    None
+}
+
+impl StrandBatch {
+    /// A workspace for reduced strands of `segments` segments and `quadrature_points` Gauss points per segment
+    /// (the model's `quadrature_points`).
+    pub fn new(segments: usize, quadrature_points: usize) -> Self {
+        let n = segments.max(1);
+        Self {
+            segments,
+            quadrature_points,
+            segs: vec![Segment::zero(); n],
+            frames: Vec::with_capacity(n + 1),
+            points: Vec::with_capacity(n * quadrature_points),
+            lanes: 0,
+        }
+    }
+
+    /// A workspace sized for `strand` (its segments and Gauss points).
+    pub fn for_strand(strand: &Strand) -> Self {
+        Self::new(strand.model.segments, strand.dynamics.quadrature_nodes().len())
+    }
+
+    /// Whether `strand` can be a lane of this batch: reduced model, linearly implicit Euler, the batch's
+    /// segments and Gauss points.
+    pub fn accepts(&self, strand: &Strand) -> bool {
+        batch_mismatch(self.segments, self.quadrature_points, strand).is_none()
+    }
+
+    /// One linearly implicit Euler step of `h` seconds (s) for every strand, each with its own point forces
+    /// (`external[j]` for strand `j`; an empty slice of slices for none). Equal to [`Strand::step`] on each.
+    /// A strand whose step fails keeps its state; the others step; the first error is returned.
+    pub fn step(&mut self, h: f64, strands: &mut [&mut Strand], external: &[&[PointForce]]) -> Result<()> {
+        let mut first = self.prepare(h, strands, external).err();
+        for s in strands.iter_mut() {
+            if s.has_prepared_step() {
+                if let Err(e) = s.finish_step(&[], &ConstraintOptions::default()) {
+                    first.get_or_insert(e);
+                }
+            }
+        }
+        first.map_or(Ok(()), Err)
+    }
+
+    /// First half of the step for every strand (as [`Strand::prepare_step`] on each): evaluates the dynamics
+    /// at the current states and solves the unconstrained velocities. Afterwards each strand has a prepared step
+    /// ([`Strand::has_prepared_step`]) and its `dynamics` holds the frames, Gauss points, generalized forces and
+    /// energies of the current state; complete it with [`Strand::finish_step`] (with constraints only after
+    /// [`StrandBatch::hand_over`]). Errors: more than [`LANES`] or no strands, a strand the batch does not
+    /// accept, bad time step or point forces (then nothing is prepared); a lane whose step matrix is not
+    /// positive definite is left unprepared and its error returned, the other lanes are prepared.
+    pub fn prepare(&mut self, h: f64, strands: &mut [&mut Strand], external: &[&[PointForce]]) -> Result<()> {
+        let lanes = strands.len();
+        if lanes == 0 || lanes > LANES {
+            return Err(StrandError::InvalidParameter { field: "batch", reason: format!("needs 1 to {LANES} strands, got {lanes}") });
+        }
+        if !(external.is_empty() || external.len() == lanes) {
+            return Err(StrandError::InvalidParameter { field: "point force", reason: format!("one list per strand ({lanes}) or none, got {}", external.len()) });
+        }
+        for (j, s) in strands.iter_mut().enumerate() {
+            s.prepared = None;
+            if let Some(reason) = batch_mismatch(self.segments, self.quadrature_points, s) {
+                return Err(StrandError::InvalidParameter { field: "batch", reason: format!("strand {j}: {reason}") });
+            }
+            s.check_step_input(h, external.get(j).copied().unwrap_or(&[]))?;
+        }
+        self.lanes = lanes;
+        let n = self.segments;
+        let nq = self.quadrature_points;
+        // Unused lanes repeat the first strand (their results are dropped).
+        let pick = |j: usize| if j < lanes { j } else { 0 };
+        let per_lane = |f: &dyn Fn(&Strand) -> f64| L::from(std::array::from_fn::<f64, LANES, _>(|j| f(&*strands[pick(j)])));
+        let per_lane3 = |f: &dyn Fn(&Strand) -> Vector3<f64>| V3::gather(std::array::from_fn(|j| f(&*strands[pick(j)])));
+        let l = per_lane(&|s| s.model.segment_length());
+        let rho_a = per_lane(&|s| s.model.linear_density());
+        let rot_inertia = per_lane3(&|s| s.model.rotary_inertia());
+        let drag_rate = per_lane(&|s| s.model.air_drag / s.model.linear_density());
+        let gravity = per_lane3(&|s| s.model.gravity);
+        let origin = per_lane3(&|s| s.state.root.position);
+        let rig_l = per_lane3(&|s| s.model.rigidities() * s.model.segment_length());
+        let rig_step = per_lane3(&|s| s.model.rigidities() * (s.model.segment_length() * (h * s.model.damping + h * h)));
+        let damping = per_lane(&|s| s.model.damping);
+        let scale = per_lane(&|s| 1.0 + h * (s.model.air_drag / s.model.linear_density()));
+        let nodes: Vec<(L, L)> = (0..nq).map(|g| (per_lane(&|s| s.dynamics.quadrature_nodes()[g].0), per_lane(&|s| s.dynamics.quadrature_nodes()[g].1))).collect();
+        for (i, seg) in self.segs.iter_mut().enumerate().take(n) {
+            for k in 0..2 {
+                seg.q[k] = per_lane(&|s| s.state.q[2 * i + k]);
+                seg.qdot[k] = per_lane(&|s| s.state.qdot[2 * i + k]);
+                seg.rest[k] = per_lane(&|s| s.model.rest[i][k]);
+            }
+        }
+        let root = |f: &dyn Fn(&crate::state::RootFrame) -> Vector3<f64>| per_lane3(&|s| f(&s.state.root));
+        let mut start = MotionL {
+            rot: M3::gather(std::array::from_fn(|j| strands[pick(j)].state.root.rotation)),
+            x: V3::zero(),
+            v: root(&|r| r.velocity),
+            a: root(&|r| r.acceleration),
+            w: root(&|r| r.angular_velocity),
+            alpha: root(&|r| r.angular_acceleration),
+        };
+        let has_external = external.iter().any(|e| !e.is_empty());
+
+        // Step 1: root-to-tip sweep.
+        self.frames.clear();
+        self.points.clear();
+        let zero = sp(0.0);
+        let half = sp(0.5);
+        let mut kinetic = zero;
+        let mut gravity_energy = zero;
+        for i in 0..n {
+            self.frames.push((start.rot, start.x + origin));
+            let seg = &mut self.segs[i];
+            let omega = V3::new(seg.q[0], seg.q[1], zero);
+            let rate = V3::new(seg.qdot[0], seg.qdot[1], zero);
+            seg.q_own = [zero; 2];
+            seg.f_own = [[zero; 6]; 2];
+            seg.m_own = [zero; 3];
+            seg.wrench = [zero; 6];
+            seg.mass = zero;
+            seg.first = V3::zero();
+            seg.inertia = [zero; 6];
+            for &(sigma, weight) in &nodes {
+                let pk = point_kinematics_l(&start, omega, rate, sigma);
+                let p = &pk.motion;
+                self.points.push(p.x + origin);
+                let m = rho_a * weight;
+                let ic = rot_inertia * weight;
+                let w_l = p.rot.tr_mul_v(p.w);
+                let icw_l = ic.cmul(w_l);
+                let f = gravity * m - p.v * (drag_rate * m) - p.a * m;
+                let tau_l = -(icw_l * drag_rate) - (ic.cmul(p.rot.tr_mul_v(p.alpha)) + w_l.cross(icw_l));
+                let tau = p.rot.mul_v(tau_l);
+                for k in 0..2 {
+                    seg.q_own[k] += pk.u_cols[k].dot(f) + pk.w_cols[k].dot(tau);
+                }
+                let t = p.x.cross(f) + tau;
+                for (w, x) in seg.wrench.iter_mut().zip([t.x, t.y, t.z, f.x, f.y, f.z]) {
+                    *w += x;
+                }
+                kinetic += half * (m * p.v.norm_squared() + w_l.dot(icw_l));
+                gravity_energy -= m * gravity.dot(p.x + origin);
+                // Own momentum columns and own mass block (rotary part in the material frame).
+                let w_local = [p.rot.tr_mul_v(pk.w_cols[0]), p.rot.tr_mul_v(pk.w_cols[1])];
+                for a in 0..2 {
+                    let icwa = ic.cmul(w_local[a]);
+                    let u = pk.u_cols[a] * m;
+                    let ang = p.rot.mul_v(icwa) + p.x.cross(u);
+                    for (c, x) in seg.f_own[a].iter_mut().zip([ang.x, ang.y, ang.z, u.x, u.y, u.z]) {
+                        *c += x;
+                    }
+                    for b in 0..=a {
+                        seg.m_own[a + b] += m * pk.u_cols[b].dot(pk.u_cols[a]) + w_local[b].dot(icwa);
+                    }
+                }
+                // Rigid inertia of the point: I_c - m [x]^2 = sum_k ic_k r_k r_k^T + m (|x|^2 1 - x x^T).
+                seg.mass += m;
+                seg.first += p.x * m;
+                let x = [p.x.x, p.x.y, p.x.z];
+                let x2 = p.x.norm_squared();
+                let icv = [ic.x, ic.y, ic.z];
+                for b in 0..3 {
+                    for a in b..3 {
+                        let mut v = -(m * x[a] * x[b]);
+                        if a == b {
+                            v += m * x2;
+                        }
+                        for k in 0..3 {
+                            v += icv[k] * p.rot.r[a][k] * p.rot.r[b][k];
+                        }
+                        seg.inertia[sym(a, b)] += v;
+                    }
+                }
+            }
+            if has_external {
+                // Point forces, lane by lane with the scalar kinematics (few, and only where they act).
+                for (j, forces) in external.iter().enumerate() {
+                    let model = &strands[j].model;
+                    for pf in forces.iter() {
+                        let (seg_index, sigma) = locate(model, pf.s);
+                        if seg_index != i {
+                            continue;
+                        }
+                        let q = Vector3::new(lane(seg.q[0], j), lane(seg.q[1], j), 0.0);
+                        let qdot = Vector3::new(lane(seg.qdot[0], j), lane(seg.qdot[1], j), 0.0);
+                        let pk = point_kinematics::<2>(&start.lane(j), &q, &qdot, sigma);
+                        let q_own = pk.u_cols.tr_mul(&pf.force) + pk.w_cols.tr_mul(&pf.torque);
+                        for k in 0..2 {
+                            seg.q_own[k].as_array_mut()[j] += q_own[k];
+                        }
+                        let wr = wrench(&pf.force, &pf.torque, &pk.motion.x);
+                        for k in 0..6 {
+                            seg.wrench[k].as_array_mut()[j] += wr[k];
+                        }
+                    }
+                }
+            }
+            let end = point_kinematics_l(&start, omega, rate, l);
+            let x = end.motion.x;
+            for k in 0..2 {
+                let w = end.w_cols[k];
+                let v = end.u_cols[k] - w.cross(x);
+                seg.motion[k] = [w.x, w.y, w.z, v.x, v.y, v.z];
+            }
+            start = end.motion;
+        }
+        self.frames.push((start.rot, start.x + origin));
+
+        // Step 2 (forces): tip-to-root suffix sums of the wrenches; step 4: elasticity and damping; the
+        // right-hand side h F - h^2 K qdot.
+        let mut suffix = [zero; 6];
+        for seg in self.segs[..n].iter_mut().rev() {
+            for k in 0..2 {
+                seg.force[k] = seg.q_own[k] + dot6(&seg.motion[k], &suffix);
+            }
+            for (s, w) in suffix.iter_mut().zip(seg.wrench) {
+                *s += w;
+            }
+        }
+        let hh = sp(h);
+        let rig = [rig_l.x, rig_l.y];
+        let mut elastic = zero;
+        for seg in self.segs[..n].iter_mut() {
+            for k in 0..2 {
+                let dq = seg.q[k] - seg.rest[k];
+                elastic += half * rig[k] * dq * dq;
+                seg.force[k] = seg.force[k] - rig[k] * (dq + damping * seg.qdot[k]);
+                seg.b[k] = hh * seg.force[k] - hh * hh * rig[k] * seg.qdot[k];
+            }
+        }
+
+        // The articulated-body solve (see `Dynamics::solve_articulated`): elimination from the tip.
+        let rig_s = [rig_step.x, rig_step.y];
+        let mut ia = [[zero; 6]; 6];
+        let mut pa = [zero; 6];
+        let mut ok = sp(0.0).cmp_lt(sp(1.0)); // all lanes true
+        for seg in self.segs[..n].iter_mut().rev() {
+            let s = &seg.motion;
+            let mut ia_s = [[zero; 6]; 2];
+            for k in 0..2 {
+                for (r, row) in ia.iter().enumerate() {
+                    ia_s[k][r] = dot6(row, &s[k]);
+                }
+            }
+            let mut u = [[zero; 6]; 2];
+            for k in 0..2 {
+                for r in 0..6 {
+                    u[k][r] = seg.f_own[k][r] * scale + ia_s[k][r];
+                }
+            }
+            let d00 = seg.m_own[0] * scale + dot6(&s[0], &ia_s[0]) + rig_s[0];
+            let d01 = seg.m_own[1] * scale + dot6(&s[0], &ia_s[1]);
+            let d10 = seg.m_own[1] * scale + dot6(&s[1], &ia_s[0]);
+            let d11 = seg.m_own[2] * scale + dot6(&s[1], &ia_s[1]) + rig_s[1];
+            let c = [-dot6(&s[0], &pa) - seg.b[0], -dot6(&s[1], &pa) - seg.b[1]];
+            let det = d00 * d11 - d01 * d10;
+            ok = ok & d00.cmp_gt(zero) & det.cmp_gt(zero) & det.is_finite();
+            let inv = sp(1.0) / det;
+            let dinv = [d11 * inv, -d10 * inv, d00 * inv];
+            let mut u_dinv = [[zero; 6]; 2];
+            for r in 0..6 {
+                u_dinv[0][r] = u[0][r] * dinv[0] + u[1][r] * dinv[1];
+                u_dinv[1][r] = u[0][r] * dinv[1] + u[1][r] * dinv[2];
+            }
+            // I^A += scale I_own - U D^-1 U^T, with I_own = [[J, [c]x], [[c]x^T, m 1]].
+            let cv = seg.first;
+            let cx = [[zero, -cv.z, cv.y], [cv.z, zero, -cv.x], [-cv.y, cv.x, zero]];
+            for r in 0..6 {
+                for cc in 0..6 {
+                    let own = match (r < 3, cc < 3) {
+                        (true, true) => seg.inertia[sym(r, cc)],
+                        (true, false) => cx[r][cc - 3],
+                        (false, true) => cx[cc][r - 3],
+                        (false, false) => {
+                            if r == cc {
+                                seg.mass
+                            } else {
+                                zero
+                            }
+                        }
+                    };
+                    ia[r][cc] += own * scale - (u_dinv[0][r] * u[0][cc] + u_dinv[1][r] * u[1][cc]);
+                }
+                pa[r] += u_dinv[0][r] * c[0] + u_dinv[1][r] * c[1];
+            }
+            seg.u = u;
+            seg.dinv = dinv;
+            seg.c = c;
+        }
+        // Back-substitution from the root: x_Q = -D^-1 (U^T V + c), V += S_Q x_Q.
+        let mut v = [zero; 6];
+        for seg in self.segs[..n].iter_mut() {
+            let t = [dot6(&seg.u[0], &v) + seg.c[0], dot6(&seg.u[1], &v) + seg.c[1]];
+            let x = [-(seg.dinv[0] * t[0] + seg.dinv[1] * t[1]), -(seg.dinv[1] * t[0] + seg.dinv[2] * t[1])];
+            for r in 0..6 {
+                v[r] += seg.motion[0][r] * x[0] + seg.motion[1][r] * x[1];
+            }
+            seg.b = x;
+            ok = ok & x[0].is_finite() & x[1].is_finite();
+        }
+
+        // Scatter: each lane's prepared step and the sweep's results into its strand.
+        let ok = ok.move_mask();
+        let mut first = None;
+        for (j, s) in strands.iter_mut().enumerate() {
+            if ok & (1 << j) == 0 {
+                first.get_or_insert(StrandError::NotPositiveDefinite { what: "step matrix" });
+                continue;
+            }
+            let segs = &self.segs[..n];
+            let v_new = DVector::from_fn(2 * n, |r, _| s.state.qdot[r] + lane(segs[r / 2].b[r % 2], j));
+            let dy = &mut s.dynamics;
+            dy.frames.clear();
+            dy.frames.extend(self.frames.iter().map(|(rot, x)| Frame { rotation: rot.lane(j), position: x.lane(j) }));
+            dy.points.clear();
+            dy.points.extend(self.points.iter().map(|x| x.lane(j)));
+            for (r, f) in dy.forces.iter_mut().enumerate() {
+                *f = lane(segs[r / 2].force[r % 2], j);
+            }
+            dy.kinetic_energy = lane(kinetic, j);
+            dy.gravity_energy = lane(gravity_energy, j);
+            dy.elastic_energy = lane(elastic, j);
+            s.prepared = Some((h, v_new));
+        }
+        first.map_or(Ok(()), Err)
+    }
+
+    /// Gives `strand`, lane `lane` of the last [`StrandBatch::prepare`] (and not changed since), that lane's
+    /// motion subspaces and articulated elimination, so that [`Strand::finish_step`] can solve constraints as
+    /// after [`Strand::prepare_step`]. Errors if the lane is out of range or the strand has no prepared step
+    /// or another size.
+    pub fn hand_over(&self, lane_index: usize, strand: &mut Strand) -> Result<()> {
+        if lane_index >= self.lanes || !strand.has_prepared_step() || strand.model.segments != self.segments {
+            return Err(StrandError::InvalidParameter {
+                field: "batch",
+                reason: format!("lane {lane_index} of {} was not prepared for this strand", self.lanes),
+            });
+        }
+        let j = lane_index;
+        for (i, seg) in self.segs[..self.segments].iter().enumerate() {
+            let mut motion = Twists::zeros();
+            let mut u = Twists::zeros();
+            for k in 0..2 {
+                for r in 0..6 {
+                    motion[(r, k)] = lane(seg.motion[k][r], j);
+                    u[(r, k)] = lane(seg.u[k][r], j);
+                }
+            }
+            let (d00, d01, d11) = (lane(seg.dinv[0], j), lane(seg.dinv[1], j), lane(seg.dinv[2], j));
+            let dinv = Matrix3::new(d00, d01, 0.0, d01, d11, 0.0, 0.0, 0.0, 1.0);
+            let c = Vector3::new(lane(seg.c[0], j), lane(seg.c[1], j), 0.0);
+            strand.dynamics.set_segment_solver(i, motion, (u, dinv, c));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::constraint::{ConstraintKind, PointConstraint};
+    use crate::hair_type::HairType;
+    use crate::model::StrandModel;
+    use crate::state::RootFrame;
+
+    /// Four different strands of 16 segments: hair types, lengths, rest curls, root poses and root motions
+    /// all differ; one is straight (its segments use the series branch of the helix coefficients), the curly
+    /// ones use the closed form, so a batch mixes both branches.
+    fn strands() -> Vec<Strand> {
+        let specs = [
+            (HairType::H1, 0.10, false, Vector3::new(0.0, 0.0, 0.3), -Vector3::z(), Vector3::new(0.02, 0.0, 0.0), Vector3::zeros()),
+            (HairType::CAUCASIAN, 0.25, true, Vector3::new(0.01, 0.0, 0.3), Vector3::new(0.3, 0.0, -1.0), Vector3::new(0.05, -0.02, 0.0), Vector3::new(0.0, 0.0, 1.5)),
+            (HairType::AFRICAN, 0.12, true, Vector3::new(-0.02, 0.01, 0.28), Vector3::new(0.0, 0.4, -1.0), Vector3::zeros(), Vector3::new(2.0, -1.0, 0.5)),
+            (HairType::GC3, 0.18, true, Vector3::new(0.0, -0.01, 0.31), Vector3::new(-0.2, 0.1, -1.0), Vector3::new(-0.1, 0.0, 0.03), Vector3::zeros()),
+        ];
+        specs
+            .iter()
+            .map(|&(h, len, curly, pos, tangent, vel, omega)| {
+                let mut m = StrandModel::new(ModelKind::Reduced, len, 16, h.section().unwrap(), h.material().unwrap()).unwrap();
+                if curly {
+                    let (tw, bd) = h.rest_curvature();
+                    m = m.with_uniform_rest(tw.max(5.0), bd.max(20.0), 0.0);
+                }
+                let mut root = RootFrame::new(pos, tangent, Vector3::y()).unwrap();
+                root.velocity = vel;
+                root.angular_velocity = omega;
+                root.acceleration = -vel * 0.5;
+                Strand::new(m, root).unwrap()
+            })
+            .collect()
+    }
+
+    fn forces_for(k: usize, step: usize) -> Vec<PointForce> {
+        // Lane 1 and 3 get point forces (lane 3 a force and a torque) during part of the run.
+        match k {
+            1 if step % 3 != 0 => vec![PointForce::new(0.11, Vector3::new(2e-5, -1e-5, 1e-5))],
+            3 if step > 50 => vec![PointForce { s: 0.07, force: Vector3::new(-1e-5, 0.0, 2e-5), torque: Vector3::new(0.0, 1e-10, -2e-10) }],
+            _ => vec![],
+        }
+    }
+
+    fn max_difference(a: &Strand, b: &Strand) -> f64 {
+        let dq = (&a.state.q - &b.state.q).amax() / (1.0 + b.state.q.amax());
+        let dv = (&a.state.qdot - &b.state.qdot).amax() / (1.0 + b.state.qdot.amax());
+        dq.max(dv)
+    }
+
+    #[test]
+    fn batch_steps_equal_scalar_steps() {
+        // 300 steps of 1 ms for 4 different strands, full and partly filled batches (1 to 4 lanes): q and qdot
+        // equal the scalar step's to 1e-10 (relative to 1 + max |q|, 1 + max |qdot|); only round-off differs
+        // (SIMD sine and cosine, summation order).
+        for lanes in 1..=LANES {
+            let mut scalar: Vec<Strand> = strands().into_iter().take(lanes).collect();
+            let mut batched = scalar.clone();
+            let mut batch = StrandBatch::for_strand(&batched[0]);
+            for step in 0..300 {
+                let forces: Vec<Vec<PointForce>> = (0..lanes).map(|k| forces_for(k, step)).collect();
+                for (k, s) in scalar.iter_mut().enumerate() {
+                    s.step(1e-3, &forces[k]).unwrap();
+                }
+                let ext: Vec<&[PointForce]> = forces.iter().map(|f| f.as_slice()).collect();
+                let mut refs: Vec<&mut Strand> = batched.iter_mut().collect();
+                batch.step(1e-3, &mut refs, &ext).unwrap();
+            }
+            for (k, (a, b)) in batched.iter().zip(&scalar).enumerate() {
+                let d = max_difference(a, b);
+                assert!(d < 1e-10, "{lanes} lanes, strand {k}: difference {d:e}");
+                assert_eq!(a.state.time, b.state.time);
+                assert!((a.state.root.position - b.state.root.position).norm() < 1e-15);
+                // The strand moved (the comparison is not between two resting strands).
+                assert!(b.state.qdot.amax() > 1e-3, "strand {k} at rest");
+            }
+        }
+    }
+
+    #[test]
+    fn prepared_lanes_expose_the_scalar_sweep() {
+        // After prepare, each strand's frames, Gauss points, forces and energies equal those of its own
+        // prepare_step (1e-12 m, 1e-10 relative), and the prepared velocities agree to 1e-10.
+        let mut scalar = strands();
+        let mut batched = scalar.clone();
+        for s in scalar.iter_mut() {
+            s.prepare_step(1e-3, &[]).unwrap();
+        }
+        let mut batch = StrandBatch::new(16, 2);
+        let mut refs: Vec<&mut Strand> = batched.iter_mut().collect();
+        batch.prepare(1e-3, &mut refs, &[]).unwrap();
+        for (a, b) in batched.iter().zip(&scalar) {
+            assert_eq!(a.dynamics.frames.len(), b.dynamics.frames.len());
+            assert_eq!(a.dynamics.points.len(), b.dynamics.points.len());
+            for (fa, fb) in a.dynamics.frames.iter().zip(&b.dynamics.frames) {
+                assert!((fa.position - fb.position).norm() < 1e-12 && (fa.rotation - fb.rotation).norm() < 1e-12);
+            }
+            for (pa, pb) in a.dynamics.points.iter().zip(&b.dynamics.points) {
+                assert!((pa - pb).norm() < 1e-12);
+            }
+            assert!((&a.dynamics.forces - &b.dynamics.forces).norm() <= 1e-10 * b.dynamics.forces.norm());
+            let e = |s: &Strand| (s.dynamics.kinetic_energy, s.dynamics.gravity_energy, s.dynamics.elastic_energy);
+            let (ea, eb) = (e(a), e(b));
+            assert!((ea.0 - eb.0).abs() <= 1e-10 * eb.0.abs().max(1e-30) && (ea.1 - eb.1).abs() <= 1e-10 * eb.1.abs() && (ea.2 - eb.2).abs() <= 1e-10 * eb.2.abs().max(1e-30));
+            let (va, vb) = (&a.prepared.as_ref().unwrap().1, &b.prepared.as_ref().unwrap().1);
+            assert!((va - vb).amax() <= 1e-10 * (1.0 + vb.amax()));
+        }
+    }
+
+    #[test]
+    fn a_handed_over_lane_solves_constraints_like_the_scalar_step() {
+        // A contact pressed into lane 2's strand: batch prepare + hand_over + finish_step with the contact gives
+        // the same impulse and state as the scalar step_constrained (1e-9 relative), over 50 steps.
+        let mut scalar = strands();
+        let mut batched = scalar.clone();
+        let mut batch = StrandBatch::new(16, 2);
+        let opts = ConstraintOptions::default();
+        for step in 0..50 {
+            let contact = PointConstraint {
+                s: 0.06,
+                kind: ConstraintKind::Contact { normal: Vector3::new(0.0, 1.0, 0.0), depth: 1e-5 * step as f64, friction: 0.3 },
+                velocity: Vector3::new(0.0, 0.05, 0.01),
+            };
+            let ps = scalar[2].step_constrained(1e-3, &[], &[contact], &opts).unwrap();
+            for (k, s) in scalar.iter_mut().enumerate() {
+                if k != 2 {
+                    s.step(1e-3, &[]).unwrap();
+                }
+            }
+            let mut refs: Vec<&mut Strand> = batched.iter_mut().collect();
+            batch.prepare(1e-3, &mut refs, &[]).unwrap();
+            batch.hand_over(2, &mut batched[2]).unwrap();
+            let pb = batched[2].finish_step(&[contact], &opts).unwrap();
+            for (k, s) in batched.iter_mut().enumerate() {
+                if k != 2 {
+                    s.finish_step(&[], &opts).unwrap();
+                }
+            }
+            assert!((pb[0] - ps[0]).norm() <= 1e-9 * ps[0].norm().max(1e-12), "step {step}: impulse {} vs {}", pb[0], ps[0]);
+        }
+        assert!(scalar[2].state.qdot.amax() > 1e-3);
+        for (k, (a, b)) in batched.iter().zip(&scalar).enumerate() {
+            let d = max_difference(a, b);
+            assert!(d < 1e-9, "strand {k}: difference {d:e}");
+        }
+    }
+
+    #[test]
+    fn bad_batches_are_refused_with_a_reason() {
+        let mut s = strands();
+        let mut batch = StrandBatch::new(16, 2);
+        // Five strands.
+        let mut five: Vec<Strand> = s.iter().cloned().chain(std::iter::once(s[0].clone())).collect();
+        let mut refs: Vec<&mut Strand> = five.iter_mut().collect();
+        assert!(matches!(batch.prepare(1e-3, &mut refs, &[]), Err(StrandError::InvalidParameter { field: "batch", .. })));
+        // No strand.
+        assert!(batch.prepare(1e-3, &mut [], &[]).is_err());
+        // Another segment count, the full model, another integrator.
+        let h = HairType::H1;
+        let other = |kind, n| Strand::new(StrandModel::new(kind, 0.1, n, h.section().unwrap(), h.material().unwrap()).unwrap(), RootFrame::new(Vector3::zeros(), -Vector3::z(), Vector3::x()).unwrap()).unwrap();
+        for mut bad in [other(ModelKind::Reduced, 8), other(ModelKind::Full, 16), {
+            let mut m = other(ModelKind::Reduced, 16);
+            m.integrator = Integrator::ImplicitMidpoint;
+            m
+        }] {
+            assert!(!batch.accepts(&bad));
+            let mut refs: Vec<&mut Strand> = vec![&mut s[0], &mut bad];
+            let err = batch.prepare(1e-3, &mut refs, &[]).unwrap_err();
+            assert!(err.to_string().contains("strand 1"), "{err}");
+        }
+        // Bad time step and non-finite force: refused, nothing prepared, states unchanged.
+        let before = s[0].state.clone();
+        let mut refs: Vec<&mut Strand> = s.iter_mut().collect();
+        assert!(batch.step(f64::NAN, &mut refs, &[]).is_err());
+        let nan = [PointForce::new(0.05, Vector3::new(f64::NAN, 0.0, 0.0))];
+        let ext: Vec<&[PointForce]> = vec![&[], &nan, &[], &[]];
+        assert!(batch.step(1e-3, &mut refs, &ext).is_err());
+        assert!(!refs[0].has_prepared_step());
+        assert_eq!(s[0].state, before);
+        // hand_over of a lane that was not prepared.
+        assert!(batch.hand_over(3, &mut s[3]).is_err());
+    }
+}

@@ -331,6 +331,43 @@ impl MetaballSet {
     }
 }
 
+impl MetaballSet {
+    /// [`push_out_many`](Self::push_out_many) for f32 points (m; e.g.
+    /// [`crate::ffd::CompactBinding`]'s output), computed in f64. Returns how many points moved.
+    pub fn push_out_many_f32(&self, points: &mut [[f32; 3]], threshold: f64, skin: f64) -> usize {
+        use rayon::prelude::*;
+        if self.balls.is_empty() {
+            return 0;
+        }
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for b in &self.balls {
+            for a in 0..3 {
+                lo[a] = lo[a].min(b.centre[a] - b.radius);
+                hi[a] = hi[a].max(b.centre[a] + b.radius);
+            }
+        }
+        points
+            .par_chunks_mut(4096)
+            .map(|chunk| {
+                let mut moved = 0;
+                for x in chunk {
+                    let p = Point3::new(x[0] as f64, x[1] as f64, x[2] as f64);
+                    if (0..3).any(|a| p[a] < lo[a] || p[a] > hi[a]) {
+                        continue;
+                    }
+                    let y = self.push_out(&p, threshold, skin);
+                    if y != p {
+                        *x = [y.x as f32, y.y as f32, y.z as f32];
+                        moved += 1;
+                    }
+                }
+                moved
+            })
+            .sum()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -523,7 +560,13 @@ mod tests {
         let mut pts = points();
         let inside_before = pts.iter().filter(|p| s.inside(p, t)).count();
         assert!(inside_before > 20);
+        let mut pts32: Vec<[f32; 3]> = pts.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect();
         let moved = s.push_out_many(&mut pts, t, skin);
+        assert_eq!(s.push_out_many_f32(&mut pts32, t, skin), moved);
+        for (a, b) in pts.iter().zip(&pts32) {
+            // f32 rounding of input and output (~1e-8 m at 0.1 m)
+            assert!((a - Point3::new(b[0] as f64, b[1] as f64, b[2] as f64)).norm() < 1e-6);
+        }
         assert!(moved >= inside_before);
         for (p, q) in pts.iter().zip(points()) {
             let (f, g) = s.field_and_gradient(p);

@@ -104,7 +104,7 @@ export function decodeScene(buf: ArrayBuffer): SceneMsg {
   const renderWeight = f32s(buf, o, nb); o += 4 * nb;
   const renderSpan = f32s(buf, o, strands); o += 4 * strands;
   // Appended block (older servers end here): metaballs of the head for the push-out.
-  let metaballs = new Float32Array(0), metaballThreshold = 0.25, pushOutSkin = 0;
+  let metaballs: Float32Array = new Float32Array(0), metaballThreshold = 0.25, pushOutSkin = 0;
   if (o + 12 <= buf.byteLength) {
     const m = u32();
     metaballThreshold = f32();

@@ -38,8 +38,14 @@ impl Metaball {
     #[inline]
     pub fn term(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
         let r = x - self.centre;
-        let r2inv = 1.0 / (self.radius * self.radius);
-        let q = 1.0 - r.norm_squared() * r2inv;
+        let d2 = r.norm_squared();
+        let rr = self.radius * self.radius;
+        // outside the ball's reach: no division (most balls, for most points)
+        if !(d2 < rr) {
+            return (0.0, Vector3::zeros());
+        }
+        let r2inv = 1.0 / rr;
+        let q = 1.0 - d2 * r2inv;
         if q <= 0.0 {
             return (0.0, Vector3::zeros());
         }
@@ -233,9 +239,9 @@ impl MetaballSet {
     /// `x` unchanged. The move is along the outward normal n = -grad F/|grad F| at `x` (where the
     /// gradient vanishes, e.g. a ball's centre: the ray from the largest contributing ball's
     /// centre, +z at the centre itself): the root t of d(x + t n) = skin, d = (T - F)/|grad F|
-    /// the first-order signed distance (+infinity where F = 0), by Newton steps t <- t + (skin - d)
-    /// (d' = 1 along the normal near the surface; one step is exact to O(depth^2) there) kept
-    /// inside a bracket and bisected when they leave it; at most 60 field evaluations, to
+    /// the first-order signed distance (+infinity where F = 0), by secant steps on d along the ray
+    /// (slope 1 where the secant is unusable: d' = 1 near the surface, where one step is exact to
+    /// O(depth^2)) kept inside a bracket and bisected when they leave it; at most 60 field evaluations, to
     /// |d - skin| <= 1e-3 skin. Returns the point, m.
     ///
     /// The result is continuous in `x` (points within the skin are moved onto it, not only
@@ -274,6 +280,7 @@ impl MetaballSet {
         }
         let (mut lo, mut hi): (f64, Option<f64>) = (0.0, None);
         let mut t = (skin - d0).clamp(tol, cap);
+        let mut prev = (0.0, d0 - skin);
         for _ in 0..60 {
             let d = dist(&(x + t * n)).0;
             let ph = d - skin;
@@ -285,7 +292,11 @@ impl MetaballSet {
             } else {
                 hi = Some(t);
             }
-            let newton = t - ph;
+            // secant slope of d along the ray where it is usable, else 1 (exact near the surface)
+            let slope = (ph - prev.1) / (t - prev.0);
+            let slope = if slope.is_finite() && slope > 0.1 { slope } else { 1.0 };
+            prev = (t, ph);
+            let newton = t - ph / slope;
             t = match hi {
                 None => lo + (-ph).clamp(tol, cap),
                 Some(h) if newton.is_finite() && newton > lo && newton < h => newton,

@@ -52,6 +52,34 @@ vec3 ffd(vec3 p) {
   }
   return x;
 }
+// Push-out (SCENE's appended metaballs, head frame = the viewer's world): a vertex inside the body
+// {F > T}, or within the skin of its surface, is moved along the outward normal -grad F/|grad F| onto the
+// surface offset by the skin (Newton steps on the first-order distance (T - F)/|grad F|), as
+// MetaballSet::push_out does on the CPU.
+#define MAX_METABALLS 16
+uniform vec4 metaballs[MAX_METABALLS]; // xyz centre, w radius R, m
+uniform int metaballCount;
+uniform float metaballThreshold;       // T, dimensionless
+uniform float pushOutSkin;             // m
+vec3 pushOut(vec3 p) {
+  for (int it = 0; it < 3; it++) {
+    float f = 0.0;
+    vec3 g = vec3(0.0);
+    for (int b = 0; b < MAX_METABALLS; b++) {
+      if (b >= metaballCount) break;
+      vec3 r = p - metaballs[b].xyz;
+      float r2inv = 1.0 / (metaballs[b].w * metaballs[b].w);
+      float q = 1.0 - dot(r, r) * r2inv;
+      if (q > 0.0) { f += q * q; g -= 4.0 * q * r2inv * r; }
+    }
+    float gn = length(g);
+    if (f <= 0.0 || gn < 1e-9) return p;
+    float d = (metaballThreshold - f) / gn;
+    if (d >= pushOutSkin * 0.999) return p;
+    p -= (pushOutSkin - d) * g / gn;
+  }
+  return p;
+}
 vec3 guideOffset(int g, float u) {
   float x = u * float(guideSamples - 1);
   int a = int(floor(x));
@@ -71,6 +99,7 @@ void main() {
   vec3 side2 = cross(t, side);
   float ang = u * 40.0 + arc.y;
   p += curliness * curlRadius * sqrt(u) * (cos(ang) * side + sin(ang) * side2);
+  p = pushOut(p);
   vec4 st = texelFetch(guideState, ivec2(g, 0), 0);
   vWet = st.r;
   vKeep = st.g;
@@ -146,6 +175,7 @@ export class HairMaterial {
         lightDirection: { value: new THREE.Vector3(0.4, -0.6, 0.7) },
         cameraPos: { value: new THREE.Vector3() },
         headRadius: { value: headRadius },
+        ...pushOutUniforms(scene),
       },
     });
   }
@@ -191,6 +221,23 @@ export class HairMaterial {
     this.displacementTexture.needsUpdate = true;
     this.stateTexture.needsUpdate = true;
   }
+}
+
+/** The push-out uniforms from SCENE's metaballs (at most 16; none: no push-out). */
+function pushOutUniforms(scene: SceneMsg): Record<string, THREE.IUniform> {
+  const count = Math.min(16, Math.floor((scene.metaballs?.length ?? 0) / 4));
+  const balls: THREE.Vector4[] = [];
+  for (let b = 0; b < 16; b++) {
+    balls.push(b < count
+      ? new THREE.Vector4(scene.metaballs[4 * b], scene.metaballs[4 * b + 1], scene.metaballs[4 * b + 2], scene.metaballs[4 * b + 3])
+      : new THREE.Vector4(0, 0, 0, 1));
+  }
+  return {
+    metaballs: { value: balls },
+    metaballCount: { value: count },
+    metaballThreshold: { value: scene.metaballThreshold ?? 0.25 },
+    pushOutSkin: { value: scene.pushOutSkin ?? 0.0005 },
+  };
 }
 
 function floatTexture(w: number, h: number): THREE.DataTexture {

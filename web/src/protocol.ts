@@ -38,6 +38,10 @@ export interface SceneMsg {
   headPositions: Float32Array;
   headIndices: Uint32Array;
   renderPositions: Float32Array;
+  /** Appended to SCENE: the head's metaballs (head frame) for the shader's push-out; empty if absent. */
+  metaballs: Float32Array; // M x (cx, cy, cz, R), m
+  metaballThreshold: number;
+  pushOutSkin: number; // m
   renderGuide: Uint32Array; // guidesPerStrand per strand, nearest first
   renderWeight: Float32Array; // guidesPerStrand per strand, summing to 1
   renderSpan: Float32Array; // per strand: fraction of the guides' length it spans
@@ -99,7 +103,15 @@ export function decodeScene(buf: ArrayBuffer): SceneMsg {
   const renderGuide = u32s(buf, o, nb); o += 4 * nb;
   const renderWeight = f32s(buf, o, nb); o += 4 * nb;
   const renderSpan = f32s(buf, o, strands); o += 4 * strands;
-  return { verticesPerStrand, strands, guidesPerStrand, guides, samples, latticeDims, latticeOrigin, latticeH, hairTypes, hairType, headPositions, headIndices, renderPositions, renderGuide, renderWeight, renderSpan };
+  // Appended block (older servers end here): metaballs of the head for the push-out.
+  let metaballs: Float32Array = new Float32Array(0), metaballThreshold = 0.25, pushOutSkin = 0;
+  if (o + 12 <= buf.byteLength) {
+    const m = u32();
+    metaballThreshold = f32();
+    pushOutSkin = f32();
+    metaballs = f32s(buf, o, 4 * m); o += 16 * m;
+  }
+  return { verticesPerStrand, strands, guidesPerStrand, guides, samples, latticeDims, latticeOrigin, latticeH, hairTypes, hairType, headPositions, headIndices, renderPositions, renderGuide, renderWeight, renderSpan, metaballs, metaballThreshold, pushOutSkin };
 }
 
 export function decodeFrame(buf: ArrayBuffer): FrameMsg {

@@ -2,7 +2,7 @@
 //! the head and colliding with the body; render strands follow it by FFD.
 
 use crate::generate::{GenerateError, Hairstyle};
-use lattice::ffd::Binding;
+use lattice::ffd::{Binding, FfdError};
 use lattice::lattice::{CarryParams, LatticeError, LatticeModel, LatticeParams};
 use lattice::metaball::{Metaball, MetaballSet};
 use nalgebra::{Isometry3, Point3};
@@ -14,6 +14,27 @@ pub struct HairLattice {
     pub model: LatticeModel,
     /// FFD binding of every render strand vertex (same order as `RenderStrands::positions`).
     pub binding: Binding,
+}
+
+impl HairLattice {
+    /// World positions (m) of the render strand vertices for lattice nodes at `nodes` (world,
+    /// m): the FFD of the binding (both cores), then every vertex inside the body `body_world`
+    /// (world frame; e.g. [`body_in_world`]) or within `skin` (m) of its surface is pushed out
+    /// onto the offset surface at `skin` ([`MetaballSet::push_out_many`], threshold
+    /// `model.params.metaball.threshold`; [`lattice::metaball::PUSH_OUT_SKIN`] = 0.5 mm is the
+    /// usual skin). The lattice nodes collide with the body, but the vertices between them
+    /// (several per cell) can sag into it where the lattice does; this keeps them out. Returns
+    /// how many vertices were pushed.
+    pub fn render_positions(
+        &self,
+        nodes: &[Point3<f64>],
+        body_world: &MetaballSet,
+        skin: f64,
+        out: &mut Vec<Point3<f64>>,
+    ) -> Result<usize, FfdError> {
+        self.binding.apply_parallel(nodes, out)?;
+        Ok(body_world.push_out_many(out, self.model.params.metaball.threshold, skin))
+    }
 }
 
 /// The metaball set `body` (head frame) placed in the world by the head pose `head`.

@@ -43,19 +43,27 @@ fn lattice_carries_the_hair_mass() {
 }
 
 /// Minimum signed distance (m, negative inside) of the render vertices to the head/body surface
-/// after FFD of the lattice nodes `nodes` (world), the head at pose `head`.
+/// after FFD of the lattice nodes `nodes` (world), the head at pose `head`: (plain FFD, FFD then
+/// push-out by `HairLattice::render_positions` with the 0.5 mm skin).
 fn min_render_distance(
     h: &Hairstyle,
     hl: &hairstyle::global::HairLattice,
     nodes: &[nalgebra::Point3<f64>],
     head: &nalgebra::Isometry3<f64>,
     out: &mut Vec<nalgebra::Point3<f64>>,
-) -> f64 {
-    hl.binding.apply_parallel(nodes, out).unwrap();
+) -> (f64, f64) {
     let inv = head.inverse();
-    out.iter()
-        .map(|p| h.head.signed_distance(&(inv * p)))
-        .fold(f64::INFINITY, f64::min)
+    let min = |out: &Vec<nalgebra::Point3<f64>>| {
+        out.iter()
+            .map(|p| h.head.signed_distance(&(inv * p)))
+            .fold(f64::INFINITY, f64::min)
+    };
+    hl.binding.apply_parallel(nodes, out).unwrap();
+    let raw = min(out);
+    let body = hairstyle::global::body_in_world(&h.head.body, head);
+    hl.render_positions(nodes, &body, lattice::metaball::PUSH_OUT_SKIN, out)
+        .unwrap();
+    (raw, min(out))
 }
 
 /// Head shake: 2000 render strands on a 4 cm lattice (9 x 9 x 11 nodes) under gravity, with the
@@ -67,12 +75,11 @@ fn min_render_distance(
 /// equilibrium would put them (head * X0) peaks above 2 mm during the shake (measured 4.4 mm;
 /// a lattice with no inertia would show 0) and stays below A.
 /// Settling: 2 s after the shake every node is back at X0 within 0.5 mm (measured 0.08 mm).
-/// Head: no render vertex (FFD of the lattice, `Binding::apply_parallel`) is more than 6 mm
-/// inside the head/body surface (first-order distance (T - F)/|grad F|) at any step, and after
-/// settling no deeper than 3.5 mm. Measured: 0 at rest, 2.6 mm at the gravity equilibrium,
-/// 4.6 mm at worst during the shake. The 1 mm the lead asked for is NOT met at this lattice
-/// resolution: the lattice nodes collide, the render vertices between them (4 cm cells) sag
-/// into the scalp where the lattice sags.
+/// Head: with the push-out of `HairLattice::render_positions` (0.5 mm skin) no render vertex is
+/// more than 0.1 mm inside the head/body surface (first-order distance (T - F)/|grad F|) at any
+/// step. Without it (plain FFD, `Binding::apply_parallel`) the lattice nodes collide but the
+/// vertices between them (4 cm cells) sag into the scalp where the lattice sags: no deeper than
+/// 6 mm at any step and 3.5 mm after settling (measured in the assertion messages).
 #[test]
 fn head_shake_moves_hair_with_inertia_and_it_settles_back() {
     use hairstyle::global::body_in_world;
@@ -96,7 +103,7 @@ fn head_shake_moves_hair_with_inertia_and_it_settles_back() {
     let still = Isometry3::identity();
     let body = body_in_world(&h.head.body, &still);
     let mut s = m.rest_state(&still);
-    assert!(min_render_distance(&h, &hl, &s.positions, &still, &mut out) > -1e-6);
+    assert!(min_render_distance(&h, &hl, &s.positions, &still, &mut out).0 > -1e-6);
     for _ in 0..200 {
         m.step(&mut s, dt, &still, Some(&body));
     }
@@ -108,7 +115,8 @@ fn head_shake_moves_hair_with_inertia_and_it_settles_back() {
         .collect();
     assert!(free.len() > 10, "{} free nodes", free.len());
     let (a, f) = (0.03, 2.0);
-    let (mut max_lag, mut min_dist): (f64, f64) = (0.0, f64::INFINITY);
+    let (mut max_lag, mut min_dist, mut min_pushed): (f64, f64, f64) =
+        (0.0, f64::INFINITY, f64::INFINITY);
     for k in 0..300 {
         let t = (k + 1) as f64 * dt;
         let y = if t <= 1.0 {
@@ -127,7 +135,9 @@ fn head_shake_moves_hair_with_inertia_and_it_settles_back() {
                 / free.len() as f64;
             max_lag = max_lag.max(lag);
         }
-        min_dist = min_dist.min(min_render_distance(&h, &hl, &s.positions, &head, &mut out));
+        let (raw, pushed) = min_render_distance(&h, &hl, &s.positions, &head, &mut out);
+        min_dist = min_dist.min(raw);
+        min_pushed = min_pushed.min(pushed);
     }
     assert_eq!(s.rejected_steps, 0);
     assert!(max_lag > 2e-3 && max_lag < a, "lag {max_lag} m");
@@ -137,7 +147,122 @@ fn head_shake_moves_hair_with_inertia_and_it_settles_back() {
         .map(|(p, q)| (p - q).norm())
         .fold(0.0, f64::max);
     assert!(back < 5e-4, "not back at equilibrium: {back} m");
+    let (end, end_pushed) = min_render_distance(&h, &hl, &s.positions, &still, &mut out);
+    eprintln!(
+        "deepest render vertex: plain FFD {min_dist} m during, {end} m after; pushed out \
+         {min_pushed} m during, {end_pushed} m after"
+    );
+    assert!(min_pushed > -1e-4, "pushed render vertex {min_pushed} m inside the head");
+    assert!(end_pushed > -1e-4, "pushed render vertex {end_pushed} m inside after settling");
     assert!(min_dist > -6e-3, "render vertex {min_dist} m inside the head");
-    let end = min_render_distance(&h, &hl, &s.positions, &still, &mut out);
     assert!(end > -3.5e-3, "render vertex {end} m inside the head after settling");
+}
+
+/// A hair dryer on a hanging hairstyle (2000 render strands, 4 cm lattice, default lattice
+/// parameters, gravity, no obstacles so the balance below is exact): 10 m/s jet from 0.4 m on the
+/// left (-x) of the head blowing along +x across the hair behind it, cone half-angle 0.6 rad, range
+/// 0.8 m. Each node gets `HairDryer::hair_force` for the hair it carries (its mass less the
+/// empty-node mass over rho A) and a 4 cm x 4 cm frontal area, through
+/// `LatticeModel::step_with_forces`.
+/// 1. Settle 2 s without the dryer (equilibrium X0), then blow 3 s: the hair moves in +x: the
+///    force-weighted mean displacement of the blown nodes along the force is > 0 and the
+///    nodes' mean displacement has a positive x component.
+/// 2. Hand estimate: at equilibrium the stiffeners' forces cancel in the sum, so the attachment
+///    springs carry the whole dryer force: sum_i a_i k_a (x_i - X0_i) = F_total. Checked to 5 %
+///    (the 3 s do not settle the slowest mode completely), i.e. the anchors move by
+///    F_total / (k_a sum a_i) on the weighted mean; the free hair moves more (shear of the lattice).
+/// 3. Dryer off 3 s: every node back within 0.5 mm of X0.
+#[test]
+fn dryer_blows_the_hair_and_it_settles_back() {
+    use nalgebra::{Isometry3, Vector3};
+    use tools::dryer::{Cone, HairDrag, HairDryer};
+    let h = Hairstyle::generate(&HairstyleParams {
+        guide_count: 60,
+        render_count: 2000,
+        seed: 21,
+        ..Default::default()
+    })
+    .unwrap();
+    let carry = CarryParams {
+        cell: 0.04,
+        ..Default::default()
+    };
+    let params = LatticeParams::default();
+    let hl = h.lattice(&carry, params).unwrap();
+    let m = &hl.model;
+    let hair = h.params.hair().unwrap();
+    let area = hair.section().unwrap().area();
+    let drag = HairDrag {
+        hair_diameter: 2.0 * (area / std::f64::consts::PI).sqrt(),
+        ..Default::default()
+    };
+    let dryer = HairDryer {
+        cone: Cone {
+            apex: Vector3::new(-0.4, -0.1, -0.1),
+            axis: Vector3::x(),
+            half_angle: 0.6,
+            range: 0.8,
+        },
+        air_speed: 10.0,
+        ..Default::default()
+    };
+    let still = Isometry3::identity();
+    let dt = 0.01;
+    let mut s = m.rest_state(&still);
+    for _ in 0..200 {
+        m.step(&mut s, dt, &still, None);
+    }
+    let x0 = s.positions.clone();
+    let forces: Vec<Vector3<f64>> = (0..m.node_count())
+        .map(|i| {
+            let len = (m.masses[i] - carry.empty_node_mass).max(0.0) / (hair.density * area);
+            dryer
+                .hair_force(&x0[i].coords, len, carry.cell * carry.cell, &drag)
+                .unwrap()
+        })
+        .collect();
+    let total: Vector3<f64> = forces.iter().sum();
+    let blown = forces.iter().filter(|f| f.norm() > 0.0).count();
+    assert!(blown > 20 && total.x > 0.0, "{blown} nodes blown, total {total} N");
+    for _ in 0..300 {
+        m.step_with_forces(&mut s, dt, &still, None, &forces).unwrap();
+    }
+    let disp: Vec<Vector3<f64>> = s.positions.iter().zip(&x0).map(|(x, y)| x - y).collect();
+    let along: f64 = forces.iter().zip(&disp).map(|(f, d)| f.dot(d)).sum::<f64>() / total.norm();
+    let mean_blown: Vector3<f64> = forces
+        .iter()
+        .zip(&disp)
+        .filter(|(f, _)| f.norm() > 0.0)
+        .map(|(_, d)| *d)
+        .sum::<Vector3<f64>>()
+        / blown as f64;
+    let max = disp.iter().map(|d| d.norm()).fold(0.0, f64::max);
+    let anchors: Vector3<f64> = disp
+        .iter()
+        .zip(&m.attachment)
+        .map(|(d, a)| a * params.attachment_stiffness * d)
+        .sum();
+    let k_anchor: f64 = m.attachment.iter().sum::<f64>() * params.attachment_stiffness;
+    eprintln!(
+        "dryer: {blown} nodes, total force {total} N ({:.4} N); anchors carry {anchors} N; \
+         anchor stiffness {k_anchor} N/m -> weighted anchor shift {:.3e} m; blown nodes' mean \
+         displacement {mean_blown} m, force-weighted along the force {along:.3e} m, max {max:.3e} m",
+        total.norm(),
+        total.norm() / k_anchor
+    );
+    assert!(along > 0.0 && mean_blown.x > 0.0);
+    assert!(
+        (anchors - total).norm() < 0.05 * total.norm(),
+        "anchors {anchors} N vs dryer {total} N"
+    );
+    for _ in 0..300 {
+        m.step_with_forces(&mut s, dt, &still, None, &[]).unwrap();
+    }
+    let back = s
+        .positions
+        .iter()
+        .zip(&x0)
+        .map(|(x, y)| (x - y).norm())
+        .fold(0.0, f64::max);
+    assert!(back < 5e-4, "not back: {back} m");
 }

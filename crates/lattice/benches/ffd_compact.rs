@@ -1,10 +1,13 @@
 //! FFD of 150,000 strands x 32 vertices (4.8 M vertices) on a 16^3 lattice of 2 cm cells through
 //! the compact binding ([`lattice::ffd::CompactBinding`], 40 bytes a vertex, f32 output), on one
-//! core and on all cores (rayon).
+//! core and on all cores (rayon); and on all cores followed by the push-out of the vertices inside
+//! a head (`MetaballSet::push_out_many_f32`, the built-in head, neck and shoulders of 9 cm head
+//! radius centred 2 cm below the vertices' box, 0.5 mm skin).
 //! Run: `cargo bench -p coiffure-lattice --bench ffd_compact`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use lattice::ffd::{CompactBinding, FfdLattice};
+use lattice::metaball::{Metaball, MetaballSet, PUSH_OUT_SKIN};
 use nalgebra::{Point3, Vector3};
 
 fn bench(c: &mut Criterion) {
@@ -36,6 +39,17 @@ fn bench(c: &mut Criterion) {
     });
     g.bench_function("150k_strands_x32_all_cores", |b| {
         b.iter(|| binding.apply_parallel(&nodes, &mut out).unwrap())
+    });
+    let head = MetaballSet::head_neck_shoulders(0.09);
+    let head = MetaballSet::new(head.balls.iter().map(|b| Metaball::new(b.centre + Vector3::new(0.0, 0.0, -0.02), b.radius)).collect());
+    binding.apply_parallel(&nodes, &mut out).unwrap();
+    let moved = head.push_out_many_f32(&mut out, 0.25, PUSH_OUT_SKIN);
+    eprintln!("push-out moves {moved} of {n} vertices ({:.1} %)", 100.0 * moved as f64 / n as f64);
+    g.bench_function("150k_strands_x32_all_cores_push_out", |b| {
+        b.iter(|| {
+            binding.apply_parallel(&nodes, &mut out).unwrap();
+            head.push_out_many_f32(&mut out, 0.25, PUSH_OUT_SKIN)
+        })
     });
     g.finish();
 }

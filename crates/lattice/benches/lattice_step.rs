@@ -4,7 +4,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use lattice::ffd::{Binding, FfdLattice};
-use lattice::lattice::{FillOrdering, LatticeModel, LatticeParams};
+use lattice::lattice::{BendingJacobian, FactorPrecision, FillOrdering, LatticeModel, LatticeParams};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
 /// CPU time of the calling thread, ns (first field of /proc/thread-self/schedstat).
@@ -18,11 +18,22 @@ fn bench(c: &mut Criterion) {
     let ffd = FfdLattice::new(Point3::new(-0.15, -0.15, 0.0), 0.02, [16, 16, 16]).unwrap();
     let mut g = c.benchmark_group("lattice");
     g.throughput(Throughput::Elements(1));
-    // `step_16x16x16_10ms` uses the default (fill-reducing ordering chosen automatically: nested
-    // dissection here); `_amd` forces faer's AMD ordering, the solver before issue 4's change.
+    // `step_16x16x16_10ms` uses the defaults (fill-reducing ordering chosen automatically, bending
+    // Jacobian PathBound, f32 factor); `_amd` forces faer's AMD ordering; `_laplacian_f64` is the
+    // exact bending Jacobian with an f64 factor (the solver before the PathBound/F32 change);
+    // `_pathbound_f64` and `_laplacian_f32` separate the two changes.
     let mut state = None;
-    for (name, ordering) in [("step_16x16x16_10ms", FillOrdering::Auto), ("step_16x16x16_10ms_amd", FillOrdering::Amd)] {
-        let params = LatticeParams { fill_ordering: ordering, ..LatticeParams::default() };
+    let (lap, path, diag) = (BendingJacobian::Laplacian, BendingJacobian::PathBound, BendingJacobian::DiagonalBound);
+    let (f64p, f32p) = (FactorPrecision::F64, FactorPrecision::F32);
+    for (name, ordering, bending, precision) in [
+        ("step_16x16x16_10ms", FillOrdering::Auto, path, f32p),
+        ("step_16x16x16_10ms_laplacian_f64", FillOrdering::Auto, lap, f64p),
+        ("step_16x16x16_10ms_pathbound_f64", FillOrdering::Auto, path, f64p),
+        ("step_16x16x16_10ms_laplacian_f32", FillOrdering::Auto, lap, f32p),
+        ("step_16x16x16_10ms_diagonalbound_f32", FillOrdering::Auto, diag, f32p),
+        ("step_16x16x16_10ms_amd", FillOrdering::Amd, path, f32p),
+    ] {
+        let params = LatticeParams { fill_ordering: ordering, bending_jacobian: bending, factor_precision: precision, ..LatticeParams::default() };
         let model = LatticeModel::uniform(ffd.clone(), 1e-4, params).unwrap();
         let mut s = model.rest_state(&Isometry3::identity());
         let mut t = 0.0f64;
@@ -34,7 +45,7 @@ fn bench(c: &mut Criterion) {
                 model.step(&mut s, 0.01, &head, None);
             })
         });
-        if ordering == FillOrdering::Auto {
+        if ordering == FillOrdering::Auto && (bending, precision) != (diag, f32p) {
             // The same step timed in this thread's CPU time (Linux schedstat, ns), not wall time:
             // under load from other processes this is the cost of a step on one core.
             g.bench_function(format!("{name}_cpu_time"), |b| {
@@ -50,7 +61,7 @@ fn bench(c: &mut Criterion) {
             });
         }
         if let Some(nnz) = s.cache.factor_nonzeros() {
-            eprintln!("{name}: Cholesky factor of the 16^3 system matrix holds {nnz} values");
+            eprintln!("{name}: Cholesky factor of the 16^3 system matrix holds {nnz} values ({} bytes)", s.cache.factor_bytes().unwrap_or(0));
         }
         state.get_or_insert(s);
     }

@@ -280,7 +280,22 @@ pub fn encode_scene(s: &Scene) -> Vec<u8> {
     for x in r.weight.iter().chain(r.span.iter()) {
         w.0.extend_from_slice(&x.to_le_bytes());
     }
+    // Appended block: the head's metaballs (head frame) for the viewer's push-out of render vertices.
+    encode_scene_metaballs(&mut w.0, &s.head, s.lattice.params.metaball.threshold);
     w.0
+}
+
+/// The SCENE's appended metaball block (docs/protocol.md): u32 M, f32 threshold T, f32 push-out skin (m),
+/// then M x (3 x f32 centre, f32 radius) in the head frame, m.
+fn encode_scene_metaballs(out: &mut Vec<u8>, head: &lattice::metaball::MetaballSet, threshold: f64) {
+    out.extend_from_slice(&(head.balls.len() as u32).to_le_bytes());
+    out.extend_from_slice(&(threshold as f32).to_le_bytes());
+    out.extend_from_slice(&(lattice::metaball::PUSH_OUT_SKIN as f32).to_le_bytes());
+    for b in &head.balls {
+        for x in [b.centre.x, b.centre.y, b.centre.z, b.radius] {
+            out.extend_from_slice(&(x as f32).to_le_bytes());
+        }
+    }
 }
 
 /// Byte offset of the FRAME flags byte (bit 0: the receiving viewer controls the tool), patched per viewer.

@@ -341,7 +341,7 @@ use nalgebra::Point3;
 use strand::dynamics::PointForce;
 use strand::kinematics::{frame_at, segment_frames};
 use strand::styling::{SetModel, SetState};
-use tools::dryer::{Cone, HairDryer};
+use tools::dryer::{Cone, HairDrag, HairDryer};
 use tools::sprayer::Sprayer;
 use tools::wetness::{WetnessField, WetnessModel};
 
@@ -616,6 +616,14 @@ pub struct GlobalSummary {
     pub pieces_max_field: f64,
     /// Steps in which a guide's velocities were scaled down by the safety net.
     pub clamped_steps: u64,
+    /// Drying pass on the lattice (only with dryer actions; 0 otherwise): largest displacement of a lattice
+    /// node from its settled position under the dryers' drag (`HairDryer::hair_force`, 4 cm lattice,
+    /// `LatticeModel::step_with_forces` every `global_dt`, body collisions), m.
+    pub lattice_max_displacement: f64,
+    /// Largest displacement of a lattice node from its settled position at the end, m.
+    pub lattice_end_displacement: f64,
+    /// Largest total dryer force on the lattice at one time, N.
+    pub lattice_peak_force: f64,
 }
 
 /// Everything a global scenario produces (the server writes it to files).
@@ -804,6 +812,31 @@ impl GlobalScenario {
         let every = ((self.global_dt / self.dt).round() as usize).max(1);
         let mut rows = vec![];
         let mut forces: Vec<PointForce> = vec![];
+        // Drying pass on the lattice: the dryers' drag on the hair each node carries (head still: head frame =
+        // world). Settled 1 s under gravity first; displacements are from that equilibrium.
+        let still = nalgebra::Isometry3::identity();
+        let mut dry_lattice = None;
+        if self.actions.iter().any(|a| matches!(a, Action::Dry(_))) {
+            let carry = lattice::lattice::CarryParams { cell: 0.04, ..Default::default() };
+            let hl = style
+                .lattice(&carry, lattice::lattice::LatticeParams::default())
+                .map_err(|e| global_err("lattice", e))?;
+            let mut ls = hl.model.rest_state(&still);
+            for _ in 0..((1.0 / self.global_dt).round() as usize).max(1) {
+                hl.model.step(&mut ls, self.global_dt, &still, Some(body));
+            }
+            let x0 = ls.positions.clone();
+            let lengths: Vec<f64> = hl
+                .model
+                .masses
+                .iter()
+                .map(|m| (m - carry.empty_node_mass).max(0.0) / (dry_material.density * area))
+                .collect();
+            dry_lattice = Some((hl, ls, x0, lengths, carry.cell * carry.cell));
+        }
+        let drag = HairDrag { hair_diameter: 2.0 * (area / std::f64::consts::PI).sqrt(), ..HairDrag::default() };
+        let (mut lattice_max, mut lattice_peak_force) = (0.0f64, 0.0f64);
+        let mut node_forces: Vec<Vector3<f64>> = vec![];
         for n in 1..=steps {
             let t = n as f64 * self.dt;
             // Cuts due by now.
@@ -918,6 +951,28 @@ impl GlobalScenario {
                     c.step(&cluster_params, body, h)
                         .map_err(|e| global_err("clusters", e))?;
                 }
+                if let Some((hl, ls, x0, lengths, face)) = dry_lattice.as_mut() {
+                    node_forces.clear();
+                    node_forces.resize(hl.model.node_count(), Vector3::zeros());
+                    for a in &self.actions {
+                        if let Action::Dry(c) = a {
+                            if c.active(t) {
+                                let d = c.dryer(t);
+                                for (i, f) in node_forces.iter_mut().enumerate() {
+                                    *f += d
+                                        .hair_force(&ls.positions[i].coords, lengths[i], *face, &drag)
+                                        .map_err(|e| global_err("dryer", e))?;
+                                }
+                            }
+                        }
+                    }
+                    lattice_peak_force = lattice_peak_force.max(node_forces.iter().sum::<Vector3<f64>>().norm());
+                    hl.model
+                        .step_with_forces(ls, h, &still, Some(body), &node_forces)
+                        .map_err(|e| global_err("lattice", e))?;
+                    let disp = ls.positions.iter().zip(x0.iter()).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max);
+                    lattice_max = lattice_max.max(disp);
+                }
                 let (lo, hi) = wet
                     .values
                     .iter()
@@ -988,6 +1043,12 @@ impl GlobalScenario {
             cluster_energy: clusters.iter().map(|c| c.kinetic_energy()).sum::<f64>() + 0.0,
             pieces_max_field: max_field,
             clamped_steps: guides.iter().map(|g| g.clamped_steps).sum(),
+            lattice_max_displacement: lattice_max,
+            lattice_end_displacement: dry_lattice
+                .as_ref()
+                .map(|(_, ls, x0, _, _)| ls.positions.iter().zip(x0.iter()).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max))
+                .unwrap_or(0.0),
+            lattice_peak_force,
         };
         Ok(GlobalOutput {
             rows,

@@ -153,6 +153,7 @@ fn run_global(args: &RunArgs, scenario: &GlobalScenario) -> Result<()> {
          render cut      {} (mean length {:.6} m -> {:.6} m)\n\
          render mass     {:.9e} kg before; {:.9e} kg on head + {:.9e} kg cut = {:.9e} kg\n\
          clusters        {} (kinetic energy at the end {:.3e} J; largest body field at a piece point {:.4}, surface 0.25)\n\
+         lattice dryer   largest node displacement {:.3e} m (end {:.3e} m), peak dryer force {:.3e} N\n\
          wall time       {:.2} s\n\
          outputs         {}, {}, {}\n",
         h.hair_type,
@@ -183,6 +184,9 @@ fn run_global(args: &RunArgs, scenario: &GlobalScenario) -> Result<()> {
         s.clusters,
         s.cluster_energy,
         s.pieces_max_field,
+        s.lattice_max_displacement,
+        s.lattice_end_displacement,
+        s.lattice_peak_force,
         wall,
         trace_path.display(),
         hair_path.display(),

@@ -377,8 +377,8 @@ pub struct LatticeSnapshot {
     pub step_seconds: f64,
     /// Mean wetness in [0, 1] of each guide (over its segments' `WetnessField` values).
     pub wetness: Vec<f32>,
-    /// Scissors cuts applied to the render strands so far (the viewer re-reads `kept` when it changes).
-    pub cuts: u64,
+    /// Changes of `kept` so far (scissors cuts and resets): the viewer re-reads `kept` when it changes.
+    pub kept_version: u64,
     /// Points kept of each render strand (vertices 0..kept stay on the head; V: uncut).
     pub kept: Arc<Vec<u16>>,
     /// The falling cut clusters' chains: node positions (world, m), one list per chain.
@@ -505,6 +505,7 @@ pub struct GlobalCore {
     /// Kept length of each render strand in vertex units (V - 1: uncut).
     kept_len: Vec<f32>,
     kept: Arc<Vec<u16>>,
+    kept_version: u64,
     cuts: u64,
     /// Rest length of each render strand, m, and the render hair's linear density, kg/m.
     rest_len: Vec<f64>,
@@ -550,7 +551,7 @@ impl GlobalCore {
         let air_drag = g0.map_or(2e-5, |g| g.model.air_drag.max(2e-5));
         Self {
             model, state, version: 0, head, outside, sprayer, dryer, wet: WetnessField::dry(&segs), centres,
-            kept_len: vec![v.saturating_sub(1) as f32; rh.strands()], kept: Arc::new(vec![v as u16; rh.strands()]), cuts: 0,
+            kept_len: vec![v.saturating_sub(1) as f32; rh.strands()], kept: Arc::new(vec![v as u16; rh.strands()]), kept_version: 0, cuts: 0,
             rest_len, lambda, air_drag, clusters: Vec::new(), cluster_params: ClusterParams::default(), last_cut: None, failed: 0, scene,
         }
     }
@@ -561,6 +562,7 @@ impl GlobalCore {
         let v = self.scene.render.vertices_per_strand;
         self.kept_len.iter_mut().for_each(|k| *k = v.saturating_sub(1) as f32);
         self.kept = Arc::new(vec![v as u16; self.kept_len.len()]);
+        self.kept_version += 1;
         self.clusters.clear();
     }
     /// Sets every guide segment's wetness to `w` (clamped to [0, 1]; NaN gives 0).
@@ -651,7 +653,7 @@ impl GlobalCore {
         let wetness = (0..self.wet.values.len()).map(|g| self.wet.strand_mean(g) as f32).collect();
         let chains = self.clusters.iter().flat_map(|c| c.clusters.iter()).flat_map(|c| c.guides.iter())
             .map(|ch| ch.positions.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect()).collect();
-        LatticeSnapshot { version: self.version, positions: self.state.positions.clone(), step_seconds: 0.0, wetness, cuts: self.cuts, kept: self.kept.clone(), chains }
+        LatticeSnapshot { version: self.version, positions: self.state.positions.clone(), step_seconds: 0.0, wetness, kept_version: self.kept_version, kept: self.kept.clone(), chains }
     }
 
     /// Guide segment centres now (rest centres through the lattice), m.
@@ -759,6 +761,7 @@ impl GlobalCore {
             rep.mass_pieces += p.mass;
         }
         self.kept = Arc::new(kept);
+        self.kept_version += 1;
         // Falling clusters: at most MAX_PIECES_PER_CUT pieces, sampled evenly, masses scaled to the total.
         let every = pieces.len().div_ceil(MAX_PIECES_PER_CUT).max(1);
         let chosen: Vec<&hairstyle::cut::Piece> = pieces.iter().step_by(every).filter(|p| p.points.len() >= 2).collect();

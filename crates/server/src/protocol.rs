@@ -327,7 +327,7 @@ pub fn encode_frame(seq: u32, lat: &LatticeSnapshot, h: &HapticSnapshot) -> Vec<
         w.0.extend_from_slice(&x.to_le_bytes());
     }
     // --- falling cut clusters (issue 5: scissors) ---
-    w.u32(lat.cuts.min(u32::MAX as u64) as u32);
+    w.u32(lat.kept_version as u32);
     w.u32(lat.chains.len() as u32);
     for c in &lat.chains {
         w.u32(c.len() as u32);
@@ -389,7 +389,7 @@ mod tests {
     fn strands_and_frame_layout() {
         let b = encode_strands(&[12, 3]);
         assert_eq!(b, vec![server::STRANDS, VERSION, 2, 0, 0, 0, 12, 0, 3, 0]);
-        let lat = LatticeSnapshot { version: 7, positions: vec![nalgebra::Point3::new(1.0, 2.0, 3.0)], wetness: vec![0.5, 0.25], cuts: 2, chains: vec![vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]], vec![[7.0, 8.0, 9.0]]], ..Default::default() };
+        let lat = LatticeSnapshot { version: 7, positions: vec![nalgebra::Point3::new(1.0, 2.0, 3.0)], wetness: vec![0.5, 0.25], kept_version: 2, chains: vec![vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]], vec![[7.0, 8.0, 9.0]]], ..Default::default() };
         let h = HapticSnapshot { tool_rotation: Matrix3::identity(), ..Default::default() };
         let f = encode_frame(1, &lat, &h);
         // Header and fixed part: 2 + 4 + 4 + 1 + 1 + 2 + 12 + 16 + 12 + 12 + 4 + 4 = 74; 1 node; A = 0, K = 0.

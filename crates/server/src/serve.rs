@@ -142,7 +142,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let pump = std::thread::Builder::new().name("coiffure-frames".into()).spawn(move || {
         let (mut lattice, mut haptic) = (lattice, haptic);
         let mut st = PumpStats::default();
-        let mut cuts_sent = 0u64;
+        let mut kept_sent = 0u64;
         let period = Duration::from_secs_f64(1.0 / fps);
         let start = Instant::now();
         while !stop_p.load(Ordering::Relaxed) {
@@ -150,9 +150,9 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
             let w0 = Instant::now();
             let (lat, hap) = (lattice.read(), haptic.read());
             let msg = protocol::encode_frame(st.frames as u32, lat, hap);
-            // After a scissors cut: every viewer gets the strands' kept points (STRANDS) before the frame.
-            if lat.cuts != cuts_sent {
-                cuts_sent = lat.cuts;
+            // After a scissors cut or a reset: every viewer gets the strands' kept points (STRANDS) before the frame.
+            if lat.kept_version != kept_sent {
+                kept_sent = lat.kept_version;
                 let s = protocol::encode_strands(&lat.kept);
                 if let Ok(c) = app_p.control.lock() {
                     for (_, tx) in &c.viewers {

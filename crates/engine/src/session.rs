@@ -444,6 +444,8 @@ impl Default for ToolInput {
 
 /// Radius of the disk the scissors' blades sweep when they close, m (about the blades' length).
 pub const BLADE_RADIUS: f64 = 0.04;
+/// Distance the held scissors move between two cuts, m.
+pub const SNIP_DISTANCE: f64 = 0.02;
 /// Most falling pieces made of one cut: more are sampled evenly, their masses scaled to keep the total.
 pub const MAX_PIECES_PER_CUT: usize = 256;
 /// Most cuts whose clusters fall at once (the oldest is dropped).
@@ -833,6 +835,7 @@ pub struct HapticCore {
     /// Scissors closes so far, and whether the primary button was held in the last step.
     cuts: u64,
     was_pressed: bool,
+    last_cut_at: Option<Vector3<f64>>,
     step: u64,
     last_contacts: u32,
     last_select: Option<Vector3<f64>>,
@@ -856,7 +859,7 @@ impl HapticCore {
         let interaction = LocalInteraction::new(Vec::new(), Tool::Comb.shape(), pose, Self::force_model(&h, 0.0));
         Ok(Self {
             scene, params, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), interaction,
-            hair_force: Vector3::zeros(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), cuts: 0, was_pressed: false, step: 0, last_contacts: 0, last_select: None, clipped: false, rejected: 0, failed: 0,
+            hair_force: Vector3::zeros(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, rejected: 0, failed: 0,
         })
     }
 
@@ -1010,10 +1013,16 @@ impl HapticCore {
         self.apply_wetness(lattice);
         // Clip: the primary button closes it.
         let pressed = r.buttons & 1 != 0;
-        // Scissors: closing the blades (the button going down) cuts the active guides where the blades are;
-        // the global layer cuts the render strands when it sees the count go up (`ToolInput::cuts`).
-        if self.tool == Tool::Scissors && pressed && !self.was_pressed {
+        // Scissors: closing the blades (the button going down) cuts the active guides where the blades are,
+        // and again each time the held scissors have moved SNIP_DISTANCE (dragging cuts along the path); the
+        // global layer cuts the render strands when it sees the count go up (`ToolInput::cuts`).
+        let snip = self.tool == Tool::Scissors && pressed && (!self.was_pressed || self.last_cut_at.is_none_or(|p| (p - proxy).norm() > SNIP_DISTANCE));
+        if !pressed {
+            self.last_cut_at = None;
+        }
+        if snip {
             self.cuts += 1;
+            self.last_cut_at = Some(proxy);
             let blade = ToolInput { position: proxy, rotation: r.rotation, ..Default::default() }.blade();
             for (slot, &g) in self.active.iter().enumerate() {
                 let s = &self.interaction.strands[slot];

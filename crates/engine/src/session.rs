@@ -505,12 +505,11 @@ pub struct GlobalCore {
     /// Rest (head-frame) centres of each guide's segments, m.
     centres: Vec<Vec<Vector3<f64>>>,
     /// Kept length of each render strand in vertex units (V - 1: uncut).
-    kept_len: Vec<f32>,
+    kept_len: Vec<f64>,
     kept: Arc<Vec<u16>>,
     kept_version: u64,
     cuts: u64,
-    /// Rest length of each render strand, m, and the render hair's linear density, kg/m.
-    rest_len: Vec<f64>,
+    /// The render hair's linear density, kg/m.
     lambda: f64,
     /// Air drag per unit length of a hair, N s/m^2.
     air_drag: f64,
@@ -545,16 +544,13 @@ impl GlobalCore {
         }).collect();
         let rh = &scene.render;
         let v = rh.vertices_per_strand;
-        let rest_len = (0..rh.strands()).map(|i| {
-            rh.positions[i * v..(i + 1) * v].windows(2).map(|w| (Vector3::from(w[1]) - Vector3::from(w[0])).cast::<f64>().norm()).sum()
-        }).collect();
         let g0 = scene.guides.first();
         let lambda = g0.map_or(6.5e-5, |g| g.model.linear_density());
         let air_drag = g0.map_or(2e-5, |g| g.model.air_drag.max(2e-5));
         Self {
             model, state, version: 0, head, outside, sprayer, dryer, wet: WetnessField::dry(&segs), centres,
-            kept_len: vec![v.saturating_sub(1) as f32; rh.strands()], kept: Arc::new(vec![v as u16; rh.strands()]), kept_version: 0, cuts: 0,
-            rest_len, lambda, air_drag, clusters: Vec::new(), cluster_params: ClusterParams::default(), last_cut: None, failed: 0, scene,
+            kept_len: vec![v.saturating_sub(1) as f64; rh.strands()], kept: Arc::new(vec![v as u16; rh.strands()]), kept_version: 0, cuts: 0,
+            lambda, air_drag, clusters: Vec::new(), cluster_params: ClusterParams::default(), last_cut: None, failed: 0, scene,
         }
     }
     /// Back to rest: lattice, wetness, cuts and falling clusters (keeps counting versions and cuts).
@@ -562,7 +558,7 @@ impl GlobalCore {
         self.state = self.model.rest_state(&self.head);
         self.wet.values.iter_mut().flatten().for_each(|w| *w = 0.0);
         let v = self.scene.render.vertices_per_strand;
-        self.kept_len.iter_mut().for_each(|k| *k = v.saturating_sub(1) as f32);
+        self.kept_len.iter_mut().for_each(|k| *k = v.saturating_sub(1) as f64);
         self.kept = Arc::new(vec![v as u16; self.kept_len.len()]);
         self.kept_version += 1;
         self.clusters.clear();
@@ -593,7 +589,7 @@ impl GlobalCore {
         self.cluster_params.floor
     }
     /// Kept length of each render strand in vertex units (V - 1: uncut).
-    pub fn kept_lengths(&self) -> &[f32] {
+    pub fn kept_lengths(&self) -> &[f64] {
         &self.kept_len
     }
     /// Linear density of the render hair, kg/m.
@@ -711,26 +707,42 @@ impl GlobalCore {
         let c = Vector3::from(blade.point);
         let vert = |i: usize, j: usize| Vector3::from(rh.positions[i * v + j]).cast::<f64>();
         // Polyline of strand i as kept now, through the lattice.
-        let line = |i: usize, k: f32| -> Vec<[f64; 3]> {
+        let line = |i: usize, k: f64| -> Vec<[f64; 3]> {
             let whole = (k.floor() as usize).min(v - 1);
             let mut out: Vec<[f64; 3]> = (0..=whole).map(|j| ffd_map(f, nodes, &vert(i, j)).into()).collect();
-            let frac = (k - whole as f32) as f64;
+            let frac = k - whole as f64;
             if frac > 0.0 && whole + 1 < v {
-                let p = vert(i, whole) * (1.0 - frac) + vert(i, whole + 1) * frac;
-                out.push(ffd_map(f, nodes, &p).into());
+                // The cut end on the straight segment between the mapped vertices (where the cut was made).
+                let (a, b) = (Vector3::from(out[whole]), ffd_map(f, nodes, &vert(i, whole + 1)));
+                out.push((a * (1.0 - frac) + b * frac).into());
             }
             out
         };
         let mut idx = Vec::new();
         let mut lines = Vec::new();
+        // The FFD moves no point farther than the farthest node moved (its weights are a convex combination):
+        // a strand whose rest vertices all stay farther than that from the blade's plane on one side, or from
+        // the disk, cannot cross it, and is skipped without mapping it through the lattice.
+        let reach = nodes.iter().zip(&self.model.rest).map(|(x, r)| (x - self.head * r).norm()).fold(0.0, f64::max) + 1e-9;
+        let n = Vector3::from(blade.normal).normalize();
         for i in 0..rh.strands() {
             let k = self.kept_len[i];
             if !(k > 0.0) {
                 continue;
             }
-            // A strand of rest length L can reach at most 1.5 L (+ 5 cm of lattice stretch) from its root.
-            let root = ffd_map(f, nodes, &vert(i, 0));
-            if (root - c).norm() > 1.5 * self.rest_len[i] + blade.radius + 0.05 {
+            let last = (k.ceil() as usize).min(v - 1);
+            let (mut above, mut below, mut near, mut seg) = (false, false, f64::INFINITY, 0.0f64);
+            for j in 0..=last {
+                let r = vert(i, j);
+                let d = n.dot(&(r - c));
+                above |= d > -reach;
+                below |= d < reach;
+                near = near.min((r - c).norm());
+                if j > 0 {
+                    seg = seg.max((r - vert(i, j - 1)).norm());
+                }
+            }
+            if !(above && below) || near > blade.radius + reach + seg {
                 continue;
             }
             let l = line(i, k);
@@ -754,7 +766,7 @@ impl GlobalCore {
             // Segment j of the polyline is vertex segment j, except a partial last one (from an earlier cut).
             let k_old = self.kept_len[i];
             let whole = k_old.floor() as usize;
-            let k_new = if j >= whole { whole as f32 + (k_old - whole as f32) * t as f32 } else { j as f32 + t as f32 };
+            let k_new = if j >= whole { whole as f64 + (k_old - whole as f64) * t } else { j as f64 + t };
             self.kept_len[i] = k_new.min(k_old);
             kept[i] = ((self.kept_len[i] + 0.5).floor() as usize + 1).min(v) as u16;
             rep.strands += 1;
@@ -1608,8 +1620,13 @@ mod tests {
         // mass plus the mass kept on the head (from the kept lengths the session stores) equals the mass
         // before, to 1e-9 relative; the falling clusters carry the pieces' mass (1e-9 relative). Then the
         // clusters fall: after 4 s they are at rest (kinetic energy < 1e-7 J) and above the floor.
+        // The lattice is deformed first (the comb held in the hair for 0.2 s), so the cut is of the FFD's shape.
         let scene = small_scene();
         let mut g = GlobalCore::new(scene.clone(), &SessionParams::default());
+        let comb = ToolInput { tool: Tool::Comb, present: true, position: Vector3::new(0.0, -0.13, 0.0), rotation: test_rot(), pressed: false, cuts: 0 };
+        for _ in 0..20 {
+            g.step(0.01, &comb);
+        }
         let v = scene.render.vertices_per_strand;
         let blade = Blade { point: [0.0, -0.12, -0.05], normal: [0.0, 0.0, 1.0], radius: 0.08 };
         let rep = g.cut(&blade);
@@ -1619,9 +1636,9 @@ mod tests {
         assert!((rep.mass_clusters - rep.mass_pieces).abs() <= 1e-9 * rep.mass_pieces, "{rep:?}");
         assert!(rep.pieces > 0 && rep.pieces <= MAX_PIECES_PER_CUT);
         let snap = g.snapshot();
-        assert_eq!(g.kept_lengths().iter().filter(|&&k| k < (v - 1) as f32).count(), rep.strands);
+        assert_eq!(g.kept_lengths().iter().filter(|&&k| k < (v - 1) as f64).count(), rep.strands);
         assert!(snap.kept.iter().filter(|&&k| (k as usize) < v).count() > rep.strands / 2);
-        assert!(g.kept_lengths().iter().all(|&k| k >= 0.0 && k <= (v - 1) as f32));
+        assert!(g.kept_lengths().iter().all(|&k| k >= 0.0 && k <= (v - 1) as f64));
         assert!(!snap.chains.is_empty());
         // A second cut at the same place cuts nothing more; a cut higher up cuts the same strands again.
         assert_eq!(g.cut(&blade).strands, 0);

@@ -517,6 +517,8 @@ pub struct GlobalCore {
     cluster_params: ClusterParams,
     /// The last cut's report.
     pub last_cut: Option<CutReport>,
+    deferred: bool,
+    pending: Vec<Blade>,
     /// Wetness or cluster updates that failed (state kept).
     pub failed: u64,
 }
@@ -550,7 +552,7 @@ impl GlobalCore {
         Self {
             model, state, version: 0, head, outside, sprayer, dryer, wet: WetnessField::dry(&segs), centres,
             kept_len: vec![v.saturating_sub(1) as f64; rh.strands()], kept: Arc::new(vec![v as u16; rh.strands()]), kept_version: 0, cuts: 0,
-            lambda, air_drag, clusters: Vec::new(), cluster_params: ClusterParams::default(), last_cut: None, failed: 0, scene,
+            lambda, air_drag, clusters: Vec::new(), cluster_params: ClusterParams::default(), last_cut: None, deferred: false, pending: Vec::new(), failed: 0, scene,
         }
     }
     /// Back to rest: lattice, wetness, cuts and falling clusters (keeps counting versions and cuts).
@@ -562,6 +564,7 @@ impl GlobalCore {
         self.kept = Arc::new(vec![v as u16; self.kept_len.len()]);
         self.kept_version += 1;
         self.clusters.clear();
+        self.pending.clear();
     }
     /// Sets every guide segment's wetness to `w` (clamped to [0, 1]; NaN gives 0).
     pub fn set_wetness(&mut self, w: f64) {
@@ -604,7 +607,11 @@ impl GlobalCore {
         if input.cuts > self.cuts {
             self.cuts = input.cuts;
             if input.present {
-                self.last_cut = Some(self.cut(&input.blade()));
+                if self.deferred {
+                    self.pending.push(input.blade());
+                } else {
+                    self.cut(&input.blade());
+                }
             }
         }
         let nozzle = input.present && input.pressed;
@@ -693,17 +700,108 @@ impl GlobalCore {
     }
 
     /// Cuts the render strands crossing `blade` (their current shape: rest positions through the lattice)
-    /// and turns the pieces into falling clusters. Strands whose root is too far from the blade to reach it
-    /// are skipped without mapping them.
+    /// and turns the pieces into falling clusters, at once (`self.cut_job(blade).run()` then
+    /// [`GlobalCore::apply_cut`]).
     pub fn cut(&mut self, blade: &Blade) -> CutReport {
+        let job = self.cut_job(blade);
+        let r = job.run();
+        self.apply_cut(r).unwrap_or_default()
+    }
+
+    /// What a cut needs of the current state, copied so that another thread can compute it
+    /// ([`CutJob::run`]) while this core keeps stepping.
+    pub fn cut_job(&self, blade: &Blade) -> CutJob {
+        CutJob { scene: self.scene.clone(), nodes: self.state.positions.clone(), head: self.head, kept_len: self.kept_len.clone(), kept_version: self.kept_version, lambda: self.lambda, blade: *blade }
+    }
+
+    /// Applies a computed cut: shortens the strands and adds the falling clusters. None (and nothing done)
+    /// if the strands changed since the job was taken (a reset meanwhile).
+    pub fn apply_cut(&mut self, r: CutResult) -> Option<CutReport> {
+        if r.kept_version != self.kept_version {
+            return None;
+        }
+        let t0 = Instant::now();
+        let mut rep = r.report;
+        let v = self.scene.render.vertices_per_strand;
+        let mut kept = (*self.kept).clone();
+        for &(i, k) in &r.changes {
+            self.kept_len[i] = k;
+            kept[i] = ((k + 0.5).floor() as usize + 1).min(v) as u16;
+        }
+        self.kept = Arc::new(kept);
+        self.kept_version += 1;
+        if !r.pieces.is_empty() {
+            match ClusterSet::new(&r.pieces, &self.cluster_params) {
+                Ok(set) => {
+                    rep.mass_clusters = set.total_mass();
+                    rep.pieces = r.pieces.len();
+                    if self.clusters.len() >= MAX_CLUSTER_SETS {
+                        self.clusters.remove(0);
+                    }
+                    self.clusters.push(set);
+                }
+                Err(_) => self.failed += 1,
+            }
+        }
+        rep.seconds += t0.elapsed().as_secs_f64();
+        self.last_cut = Some(rep);
+        Some(rep)
+    }
+
+    /// Cuts the global steps were asked for but left to the caller (see [`GlobalCore::defer_cuts`]).
+    pub fn take_pending_cut(&mut self) -> Option<Blade> {
+        if self.pending.is_empty() { None } else { Some(self.pending.remove(0)) }
+    }
+
+    /// With `true`, [`GlobalCore::step`] queues the scissors' cuts ([`GlobalCore::take_pending_cut`]) instead
+    /// of making them: the live session computes them on a worker thread and applies them when done.
+    pub fn defer_cuts(&mut self, on: bool) {
+        self.deferred = on;
+    }
+
+    /// Version of the kept points (changes with every cut and reset).
+    pub fn kept_version(&self) -> u64 {
+        self.kept_version
+    }
+}
+
+/// The inputs of one scissors cut of the render strands (see [`GlobalCore::cut_job`]).
+pub struct CutJob {
+    scene: Arc<Scene>,
+    nodes: Vec<Point3<f64>>,
+    head: Isometry3<f64>,
+    kept_len: Vec<f64>,
+    kept_version: u64,
+    lambda: f64,
+    blade: Blade,
+}
+
+/// A computed cut, to apply with [`GlobalCore::apply_cut`].
+pub struct CutResult {
+    kept_version: u64,
+    /// New kept length (vertex units) of each strand cut.
+    changes: Vec<(usize, f64)>,
+    /// The pieces for the falling clusters (at most [`MAX_PIECES_PER_CUT`]).
+    pieces: Vec<CutPiece>,
+    report: CutReport,
+}
+
+impl CutJob {
+    /// Computes the cut: each kept strand (rest positions through the lattice) is cut at its first crossing
+    /// of the blade's disk (`hairstyle::cut::cut_polylines`). Strands that cannot reach the blade are skipped
+    /// without mapping them. At most [`MAX_PIECES_PER_CUT`] pieces are kept for the clusters, sampled
+    /// evenly, their masses scaled so that they carry all the mass cut off.
+    pub fn run(&self) -> CutResult {
         let t0 = Instant::now();
         let mut rep = CutReport::default();
+        let mut out = CutResult { kept_version: self.kept_version, changes: Vec::new(), pieces: Vec::new(), report: rep };
+        let blade = &self.blade;
         if blade.validate().is_err() {
-            return rep;
+            return out;
         }
         let rh = &self.scene.render;
         let v = rh.vertices_per_strand;
-        let (f, nodes) = (&self.model.ffd, &self.state.positions);
+        let (f, nodes) = (&self.scene.lattice.ffd, &self.nodes);
         let c = Vector3::from(blade.point);
         let vert = |i: usize, j: usize| Vector3::from(rh.positions[i * v + j]).cast::<f64>();
         // Polyline of strand i as kept now, through the lattice.
@@ -723,7 +821,7 @@ impl GlobalCore {
         // The FFD moves no point farther than the farthest node moved (its weights are a convex combination):
         // a strand whose rest vertices all stay farther than that from the blade's plane on one side, or from
         // the disk, cannot cross it, and is skipped without mapping it through the lattice.
-        let reach = nodes.iter().zip(&self.model.rest).map(|(x, r)| (x - self.head * r).norm()).fold(0.0, f64::max) + 1e-9;
+        let reach = nodes.iter().zip(&self.scene.lattice.rest).map(|(x, r)| (x - self.head * r).norm()).fold(0.0, f64::max) + 1e-9;
         let n = Vector3::from(blade.normal).normalize();
         for i in 0..rh.strands() {
             let k = self.kept_len[i];
@@ -754,11 +852,7 @@ impl GlobalCore {
             }
         }
         let before: Vec<Vec<[f64; 3]>> = lines.clone();
-        let pieces = match cut_polylines(&mut lines, self.lambda, blade) {
-            Ok(p) => p,
-            Err(_) => return rep,
-        };
-        let mut kept = (*self.kept).clone();
+        let Ok(pieces) = cut_polylines(&mut lines, self.lambda, blade) else { return out };
         for p in &pieces {
             let i = idx[p.source];
             let orig = &before[p.source];
@@ -766,37 +860,24 @@ impl GlobalCore {
             // Segment j of the polyline is vertex segment j, except a partial last one (from an earlier cut).
             let k_old = self.kept_len[i];
             let whole = k_old.floor() as usize;
-            let k_new = if j >= whole { whole as f64 + (k_old - whole as f64) * t } else { j as f64 + t };
-            self.kept_len[i] = k_new.min(k_old);
-            kept[i] = ((self.kept_len[i] + 0.5).floor() as usize + 1).min(v) as u16;
+            let k_new = (if j >= whole { whole as f64 + (k_old - whole as f64) * t } else { j as f64 + t }).min(k_old);
+            out.changes.push((i, k_new));
             rep.strands += 1;
             rep.mass_before += self.lambda * polyline_length(orig);
-            rep.mass_kept += self.lambda * polyline_length(&line(i, self.kept_len[i]));
+            rep.mass_kept += self.lambda * polyline_length(&line(i, k_new));
             rep.mass_pieces += p.mass;
         }
-        self.kept = Arc::new(kept);
-        self.kept_version += 1;
         // Falling clusters: at most MAX_PIECES_PER_CUT pieces, sampled evenly, masses scaled to the total.
         let every = pieces.len().div_ceil(MAX_PIECES_PER_CUT).max(1);
         let chosen: Vec<&hairstyle::cut::Piece> = pieces.iter().step_by(every).filter(|p| p.points.len() >= 2).collect();
         let chosen_mass: f64 = chosen.iter().map(|p| p.mass).sum();
         if chosen_mass > 0.0 {
             let scale = rep.mass_pieces / chosen_mass;
-            let cp: Vec<CutPiece> = chosen.iter().map(|p| CutPiece { points: p.points.iter().map(|x| Point3::from(*x)).collect(), mass: p.mass * scale }).collect();
-            match ClusterSet::new(&cp, &self.cluster_params) {
-                Ok(set) => {
-                    rep.mass_clusters = set.total_mass();
-                    rep.pieces = cp.len();
-                    if self.clusters.len() >= MAX_CLUSTER_SETS {
-                        self.clusters.remove(0);
-                    }
-                    self.clusters.push(set);
-                }
-                Err(_) => self.failed += 1,
-            }
+            out.pieces = chosen.iter().map(|p| CutPiece { points: p.points.iter().map(|x| Point3::from(*x)).collect(), mass: p.mass * scale }).collect();
         }
         rep.seconds = t0.elapsed().as_secs_f64();
-        rep
+        out.report = rep;
+        out
     }
 }
 
@@ -1240,8 +1321,12 @@ impl Session {
         let period = Duration::from_secs_f64(1.0 / params.global_rate_hz);
         let gdt = period.as_secs_f64();
         let recording = params.record;
+        global.defer_cuts(true);
         let global_thread = std::thread::Builder::new().name("coiffure-global".into()).spawn(move || {
             let (mut steps, mut busy, mut recov) = (0u64, 0.0f64, 0u64);
+            // Scissors cuts run on a worker thread (one at a time) and are swapped in when done, so a cut of
+            // 100k strands does not stall the lattice. (The haptic forces do not depend on them.)
+            let mut cutting: Option<JoinHandle<CutResult>> = None;
             let mut resets = Vec::new();
             let mut inputs = Vec::new();
             let mut seen_epoch = 0;
@@ -1257,7 +1342,22 @@ impl Session {
                 if recording {
                     inputs.push(input);
                 }
-                let (snap, bad) = global.step(gdt, &input);
+                let (mut snap, bad) = global.step(gdt, &input);
+                if cutting.as_ref().is_some_and(|h| h.is_finished()) {
+                    if let Some(Ok(r)) = cutting.take().map(|h| h.join()) {
+                        if global.apply_cut(r).is_some() {
+                            let secs = snap.step_seconds;
+                            snap = global.snapshot();
+                            snap.step_seconds = secs;
+                        }
+                    }
+                }
+                if cutting.is_none() {
+                    if let Some(b) = global.take_pending_cut() {
+                        let job = global.cut_job(&b);
+                        cutting = std::thread::Builder::new().name("coiffure-cut".into()).spawn(move || job.run()).ok();
+                    }
+                }
                 busy += snap.step_seconds;
                 recov += bad as u64;
                 steps += 1;
@@ -1652,6 +1752,32 @@ mod tests {
         assert!((g.cluster_mass() - mass0).abs() <= 1e-12 * mass0);
         assert!(e < 1e-7, "clusters at rest: {e} J");
         assert!(low >= g.floor() - 1e-6, "above the floor: {low}");
+    }
+
+    #[test]
+    fn a_cut_on_a_worker_gives_the_same_strands_as_at_once() {
+        // The live session defers cuts to a worker thread: the same blade gives the same kept lengths; a reset
+        // between taking the job and applying it drops the result.
+        let scene = small_scene();
+        let p = SessionParams::default();
+        let (mut now, mut later) = (GlobalCore::new(scene.clone(), &p), GlobalCore::new(scene.clone(), &p));
+        later.defer_cuts(true);
+        let input = ToolInput { tool: Tool::Scissors, present: true, position: Vector3::new(0.0, -0.12, -0.05), rotation: test_rot(), pressed: true, cuts: 1 };
+        now.step(0.01, &ToolInput { cuts: 0, ..input });
+        later.step(0.01, &input);
+        let v0 = later.kept_version();
+        let blade = later.take_pending_cut().expect("queued");
+        now.cut(&blade);
+        assert!(later.take_pending_cut().is_none());
+        let job = later.cut_job(&blade);
+        let r = std::thread::spawn(move || job.run()).join().unwrap();
+        let rep = later.apply_cut(r).expect("applied");
+        assert_eq!(later.kept_version(), v0 + 1);
+        assert!(rep.strands > 50);
+        assert!(now.kept_lengths() == later.kept_lengths(), "the same kept lengths");
+        let job = later.cut_job(&Blade { point: [0.0, -0.12, -0.02], ..blade });
+        later.reset();
+        assert!(later.apply_cut(job.run()).is_none(), "a reset drops the pending cut");
     }
 
     #[test]

@@ -1781,6 +1781,34 @@ mod tests {
     }
 
     #[test]
+    fn lattice_nodes_thrown_at_the_head_stay_outside_the_body() {
+        // Every node that starts outside the body is thrown at the head's centre at 3 m/s: after each step,
+        // none of them is inside the body (metaball field above the threshold by more than 1e-9), and none
+        // moves inwards any more.
+        let scene = small_scene();
+        let mut g = GlobalCore::new(scene.clone(), &SessionParams::default());
+        let t = g.model.params.metaball.threshold;
+        for (i, x) in g.state.positions.clone().iter().enumerate() {
+            if g.outside[i] && x.coords.norm() > 1e-9 {
+                g.state.velocities[i] = -x.coords.normalize() * 3.0;
+            }
+        }
+        let outside = g.outside.iter().filter(|&&o| o).count();
+        let mut worst: f64 = 0.0;
+        for _ in 0..20 {
+            g.step(0.01, &ToolInput::default());
+            for (i, x) in g.state.positions.iter().enumerate() {
+                if g.outside[i] {
+                    worst = worst.max(scene.head.field(x) - t);
+                }
+            }
+        }
+        eprintln!("{outside} nodes outside the body at rest; largest field above the surface {worst}");
+        assert!(outside > 100);
+        assert!(worst <= 1e-9, "a node went into the body: field {worst} above the threshold");
+    }
+
+    #[test]
     fn the_tool_pushes_the_lattice_and_does_not_drag_it() {
         // Two lattices side by side, one with the comb held still in the hair behind the head. Relative to
         // the free one: every node the comb touches (its metaball field at the free position >= 0.1, the

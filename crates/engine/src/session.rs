@@ -1782,29 +1782,37 @@ mod tests {
 
     #[test]
     fn lattice_nodes_thrown_at_the_head_stay_outside_the_body() {
-        // Every node that starts outside the body is thrown at the head's centre at 3 m/s: after each step,
-        // none of them is inside the body (metaball field above the threshold by more than 1e-9), and none
-        // moves inwards any more.
+        // Every node that starts outside the body is thrown at the head's centre at 10 m/s: after each step,
+        // none of them is inside the body (metaball field above the threshold by more than 1e-9). The same
+        // throw without the push-out does put nodes inside (so the test can fail).
         let scene = small_scene();
-        let mut g = GlobalCore::new(scene.clone(), &SessionParams::default());
-        let t = g.model.params.metaball.threshold;
-        for (i, x) in g.state.positions.clone().iter().enumerate() {
-            if g.outside[i] && x.coords.norm() > 1e-9 {
-                g.state.velocities[i] = -x.coords.normalize() * 3.0;
-            }
-        }
-        let outside = g.outside.iter().filter(|&&o| o).count();
-        let mut worst: f64 = 0.0;
-        for _ in 0..20 {
-            g.step(0.01, &ToolInput::default());
-            for (i, x) in g.state.positions.iter().enumerate() {
-                if g.outside[i] {
-                    worst = worst.max(scene.head.field(x) - t);
+        let run = |push: bool| -> (usize, f64) {
+            let mut g = GlobalCore::new(scene.clone(), &SessionParams::default());
+            let t = g.model.params.metaball.threshold;
+            let outside = g.outside.clone();
+            for (i, x) in g.state.positions.clone().iter().enumerate() {
+                if outside[i] && x.coords.norm() > 1e-9 {
+                    g.state.velocities[i] = -x.coords.normalize() * 10.0;
                 }
             }
-        }
-        eprintln!("{outside} nodes outside the body at rest; largest field above the surface {worst}");
+            if !push {
+                g.outside.iter_mut().for_each(|o| *o = false);
+            }
+            let mut worst = f64::NEG_INFINITY;
+            for _ in 0..20 {
+                g.step(0.01, &ToolInput::default());
+                for (i, x) in g.state.positions.iter().enumerate() {
+                    if outside[i] {
+                        worst = worst.max(scene.head.field(x) - t);
+                    }
+                }
+            }
+            (outside.iter().filter(|&&o| o).count(), worst)
+        };
+        let ((outside, worst), (_, without)) = (run(true), run(false));
+        eprintln!("{outside} nodes outside the body at rest; largest field above the surface {worst} (without the push-out {without})");
         assert!(outside > 100);
+        assert!(without > 1e-4, "the throw reaches the body: {without}");
         assert!(worst <= 1e-9, "a node went into the body: field {worst} above the threshold");
     }
 

@@ -193,7 +193,7 @@ export class HairMaterial {
   }
 
   /** Displacements of the active guides (rows of the others are kept: styling persists). */
-  setGuides(active: Uint32Array, samples: number, displacement: Float32Array, wetness: Float32Array, cut: Float32Array): void {
+  setGuides(active: Uint32Array, samples: number, displacement: Float32Array, wetness: Float32Array): void {
     const d = this.displacementTexture.image.data as Float32Array;
     const w = this.displacementTexture.image.width;
     for (let a = 0; a < active.length; a++) {
@@ -209,7 +209,6 @@ export class HairMaterial {
     const st = this.stateTexture.image.data as Float32Array;
     for (let g = 0; g < Math.min(wetness.length, st.length / 4); g++) {
       st[4 * g] = wetness[g];
-      st[4 * g + 1] = cut[g];
     }
     this.stateTexture.needsUpdate = true;
   }
@@ -283,4 +282,21 @@ export function hairGeometry(scene: SceneMsg): THREE.BufferGeometry {
   g.setAttribute('arc', new THREE.BufferAttribute(arc, 2));
   g.setIndex(new THREE.BufferAttribute(index, 1));
   return g;
+}
+
+// --- scissors (issue 5) ---
+/** Draws only the kept part of every strand: segments (j, j + 1) with j + 1 < kept[s] (STRANDS message).
+ * Returns the number of segments drawn. */
+export function setKept(g: THREE.BufferGeometry, nv: number, kept: Uint16Array): number {
+  const index = g.getIndex();
+  if (!index) return 0;
+  const a = index.array as Uint32Array;
+  let n = 0;
+  for (let s = 0; s < kept.length; s++) {
+    const k = Math.min(nv, kept[s]);
+    for (let i = 0; i + 1 < k; i++) { a[n++] = s * nv + i; a[n++] = s * nv + i + 1; }
+  }
+  g.setDrawRange(0, n);
+  index.needsUpdate = true;
+  return n / 2;
 }

@@ -19,7 +19,11 @@ interface Status {
   contacts: number;
   maxDisplacement: number;
   wetnessMean: number;
-  cutMin: number;
+  cutMin: number; // smallest kept fraction of a render strand (kept points / V), 1 before any cut
+  keptMean: number; // mean kept points per render strand (STRANDS)
+  segmentsDrawn: number; // render strand segments drawn
+  keptVersion: number; // changes of the strands' kept points on the server (cuts, resets)
+  chainPoints: number; // points of the falling chains in the last frame
   tool: number;
   errors: P.ErrorMsg[];
   frameTimes: number[];
@@ -37,7 +41,7 @@ const device = new MouseDevice(view.camera, canvas, view.controls.target);
 const status: Status = {
   webgl2: view.renderer.getContext() instanceof WebGL2RenderingContext,
   connected: false, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
-  lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, tool: 0, errors: [], frameTimes: [], strands: 0,
+  lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], frameTimes: [], strands: 0,
   lastFile: null,
   send: (b) => { if (ws.readyState === WebSocket.OPEN) ws.send(b); },
 };
@@ -64,6 +68,7 @@ ws.onmessage = (ev) => {
   switch (type) {
     case P.Server.SCENE: onScene(P.decodeScene(buf)); break;
     case P.Server.FRAME: onFrame(P.decodeFrame(buf)); break;
+    case P.Server.STRANDS: onStrands(P.decodeStrands(buf)); break;
     case P.Server.ERROR: {
       const e = P.decodeError(buf);
       status.errors.push(e);
@@ -93,10 +98,21 @@ ws.onmessage = (ev) => {
 function onScene(msg: P.SceneMsg): void {
   view.load(msg);
   status.strands = msg.strands;
+  nv = msg.verticesPerStrand;
   const preset = document.getElementById('preset') as HTMLSelectElement;
   preset.innerHTML = msg.hairTypes.map((n, i) => `<option value="${i}">${n}</option>`).join('');
   preset.value = String(msg.hairType);
   status.sceneLoaded = true;
+}
+
+// --- scissors (issue 5): shortened strands ---
+let nv = 2;
+function onStrands(kept: Uint16Array): void {
+  status.segmentsDrawn = view.setKept(kept);
+  let sum = 0, min = Infinity;
+  for (const k of kept) { sum += k; min = Math.min(min, k); }
+  status.keptMean = sum / Math.max(1, kept.length);
+  status.cutMin = kept.length ? min / nv : 1;
 }
 
 const scratch = new THREE.Vector3();
@@ -106,13 +122,15 @@ function onFrame(f: P.FrameMsg): void {
   const hair = view.hair;
   if (hair) {
     hair.setLattice(f.nodes);
-    hair.setGuides(f.active, f.samples, f.displacement, f.wetness, f.cut);
+    hair.setGuides(f.active, f.samples, f.displacement, f.wetness);
   }
+  view.setChains(f.chainCounts, f.chainPoints);
+  status.keptVersion = f.keptVersion;
+  status.chainPoints = f.chainPoints.length / 3;
   for (let i = 0; i < f.displacement.length; i += 3) {
     status.maxDisplacement = Math.max(status.maxDisplacement, Math.hypot(f.displacement[i], f.displacement[i + 1], f.displacement[i + 2]));
   }
   status.wetnessMean = f.wetness.reduce((a, b) => a + b, 0) / Math.max(1, f.wetness.length);
-  status.cutMin = f.cut.reduce((a, b) => Math.min(a, b), 1);
   const fm = Math.hypot(...f.force);
   status.lastForce = fm;
   status.peakForce = Math.max(status.peakForce, fm);
@@ -216,7 +234,7 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
       ctx.drawImage(canvas, 0, 0);
       return ctx.getImageData(0, 0, c.width, c.height).data;
     };
-    const hairObj = view.scene.children.find((o) => (o as THREE.LineSegments).isLineSegments && o !== arrow);
+    const hairObj = view.scene.children.find((o) => (o as THREE.LineSegments).isLineSegments && o !== arrow && o !== view.chains);
     const withHair = read();
     if (hairObj) hairObj.visible = false;
     const without = read();

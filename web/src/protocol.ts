@@ -20,6 +20,8 @@ export const Server = {
   CONTROL: 0x84,
   FILE: 0x85,
   PONG: 0x86,
+  // --- STRANDS (issue 5: scissors) ---
+  STRANDS: 0x87,
 } as const;
 
 export const FORMATS = ['hair', 'data', 'tfx', 'usda'];
@@ -63,7 +65,10 @@ export interface FrameMsg {
   samples: number;
   displacement: Float32Array; // 3 per sample, active.length * samples samples
   wetness: Float32Array;
-  cut: Float32Array;
+  // --- falling cut clusters (issue 5: scissors) ---
+  keptVersion: number; // changes of the strands' kept points (cuts, resets); STRANDS follows each
+  chainCounts: Uint32Array; // points of each falling chain
+  chainPoints: Float32Array; // 3 per point, chain after chain (world, m)
 }
 
 export interface ErrorMsg { code: number; message: string }
@@ -137,8 +142,20 @@ export function decodeFrame(buf: ArrayBuffer): FrameMsg {
   const displacement = f32s(buf, o, 3 * nActive * samples); o += 12 * nActive * samples;
   const nGuides = u32();
   const wetness = f32s(buf, o, nGuides); o += 4 * nGuides;
-  const cut = f32s(buf, o, nGuides); o += 4 * nGuides;
-  return { seq, time, tool, youControl, contacts, toolPosition, toolQuaternion, devicePosition, force, latticeVersion, nodes, active, samples, displacement, wetness, cut };
+  // --- falling cut clusters (issue 5: scissors) ---
+  const keptVersion = u32();
+  const nChains = u32();
+  const chainCounts = u32s(buf, o, nChains); o += 4 * nChains;
+  const nPoints = chainCounts.reduce((a, b) => a + b, 0);
+  const chainPoints = f32s(buf, o, 3 * nPoints); o += 12 * nPoints;
+  return { seq, time, tool, youControl, contacts, toolPosition, toolQuaternion, devicePosition, force, latticeVersion, nodes, active, samples, displacement, wetness, keptVersion, chainCounts, chainPoints };
+}
+
+// --- STRANDS (issue 5: scissors) ---
+/** STRANDS: the points kept of every render strand (vertices 0..kept-1 of strand i stay on the head). */
+export function decodeStrands(buf: ArrayBuffer): Uint16Array {
+  const n = new DataView(buf).getUint32(2, true);
+  return new Uint16Array(buf.slice(6, 6 + 2 * n));
 }
 
 export function decodeError(buf: ArrayBuffer): ErrorMsg {

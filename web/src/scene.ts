@@ -2,7 +2,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import type { SceneMsg } from './protocol';
-import { HairMaterial, hairGeometry } from './hairMaterial';
+import { HairMaterial, hairGeometry, setKept } from './hairMaterial';
 
 export class View {
   readonly renderer: THREE.WebGLRenderer;
@@ -11,6 +11,10 @@ export class View {
   readonly controls: OrbitControls;
   hair: HairMaterial | null = null;
   private hairMesh: THREE.LineSegments | null = null;
+  private verticesPerStrand = 2;
+  /** Falling cut pieces (the clusters' chains), redrawn every frame. */
+  readonly chains: THREE.LineSegments;
+  private chainPositions = new Float32Array(3 * 4096);
   private headMesh: THREE.Mesh | null = null;
 
   constructor(readonly canvas: HTMLCanvasElement) {
@@ -32,6 +36,39 @@ export class View {
     this.scene.add(sun);
     this.resize();
     window.addEventListener('resize', () => this.resize());
+    const cg = new THREE.BufferGeometry();
+    cg.setAttribute('position', new THREE.BufferAttribute(this.chainPositions, 3));
+    this.chains = new THREE.LineSegments(cg, new THREE.LineBasicMaterial({ color: 0x8a5a33 }));
+    this.chains.frustumCulled = false;
+    cg.setDrawRange(0, 0);
+    this.scene.add(this.chains);
+  }
+
+  /** Shortens the strands to their kept points (STRANDS message); returns the segments drawn. */
+  setKept(kept: Uint16Array): number {
+    if (!this.hairMesh) return 0;
+    return setKept(this.hairMesh.geometry, this.verticesPerStrand, kept);
+  }
+
+  /** The falling chains: `counts[c]` points each, 3 floats per point in `points` (world, m). */
+  setChains(counts: Uint32Array, points: Float32Array): void {
+    let segs = 0;
+    for (const c of counts) segs += Math.max(0, c - 1);
+    if (6 * segs > this.chainPositions.length) {
+      this.chainPositions = new Float32Array(6 * segs * 2);
+      this.chains.geometry.setAttribute('position', new THREE.BufferAttribute(this.chainPositions, 3));
+    }
+    const d = this.chainPositions;
+    let n = 0, p = 0;
+    for (const c of counts) {
+      for (let i = 0; i + 1 < c; i++) {
+        for (let k = 0; k < 3; k++) d[n++] = points[3 * (p + i) + k];
+        for (let k = 0; k < 3; k++) d[n++] = points[3 * (p + i + 1) + k];
+      }
+      p += c;
+    }
+    this.chains.geometry.setDrawRange(0, n / 3);
+    (this.chains.geometry.getAttribute('position') as THREE.BufferAttribute).needsUpdate = true;
   }
 
   resize(): void {
@@ -57,6 +94,7 @@ export class View {
     this.hair = new HairMaterial(msg, r || 0.09);
     this.hairMesh = new THREE.LineSegments(hairGeometry(msg), this.hair.material);
     this.hairMesh.frustumCulled = false;
+    this.verticesPerStrand = msg.verticesPerStrand;
     this.scene.add(this.hairMesh);
   }
 

@@ -6,12 +6,18 @@
 //! resets then each u64 global version, u64 number of steps, then per step: u8 has-reading; if 1: f64 time,
 //! 3 f64 position (m), 9 f64 rotation (column-major), u32 buttons; u64 lattice version; 3 f64 force (N);
 //! u8 number of commands, each: u8 kind (0 tool: u8 id; 1 hair: u8 type, f64 curliness, f64 ease; 2 reset).
+//!
+//! Version 2 (magic `CFREC2\0\0`, written now) adds the tool input of every global step right after the
+//! resets: u64 number of global steps, then per step: u8 tool id, u8 flags (bit 0 present, bit 1 primary
+//! button held), 3 f64 position (m), 9 f64 rotation (column-major), u64 scissors closes so far. The rest is
+//! as in version 1. Version-1 files still load (no global inputs: their global steps had no tool).
 
-use crate::session::{Command, Tool};
+use crate::session::{Command, Tool, ToolInput};
 use haptics::device::DeviceReading;
 use nalgebra::{Matrix3, Vector3};
 
-const MAGIC: &[u8; 8] = b"CFREC1\0\0";
+const MAGIC: &[u8; 8] = b"CFREC2\0\0";
+const MAGIC_V1: &[u8; 8] = b"CFREC1\0\0";
 
 /// One haptic step as recorded.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,6 +39,8 @@ pub struct Record {
     pub rate_hz: f64,
     /// Global versions produced right after a lattice reset.
     pub global_resets: Vec<u64>,
+    /// The tool input each global step read (entry v - 1 for the step producing version v).
+    pub global_inputs: Vec<ToolInput>,
     /// Every haptic step, in order.
     pub steps: Vec<StepRecord>,
 }
@@ -53,7 +61,7 @@ pub enum RecordError {
 impl Record {
     /// An empty record at `rate_hz`.
     pub fn new(rate_hz: f64) -> Self {
-        Self { rate_hz, global_resets: Vec::new(), steps: Vec::new() }
+        Self { rate_hz, global_resets: Vec::new(), global_inputs: Vec::new(), steps: Vec::new() }
     }
 
     /// The forces in order, N.
@@ -70,8 +78,16 @@ impl Record {
         for v in &self.global_resets {
             b.extend_from_slice(&v.to_le_bytes());
         }
-        b.extend_from_slice(&(self.steps.len() as u64).to_le_bytes());
         let f = |b: &mut Vec<u8>, x: f64| b.extend_from_slice(&x.to_le_bytes());
+        b.extend_from_slice(&(self.global_inputs.len() as u64).to_le_bytes());
+        for g in &self.global_inputs {
+            b.push(g.tool as u8);
+            b.push(g.present as u8 | (g.pressed as u8) << 1);
+            g.position.iter().for_each(|&x| f(&mut b, x));
+            g.rotation.iter().for_each(|&x| f(&mut b, x));
+            b.extend_from_slice(&g.cuts.to_le_bytes());
+        }
+        b.extend_from_slice(&(self.steps.len() as u64).to_le_bytes());
         for s in &self.steps {
             match &s.reading {
                 None => b.push(0),
@@ -104,8 +120,10 @@ impl Record {
     /// Parses a record; errors name the byte offset.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, RecordError> {
         let mut r = Reader { b: bytes, at: 0 };
-        if r.take(8)? != MAGIC {
-            return Err(RecordError::Bad { offset: 0, what: "not a Coiffure session record (magic CFREC1)".into() });
+        let magic = r.take(8)?;
+        let v2 = magic == MAGIC;
+        if !v2 && magic != MAGIC_V1 {
+            return Err(RecordError::Bad { offset: 0, what: "not a Coiffure session record (magic CFREC2 or CFREC1)".into() });
         }
         let rate_hz = r.f64()?;
         if !(rate_hz > 0.0 && rate_hz.is_finite()) {
@@ -115,6 +133,27 @@ impl Record {
         let mut global_resets = Vec::with_capacity(n.min(1 << 16));
         for _ in 0..n {
             global_resets.push(r.u64()?);
+        }
+        let mut global_inputs = Vec::new();
+        if v2 {
+            let n = r.u64()? as usize;
+            global_inputs.reserve(n.min(1 << 20));
+            for _ in 0..n {
+                let at = r.at;
+                let id = r.u8()?;
+                let tool = Tool::from_id(id).ok_or(RecordError::Bad { offset: at, what: format!("tool id {id}") })?;
+                let flags = r.u8()?;
+                if flags > 3 {
+                    return Err(RecordError::Bad { offset: at + 1, what: format!("tool flags {flags} (0-3)") });
+                }
+                let position = Vector3::new(r.f64()?, r.f64()?, r.f64()?);
+                let mut m = [0.0; 9];
+                for x in &mut m {
+                    *x = r.f64()?;
+                }
+                let cuts = r.u64()?;
+                global_inputs.push(ToolInput { tool, present: flags & 1 != 0, pressed: flags & 2 != 0, position, rotation: Matrix3::from_column_slice(&m), cuts });
+            }
         }
         let n = r.u64()? as usize;
         let mut steps = Vec::with_capacity(n.min(1 << 20));
@@ -154,7 +193,7 @@ impl Record {
         if r.at != bytes.len() {
             return Err(RecordError::Bad { offset: r.at, what: format!("{} trailing bytes", bytes.len() - r.at) });
         }
-        Ok(Record { rate_hz, global_resets, steps })
+        Ok(Record { rate_hz, global_resets, global_inputs, steps })
     }
 }
 

@@ -44,6 +44,9 @@ pub mod server {
     pub const FILE: u8 = 0x85;
     /// u32 token echoed.
     pub const PONG: u8 = 0x86;
+    // --- STRANDS (issue 5: scissors) ---
+    /// Kept points of every render strand: u32 S, S x u16 (at connect and after each cut).
+    pub const STRANDS: u8 = 0x87;
 }
 
 /// Error codes of ERROR messages.
@@ -304,8 +307,9 @@ pub const FRAME_FLAGS_OFFSET: usize = 11;
 /// FRAME message: what changed since the last frame (never the render strands).
 pub fn encode_frame(seq: u32, lat: &LatticeSnapshot, h: &HapticSnapshot) -> Vec<u8> {
     let nodes = lat.positions.len();
-    let guides = h.wetness.len();
-    let mut w = W::new(server::FRAME, 80 + 12 * nodes + 4 * h.active.len() + 12 * h.displacement.len() + 8 * guides);
+    let guides = lat.wetness.len();
+    let chain_points: usize = lat.chains.iter().map(|c| c.len()).sum();
+    let mut w = W::new(server::FRAME, 96 + 12 * nodes + 4 * h.active.len() + 12 * h.displacement.len() + 4 * guides + 4 * lat.chains.len() + 12 * chain_points);
     w.u32(seq);
     w.f32(h.time);
     w.u8(h.tool);
@@ -334,11 +338,27 @@ pub fn encode_frame(seq: u32, lat: &LatticeSnapshot, h: &HapticSnapshot) -> Vec<
         w.v3(d);
     }
     w.u32(guides as u32);
-    for x in &h.wetness {
+    for x in &lat.wetness {
         w.0.extend_from_slice(&x.to_le_bytes());
     }
-    for x in &h.cut {
-        w.0.extend_from_slice(&x.to_le_bytes());
+    // --- falling cut clusters (issue 5: scissors) ---
+    w.u32(lat.kept_version as u32);
+    w.u32(lat.chains.len() as u32);
+    for c in &lat.chains {
+        w.u32(c.len() as u32);
+    }
+    for p in lat.chains.iter().flatten() {
+        p.iter().for_each(|&x| w.0.extend_from_slice(&x.to_le_bytes()));
+    }
+    w.0
+}
+
+/// STRANDS message: the points kept of every render strand (vertices 0..kept of strand i stay on the head).
+pub fn encode_strands(kept: &[u16]) -> Vec<u8> {
+    let mut w = W::new(server::STRANDS, 4 + 2 * kept.len());
+    w.u32(kept.len() as u32);
+    for k in kept {
+        w.u16(*k);
     }
     w.0
 }
@@ -378,6 +398,24 @@ mod tests {
             }
             m => panic!("{m:?}"),
         }
+    }
+
+    #[test]
+    fn strands_and_frame_layout() {
+        let b = encode_strands(&[12, 3]);
+        assert_eq!(b, vec![server::STRANDS, VERSION, 2, 0, 0, 0, 12, 0, 3, 0]);
+        let lat = LatticeSnapshot { version: 7, positions: vec![nalgebra::Point3::new(1.0, 2.0, 3.0)], wetness: vec![0.5, 0.25], kept_version: 2, chains: vec![vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]], vec![[7.0, 8.0, 9.0]]], ..Default::default() };
+        let h = HapticSnapshot { tool_rotation: Matrix3::identity(), ..Default::default() };
+        let f = encode_frame(1, &lat, &h);
+        // Header and fixed part: 2 + 4 + 4 + 1 + 1 + 2 + 12 + 16 + 12 + 12 + 4 + 4 = 74; 1 node; A = 0, K = 0.
+        let tail = &f[74 + 12 + 8..];
+        let u32_at = |i: usize| u32::from_le_bytes(tail[i..i + 4].try_into().unwrap());
+        let f32_at = |i: usize| f32::from_le_bytes(tail[i..i + 4].try_into().unwrap());
+        assert_eq!(u32_at(0), 2);
+        assert_eq!((f32_at(4), f32_at(8)), (0.5, 0.25));
+        assert_eq!((u32_at(12), u32_at(16), u32_at(20), u32_at(24)), (2, 2, 2, 1));
+        assert_eq!((f32_at(28), f32_at(28 + 8 * 4)), (1.0, 9.0));
+        assert_eq!(tail.len(), 28 + 9 * 4);
     }
 
     #[test]

@@ -87,7 +87,7 @@ struct App {
     started: Instant,
     latest_lattice: Mutex<Vec<[f32; 3]>>,
     /// Latest (kept length per guide, active guides, their displacements, samples per guide).
-    latest_guides: Mutex<(Vec<f32>, Vec<u32>, Vec<nalgebra::Vector3<f64>>, usize)>,
+    latest_guides: Mutex<(Arc<Vec<u16>>, Vec<u32>, Vec<nalgebra::Vector3<f64>>, usize)>,
 }
 
 impl App {
@@ -134,7 +134,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         next_id: AtomicU64::new(1),
         started: Instant::now(),
         latest_lattice: Mutex::new(Vec::new()),
-        latest_guides: Mutex::new((Vec::new(), Vec::new(), Vec::new(), 2)),
+        latest_guides: Mutex::new((Arc::new(Vec::new()), Vec::new(), Vec::new(), 2)),
     });
 
     // Frame pump thread.
@@ -142,6 +142,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let pump = std::thread::Builder::new().name("coiffure-frames".into()).spawn(move || {
         let (mut lattice, mut haptic) = (lattice, haptic);
         let mut st = PumpStats::default();
+        let mut kept_sent = 0u64;
         let period = Duration::from_secs_f64(1.0 / fps);
         let start = Instant::now();
         while !stop_p.load(Ordering::Relaxed) {
@@ -149,13 +150,23 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
             let w0 = Instant::now();
             let (lat, hap) = (lattice.read(), haptic.read());
             let msg = protocol::encode_frame(st.frames as u32, lat, hap);
+            // After a scissors cut or a reset: every viewer gets the strands' kept points (STRANDS) before the frame.
+            if lat.kept_version != kept_sent {
+                kept_sent = lat.kept_version;
+                let s = protocol::encode_strands(&lat.kept);
+                if let Ok(c) = app_p.control.lock() {
+                    for (_, tx) in &c.viewers {
+                        let _ = tx.send(s.clone());
+                    }
+                }
+            }
             if let Ok(mut l) = app_p.latest_lattice.lock() {
                 l.clear();
                 l.extend(lat.positions.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]));
             }
             if let Ok(mut g) = app_p.latest_guides.lock() {
                 let samples = if hap.active.is_empty() { 2 } else { (hap.displacement.len() / hap.active.len()).max(2) };
-                *g = (hap.cut.clone(), hap.active.clone(), hap.displacement.clone(), samples);
+                *g = (lat.kept.clone(), hap.active.clone(), hap.displacement.clone(), samples);
             }
             st.bytes += msg.len() as u64;
             let _ = frame_tx.send(Arc::new(msg));
@@ -240,6 +251,12 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
     }
     let scene = app.scene_msg.lock().unwrap().clone();
     if sink.send(Message::Binary((*scene).clone().into())).await.is_err() {
+        leave(&app, id);
+        return;
+    }
+    // The strands' kept points (all uncut until the first cut).
+    let kept = app.latest_guides.lock().unwrap().0.clone();
+    if !kept.is_empty() && sink.send(Message::Binary(protocol::encode_strands(&kept).into())).await.is_err() {
         leave(&app, id);
         return;
     }
@@ -354,7 +371,7 @@ fn save(app: &App, format: usize) -> Result<Vec<u8>, String> {
     let nodes: Vec<nalgebra::Point3<f64>> = app.latest_lattice.lock().unwrap().iter().map(|p| nalgebra::Point3::new(p[0] as f64, p[1] as f64, p[2] as f64)).collect();
     let nodes = if nodes.len() == scene.lattice.node_count() { nodes } else { scene.lattice.rest.clone() };
     let nv = scene.render.vertices_per_strand;
-    let (cut, active, disp, samples) = app.latest_guides.lock().unwrap().clone();
+    let (kept, active, disp, samples) = app.latest_guides.lock().unwrap().clone();
     let k = scene.render.guides_per_strand;
     let strands: Vec<Vec<[f32; 3]>> = scene
         .render
@@ -362,11 +379,10 @@ fn save(app: &App, format: usize) -> Result<Vec<u8>, String> {
         .chunks(nv)
         .enumerate()
         .map(|(i, s)| {
-            let g0 = scene.render.guide[i * k] as usize;
-            let keep = cut.get(g0).copied().unwrap_or(1.0);
+            let keep = kept.get(i).map_or(nv, |&k| k as usize);
             s.iter()
                 .enumerate()
-                .filter(|(j, _)| (*j as f32 / (nv - 1) as f32) * scene.render.span[i] <= keep + 1e-4)
+                .filter(|(j, _)| *j < keep)
                 .map(|(j, p)| {
                     let mut q = engine::session::ffd_map(&scene.lattice.ffd, &nodes, &nalgebra::Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64));
                     // Active guides' displacement, as the viewer adds it.

@@ -30,6 +30,8 @@ pub struct LoopStats {
     pub period_p999: f64,
     /// Steps that finished after the next step's deadline.
     pub misses: u64,
+    /// True if the loop thread ran with real-time priority ([`HapticLoop::spawn_with_priority`]).
+    pub realtime: bool,
 }
 
 /// Histogram of durations with 1 us bins up to 20 ms (and an overflow bin).
@@ -78,9 +80,28 @@ impl<D: HapticDevice + 'static> HapticLoop<D> {
     /// Starts a loop at `rate_hz` (at most [`MAX_RATE_HZ`]) calling `step(reading, t, dt)` each period with the
     /// device's latest reading (None if it has none) and sending the returned command to the device. Runs at
     /// most `max_steps` steps if given.
-    pub fn spawn<F>(rate_hz: f64, mut device: D, mut step: F, max_steps: Option<u64>) -> Result<Self, String>
+    pub fn spawn<F>(rate_hz: f64, device: D, step: F, max_steps: Option<u64>) -> Result<Self, String>
     where
         F: FnMut(Option<DeviceReading>, f64, f64) -> DeviceCommand + Send + 'static,
+    {
+        Self::spawn_with_priority(rate_hz, device, step, max_steps, None, |_| {})
+    }
+
+    /// [`HapticLoop::spawn`] with the loop thread asking for real-time priority `realtime_priority`
+    /// (`SCHED_FIFO`, 1..=99, see [`crate::realtime`]) before its first step. If the request is refused the
+    /// loop runs at normal priority and `on_refused` is called, on the loop thread, with the reason;
+    /// [`LoopStats::realtime`] tells which it was.
+    pub fn spawn_with_priority<F, R>(
+        rate_hz: f64,
+        mut device: D,
+        mut step: F,
+        max_steps: Option<u64>,
+        realtime_priority: Option<i32>,
+        on_refused: R,
+    ) -> Result<Self, String>
+    where
+        F: FnMut(Option<DeviceReading>, f64, f64) -> DeviceCommand + Send + 'static,
+        R: FnOnce(String) + Send + 'static,
     {
         if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= MAX_RATE_HZ) {
             return Err(format!("loop rate must be in (0, {MAX_RATE_HZ}] Hz, got {rate_hz}"));
@@ -90,6 +111,12 @@ impl<D: HapticDevice + 'static> HapticLoop<D> {
         let handle = std::thread::Builder::new()
             .name("coiffure-haptic".into())
             .spawn(move || {
+                if let Some(priority) = realtime_priority {
+                    if let Err(why) = crate::realtime::request_realtime(priority) {
+                        on_refused(why);
+                    }
+                }
+                let realtime = crate::realtime::is_realtime();
                 let period = Duration::from_secs_f64(1.0 / rate_hz);
                 let dt = period.as_secs_f64();
                 let (mut steps_h, mut periods_h) = (Histogram::new(), Histogram::new());
@@ -131,6 +158,7 @@ impl<D: HapticDevice + 'static> HapticLoop<D> {
                     period_mean: periods_h.mean(),
                     period_p999: periods_h.quantile(0.999),
                     misses,
+                    realtime,
                 };
                 (stats, device)
             })
@@ -168,6 +196,26 @@ mod tests {
         assert!((dev.commands[299].force.x - 0.299).abs() < 1e-12);
         assert!((stats.period_mean - 1e-3).abs() < 5e-5, "mean period {}", stats.period_mean);
         assert!(stats.step_p999 >= stats.step_p99 && stats.step_max >= stats.step_mean);
+        assert!(!stats.realtime);
         assert!(HapticLoop::spawn(5000.0, ScriptedDevice::new(|_| None), |_, _, _| DeviceCommand::default(), Some(1)).is_err());
+    }
+
+    #[test]
+    fn a_loop_with_real_time_priority_runs_or_reports_why_not() {
+        // Either the thread gets SCHED_FIFO (stats say so) or the refusal reason reaches the caller; the
+        // loop runs all its steps in both cases.
+        let (tx, rx) = std::sync::mpsc::channel();
+        let dev = ScriptedDevice::new(|_| None);
+        let lp = HapticLoop::spawn_with_priority(1000.0, dev, |_, _, _| DeviceCommand::default(), Some(50), Some(10), move |why| {
+            tx.send(why).unwrap()
+        })
+        .unwrap();
+        let (stats, _) = lp.join();
+        assert_eq!(stats.steps, 50);
+        match rx.try_recv() {
+            Ok(why) => assert!(!stats.realtime && why.contains("SCHED_FIFO"), "{why}"),
+            Err(_) => assert!(stats.realtime),
+        }
+        assert!(HapticLoop::spawn_with_priority(1000.0, ScriptedDevice::new(|_| None), |_, _, _| DeviceCommand::default(), Some(1), Some(0), |_| {}).is_ok());
     }
 }

@@ -9,4 +9,5 @@ pub mod backends;
 pub mod coupling;
 pub mod device;
 pub mod haptic_loop;
+pub mod realtime;
 pub mod udp;

@@ -1,0 +1,87 @@
+//! Real-time scheduling for the haptic thread.
+//!
+//! A haptic loop must finish every step within its period (1 ms at 1 kHz). On a busy machine the ordinary
+//! scheduler may hand the core to another process for several milliseconds, which no speed-up of the step
+//! can hide (bench/RESULTS.md, "Haptic loop"). Haptic applications therefore run their loop thread with a
+//! real-time policy: Linux `SCHED_FIFO` at a modest priority, which preempts every normal thread. The kernel's
+//! real-time throttling (`/proc/sys/kernel/sched_rt_runtime_us`, 95 % by default) keeps a spinning loop from
+//! locking the machine up.
+//!
+//! The request needs the right to do it (root, `CAP_SYS_NICE`, or an `rtprio` limit in
+//! `/etc/security/limits.conf`); without it [`request_realtime`] says so and the loop runs at normal priority.
+
+/// Lowest and highest `SCHED_FIFO` priorities accepted by [`request_realtime`].
+pub const PRIORITY_RANGE: std::ops::RangeInclusive<i32> = 1..=99;
+
+/// Gives the calling thread the `SCHED_FIFO` real-time policy at `priority` (1 to 99; 10 is a sensible
+/// value for a haptic loop: above normal threads, below the kernel's own real-time work). On failure the
+/// thread keeps its policy and the error says why (permission, unsupported platform, bad priority).
+pub fn request_realtime(priority: i32) -> Result<(), String> {
+    if !PRIORITY_RANGE.contains(&priority) {
+        return Err(format!("real-time priority must be in 1..=99, got {priority}"));
+    }
+    imp::set_fifo(priority)
+}
+
+/// True if the calling thread runs with the `SCHED_FIFO` policy.
+pub fn is_realtime() -> bool {
+    imp::is_fifo()
+}
+
+#[cfg(target_os = "linux")]
+mod imp {
+    pub fn set_fifo(priority: i32) -> Result<(), String> {
+        let param = libc::sched_param { sched_priority: priority };
+        // SAFETY: pthread_self() is the calling thread, and `param` is a valid sched_param for the call.
+        let rc = unsafe { libc::pthread_setschedparam(libc::pthread_self(), libc::SCHED_FIFO, &param) };
+        match rc {
+            0 => Ok(()),
+            libc::EPERM => Err(format!(
+                "SCHED_FIFO priority {priority} not permitted (needs root, CAP_SYS_NICE or an rtprio limit); \
+                 the haptic loop runs at normal priority"
+            )),
+            e => Err(format!("pthread_setschedparam(SCHED_FIFO, {priority}) failed with error {e}")),
+        }
+    }
+
+    pub fn is_fifo() -> bool {
+        let mut policy = 0;
+        let mut param = libc::sched_param { sched_priority: 0 };
+        // SAFETY: both out-pointers are valid for writes.
+        let rc = unsafe { libc::pthread_getschedparam(libc::pthread_self(), &mut policy, &mut param) };
+        rc == 0 && policy == libc::SCHED_FIFO
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+mod imp {
+    pub fn set_fifo(_priority: i32) -> Result<(), String> {
+        Err("real-time scheduling of the haptic thread is only implemented on Linux".into())
+    }
+
+    pub fn is_fifo() -> bool {
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_priorities_are_refused_and_a_request_either_works_or_says_why() {
+        assert!(request_realtime(0).unwrap_err().contains("1..=99"));
+        assert!(request_realtime(100).is_err());
+        // On a fresh thread (so the test runner's threads keep their policy): either the request is
+        // granted and the thread reports SCHED_FIFO, or it is refused with a reason and the policy is unchanged.
+        std::thread::spawn(|| match request_realtime(10) {
+            Ok(()) => assert!(is_realtime()),
+            Err(why) => {
+                assert!(!why.is_empty());
+                assert!(!is_realtime());
+            }
+        })
+        .join()
+        .unwrap();
+    }
+}

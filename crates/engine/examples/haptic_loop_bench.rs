@@ -4,6 +4,8 @@
 //! `cargo run --release -p coiffure-engine --example haptic_loop_bench [-- [full|reduced] [nobatch] N...]`
 //! (default: full model, 16 32 64 strands). Reduced strands are prepared four at a time (SIMD batches,
 //! `LocalInteraction::use_batches`) unless `nobatch` is given.
+//! Under `chrt -f 10` (as root) the haptic thread runs with real-time FIFO priority, as a haptic application
+//! would run it; the tails then show the loop's own cost rather than the scheduler's.
 
 use engine::local_session::run_local_session;
 use haptics::backends::ScriptedDevice;

@@ -186,6 +186,23 @@ impl Strand {
         let mobility = |c: usize| w[c][c].trace();
         let max_mobility = (0..n).map(mobility).fold(0.0, f64::max);
         let active: Vec<bool> = (0..n).map(|c| mobility(c).is_finite() && mobility(c) > 1e-9 * max_mobility).collect();
+        // What the sweeps need of each contact, fixed over the iterations: tangent basis, normal mobility and the
+        // inverse of the tangential Delassus block.
+        let contact_frames: Vec<Option<(Vector3<f64>, Vector3<f64>, f64, nalgebra::Matrix2<f64>)>> = (0..n)
+            .map(|c| match constraints[c].kind {
+                ConstraintKind::Contact { normal, .. } => {
+                    let (t1, t2) = tangents(&normal);
+                    let wnn = normal.dot(&(w[c][c] * normal)).max(1e-300);
+                    let wt = Matrix3::from_columns(&[t1, t2, normal]).transpose() * w[c][c] * Matrix3::from_columns(&[t1, t2, normal]);
+                    let wt2 = nalgebra::Matrix2::new(wt[(0, 0)], wt[(0, 1)], wt[(1, 0)], wt[(1, 1)]);
+                    Some((t1, t2, wnn, wt2.try_inverse().unwrap_or_else(nalgebra::Matrix2::zeros)))
+                }
+                ConstraintKind::Pin { .. } => None,
+            })
+            .collect();
+        // Pseudo-inverses of the pins' Delassus blocks (an SVD each), also used by the post-stabilization.
+        let pin_inverse: Vec<Matrix3<f64>> =
+            (0..n).map(|c| if matches!(constraints[c].kind, ConstraintKind::Pin { .. }) { pinv3(&w[c][c]) } else { Matrix3::zeros() }).collect();
         for _ in 0..opts.iterations.max(1) {
             for c in (0..n).filter(|&c| active[c]) {
                 let mut u = u_free[c];
@@ -196,20 +213,17 @@ impl Strand {
                 match constraints[c].kind {
                     ConstraintKind::Pin { target } => {
                         let want = (target - position[c]) * beta;
-                        let dp = pinv3(&w[c][c]) * (want - rel);
+                        let dp = pin_inverse[c] * (want - rel);
                         p[c] += dp;
                     }
                     ConstraintKind::Contact { normal, depth, friction } => {
-                        let (t1, t2) = tangents(&normal);
-                        let wnn = normal.dot(&(w[c][c] * normal)).max(1e-300);
+                        let Some((t1, t2, wnn, wt2_inv)) = contact_frames[c] else { continue };
                         let want_n = beta * depth;
                         let mut pn = (p[c].dot(&normal) + (want_n - rel.dot(&normal)) / wnn).max(0.0);
                         // Tangential: aim for zero slip, then clamp to the cone.
-                        let wt = Matrix3::from_columns(&[t1, t2, normal]).transpose() * w[c][c] * Matrix3::from_columns(&[t1, t2, normal]);
-                        let wt2 = nalgebra::Matrix2::new(wt[(0, 0)], wt[(0, 1)], wt[(1, 0)], wt[(1, 1)]);
                         let rt = nalgebra::Vector2::new(rel.dot(&t1), rel.dot(&t2));
                         let pt_old = nalgebra::Vector2::new(p[c].dot(&t1), p[c].dot(&t2));
-                        let mut pt = pt_old - wt2.try_inverse().unwrap_or_else(nalgebra::Matrix2::zeros) * rt;
+                        let mut pt = pt_old - wt2_inv * rt;
                         let limit = friction * pn;
                         if pt.norm() > limit {
                             pt *= limit / pt.norm();
@@ -252,7 +266,7 @@ impl Strand {
                     for &d in &pins {
                         r -= w[c][d] * lambda[d];
                     }
-                    lambda[c] += pinv3(&w[c][c]) * r;
+                    lambda[c] += pin_inverse[c] * r;
                 }
             }
             for &c in &pins {

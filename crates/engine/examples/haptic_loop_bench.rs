@@ -1,11 +1,12 @@
 //! Benchmark of the haptic loop: a comb drawn at 0.2 m/s through N hanging strands of 16 segments (full
 //! model, constraint contacts), 1 kHz, one haptic thread. Prints step-time mean, p99, p99.9, max and deadline
 //! misses, then the mean time per step of each phase of the interaction step. Run:
-//! `cargo run --release -p coiffure-engine --example haptic_loop_bench [-- [full|reduced] [nobatch] N...]`
+//! `cargo run --release -p coiffure-engine --example haptic_loop_bench [-- [full|reduced] [nobatch] [rt] N...]`
 //! (default: full model, 16 32 64 strands). Reduced strands are prepared four at a time (SIMD batches,
 //! `LocalInteraction::use_batches`) unless `nobatch` is given.
-//! Under `chrt -f 10` (as root) the haptic thread runs with real-time FIFO priority, as a haptic application
-//! would run it; the tails then show the loop's own cost rather than the scheduler's.
+//! With `rt` (or under `chrt -f 10`; both need root or CAP_SYS_NICE) the haptic thread runs with real-time
+//! FIFO priority, as a haptic application would run it (`haptics::realtime`); the tails then show the loop's
+//! own cost rather than the scheduler's.
 
 use engine::local_session::run_local_session;
 use haptics::backends::ScriptedDevice;
@@ -22,7 +23,13 @@ fn main() {
     let counts: Vec<usize> = args.iter().filter_map(|a| a.parse().ok()).collect();
     let counts = if counts.is_empty() { vec![16, 32, 64] } else { counts };
     let batches = !args.iter().any(|a| a == "nobatch");
-    println!("model: {kind:?}, batches: {batches}");
+    if args.iter().any(|a| a == "rt") {
+        // Threads started from here inherit the policy (Linux default), so the haptic thread gets it too.
+        if let Err(why) = haptics::realtime::request_realtime(10) {
+            eprintln!("rt: {why}");
+        }
+    }
+    println!("model: {kind:?}, batches: {batches}, real-time priority: {}", haptics::realtime::is_realtime());
     println!("| strands x 16 segments | steps | step mean | p99 | p99.9 | max | misses | contact steps | peak device force | peak hair force |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
     let mut phases = Vec::new();

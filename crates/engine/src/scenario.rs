@@ -616,11 +616,12 @@ pub struct GlobalSummary {
     pub pieces_max_field: f64,
     /// Steps in which a guide's velocities were scaled down by the safety net.
     pub clamped_steps: u64,
-    /// Drying pass on the lattice (only with dryer actions; 0 otherwise): largest displacement of a lattice
-    /// node from its settled position under the dryers' drag (`HairDryer::hair_force`, 4 cm lattice,
-    /// `LatticeModel::step_with_forces` every `global_dt`, body collisions), m.
+    /// Drying pass on the lattice (only with dryer actions; 0 otherwise): largest distance between a node of
+    /// a lattice blown by the dryers (`HairDryer::hair_force`, 4 cm lattice, `LatticeModel::step_with_forces`
+    /// every `global_dt`, body collisions) and the same node of a twin lattice stepped alongside without the
+    /// dryers, over the run, m: the dryers' effect alone.
     pub lattice_max_displacement: f64,
-    /// Largest displacement of a lattice node from its settled position at the end, m.
+    /// The same distance at the end, m.
     pub lattice_end_displacement: f64,
     /// Largest total dryer force on the lattice at one time, N.
     pub lattice_peak_force: f64,
@@ -813,7 +814,7 @@ impl GlobalScenario {
         let mut rows = vec![];
         let mut forces: Vec<PointForce> = vec![];
         // Drying pass on the lattice: the dryers' drag on the hair each node carries (head still: head frame =
-        // world). Settled 1 s under gravity first; displacements are from that equilibrium.
+        // world), against a twin lattice without the dryers (settled 1 s under gravity first, both).
         let still = nalgebra::Isometry3::identity();
         let mut dry_lattice = None;
         if self.actions.iter().any(|a| matches!(a, Action::Dry(_))) {
@@ -825,14 +826,13 @@ impl GlobalScenario {
             for _ in 0..((1.0 / self.global_dt).round() as usize).max(1) {
                 hl.model.step(&mut ls, self.global_dt, &still, Some(body));
             }
-            let x0 = ls.positions.clone();
             let lengths: Vec<f64> = hl
                 .model
                 .masses
                 .iter()
                 .map(|m| (m - carry.empty_node_mass).max(0.0) / (dry_material.density * area))
                 .collect();
-            dry_lattice = Some((hl, ls, x0, lengths, carry.cell * carry.cell));
+            dry_lattice = Some((hl, ls.clone(), ls, lengths, carry.cell * carry.cell));
         }
         let drag = HairDrag { hair_diameter: 2.0 * (area / std::f64::consts::PI).sqrt(), ..HairDrag::default() };
         let (mut lattice_max, mut lattice_peak_force) = (0.0f64, 0.0f64);
@@ -951,7 +951,7 @@ impl GlobalScenario {
                     c.step(&cluster_params, body, h)
                         .map_err(|e| global_err("clusters", e))?;
                 }
-                if let Some((hl, ls, x0, lengths, face)) = dry_lattice.as_mut() {
+                if let Some((hl, ls, twin, lengths, face)) = dry_lattice.as_mut() {
                     node_forces.clear();
                     node_forces.resize(hl.model.node_count(), Vector3::zeros());
                     for a in &self.actions {
@@ -970,7 +970,9 @@ impl GlobalScenario {
                     hl.model
                         .step_with_forces(ls, h, &still, Some(body), &node_forces)
                         .map_err(|e| global_err("lattice", e))?;
-                    let disp = ls.positions.iter().zip(x0.iter()).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max);
+                    hl.model.step(twin, h, &still, Some(body));
+                    let disp =
+                        ls.positions.iter().zip(twin.positions.iter()).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max);
                     lattice_max = lattice_max.max(disp);
                 }
                 let (lo, hi) = wet
@@ -1046,7 +1048,9 @@ impl GlobalScenario {
             lattice_max_displacement: lattice_max,
             lattice_end_displacement: dry_lattice
                 .as_ref()
-                .map(|(_, ls, x0, _, _)| ls.positions.iter().zip(x0.iter()).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max))
+                .map(|(_, ls, twin, _, _)| {
+                    ls.positions.iter().zip(twin.positions.iter()).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max)
+                })
                 .unwrap_or(0.0),
             lattice_peak_force,
         };

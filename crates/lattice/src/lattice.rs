@@ -31,6 +31,15 @@
 //! (1 - L/|d|) k_s <= k_s), the approximation only adds numerical damping of transverse (bending)
 //! motion of stretched stiffeners; it never removes stability.
 //!
+//! By default ([`LatticeParams::bending_jacobian`] = [`BendingJacobian::PathBound`]) a bending
+//! stiffener's block is replaced by a larger one on the two first-neighbour edges through its
+//! middle node, so A has the 26-neighbour pattern only (a 2.5x sparser factor at 16^3), and the
+//! factor is stored and applied in f32 ([`LatticeParams::factor_precision`]); both keep the fixed
+//! points and the stability argument above (see the two enums).
+//!
+//! External per-node forces (e.g. a hair dryer's drag) enter through
+//! [`LatticeModel::step_with_forces`].
+//!
 //! Contacts with obstacles keep their exact normal blocks (k n n^T, c n n^T): with contacts the
 //! system (A + D) dv = b is solved by conjugate gradients preconditioned with the factorisation
 //! of A, starting from A^-1 b.

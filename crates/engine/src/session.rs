@@ -1821,6 +1821,26 @@ mod tests {
     }
 
     #[test]
+    fn the_live_sprayer_wets_the_guides() {
+        // A live session: the sprayer held (button down) at the back of the head for 2 s wets the guides the
+        // lattice snapshot reports.
+        let scene = small_scene();
+        let (session, mut io) = Session::start(scene.clone(), SessionParams::default()).unwrap();
+        io.commands.send(Command::SelectTool(Tool::Sprayer)).unwrap();
+        for k in 0..400 {
+            io.device.push(DeviceReading { time: k as f64 * 0.005, position: Vector3::new(0.0, -0.1, 0.0), rotation: test_rot(), buttons: 1 });
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let h = io.haptic.read().clone();
+        let l = io.lattice.read().clone();
+        let sum = l.wetness.iter().sum::<f32>();
+        eprintln!("tool {} step {} version {} wetness summed over guides {sum}", h.tool, h.step, l.version);
+        session.stop();
+        assert_eq!(h.tool, Tool::Sprayer as u8);
+        assert!(sum > 0.1, "wetness summed over the guides {sum}");
+    }
+
+    #[test]
     fn the_tool_pushes_the_lattice_and_does_not_drag_it() {
         // Two lattices side by side, one with the comb held still in the hair behind the head. Relative to
         // the free one: every node the comb touches (its metaball field at the free position >= 0.1, the

@@ -32,8 +32,8 @@ fn main() {
     let cases = [
         ("lattice only (no tool)", ToolInput::default()),
         ("comb in the hair (lattice obstacle)", at(Tool::Comb, false, -0.13)),
-        ("dryer blowing and drying", at(Tool::Dryer, true, -0.3)),
-        ("sprayer wetting", at(Tool::Sprayer, true, -0.3)),
+        ("dryer blowing and drying", at(Tool::Dryer, true, -0.15)),
+        ("sprayer wetting", at(Tool::Sprayer, true, -0.15)),
     ];
     println!("{:<40} {:>10} {:>10} {:>10}", "global step (dt 10 ms)", "median ms", "mean ms", "p95 ms");
     for (name, input) in cases {

@@ -442,6 +442,8 @@ impl Default for ToolInput {
     }
 }
 
+/// Distance from the tool point back to the dryer's or sprayer's nozzle, m.
+pub const NOZZLE_STANDOFF: f64 = 0.15;
 /// Radius of the disk the scissors' blades sweep when they close, m (about the blades' length).
 pub const BLADE_RADIUS: f64 = 0.04;
 /// Distance the held scissors move between two cuts, m.
@@ -458,9 +460,11 @@ impl ToolInput {
         let n = self.rotation.column(1).into_owned();
         Blade { point: self.position.into(), normal: n.into(), radius: BLADE_RADIUS }
     }
-    /// The nozzle's cone (dryer, sprayer): apex at the proxy, axis along the tool's -z.
+    /// The nozzle's cone (dryer, sprayer): axis along the tool's -z, apex [`NOZZLE_STANDOFF`] back from the
+    /// proxy along +z (the viewer puts the tool where the mouse points on the hair: the nozzle aims there
+    /// from a hand's distance, as a dryer or a sprayer is held).
     fn cone(&self, mut cone: Cone) -> Cone {
-        cone.apex = self.position;
+        cone.apex = self.position + self.rotation.column(2).into_owned() * NOZZLE_STANDOFF;
         cone.axis = -self.rotation.column(2).into_owned();
         cone
     }
@@ -1643,12 +1647,12 @@ mod tests {
 
     #[test]
     fn sprayer_raises_and_dryer_lowers_wetness_in_the_cone_only() {
-        // The nozzle 0.3 m behind the head aims at it (+y). Every guide segment whose centre is in the cone
+        // The nozzle 0.35 m behind the head (0.15 m behind the tool point) aims at it (+y). Every guide segment whose centre is in the cone
         // at the end gets wetter (sprayer) or drier (dryer); every segment outside the cone widened by
         // 0.15 rad keeps its wetness exactly (the lattice moves a little meanwhile, hence the margin).
         let scene = small_scene();
         let params = SessionParams::default();
-        let spray = ToolInput { tool: Tool::Sprayer, present: true, position: Vector3::new(0.0, -0.35, 0.0), rotation: test_rot(), pressed: true, cuts: 0 };
+        let spray = ToolInput { tool: Tool::Sprayer, present: true, position: Vector3::new(0.0, -0.2, 0.0), rotation: test_rot(), pressed: true, cuts: 0 };
         for (tool, start) in [(Tool::Sprayer, 0.0), (Tool::Dryer, 0.5)] {
             let mut g = GlobalCore::new(scene.clone(), &params);
             g.set_wetness(start);
@@ -1814,6 +1818,26 @@ mod tests {
         assert!(outside > 100);
         assert!(without > 1e-4, "the throw reaches the body: {without}");
         assert!(worst <= 1e-9, "a node went into the body: field {worst} above the threshold");
+    }
+
+    #[test]
+    fn the_live_sprayer_wets_the_guides() {
+        // A live session: the sprayer held (button down) at the back of the head for 2 s wets the guides the
+        // lattice snapshot reports.
+        let scene = small_scene();
+        let (session, mut io) = Session::start(scene.clone(), SessionParams::default()).unwrap();
+        io.commands.send(Command::SelectTool(Tool::Sprayer)).unwrap();
+        for k in 0..400 {
+            io.device.push(DeviceReading { time: k as f64 * 0.005, position: Vector3::new(0.0, -0.1, 0.0), rotation: test_rot(), buttons: 1 });
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let h = io.haptic.read().clone();
+        let l = io.lattice.read().clone();
+        let sum = l.wetness.iter().sum::<f32>();
+        eprintln!("tool {} step {} version {} wetness summed over guides {sum}", h.tool, h.step, l.version);
+        session.stop();
+        assert_eq!(h.tool, Tool::Sprayer as u8);
+        assert!(sum > 0.1, "wetness summed over the guides {sum}");
     }
 
     #[test]

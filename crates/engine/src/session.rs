@@ -1821,6 +1821,37 @@ mod tests {
     }
 
     #[test]
+    fn after_a_scissors_drag_the_session_takes_the_next_tool() {
+        // The browser's sequence: the scissors closed and dragged across the back of the head (a cut every
+        // 2 cm, on the worker thread), released, then the sprayer selected and held. The haptic thread must
+        // still take commands: its snapshot reports the sprayer and the sprayer wets the guides.
+        let scene = small_scene();
+        let (session, mut io) = Session::start(scene.clone(), SessionParams::default()).unwrap();
+        io.commands.send(Command::SelectTool(Tool::Scissors)).unwrap();
+        for k in 0..300 {
+            let x = 0.05 - 0.1 * (k as f64 / 300.0);
+            io.device.push(DeviceReading { time: k as f64 * 0.005, position: Vector3::new(x, -0.1, -0.06), rotation: test_rot(), buttons: (k < 280) as u32 });
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let cuts = io.lattice.read().kept_version;
+        io.commands.send(Command::SelectTool(Tool::Sprayer)).unwrap();
+        for k in 300..700 {
+            io.device.push(DeviceReading { time: k as f64 * 0.005, position: Vector3::new(0.0, -0.1, 0.0), rotation: test_rot(), buttons: 1 });
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let h = io.haptic.read().clone();
+        let l = io.lattice.read().clone();
+        let sum = l.wetness.iter().sum::<f32>();
+        eprintln!("kept version after the scissors {cuts}; tool {} step {} wetness summed over guides {sum}", h.tool, h.step);
+        let report = session.stop();
+        assert!(cuts > 0, "the scissors cut");
+        assert_eq!(h.tool, Tool::Sprayer as u8, "the haptic thread took the sprayer");
+        assert!(h.step > 3000, "the haptic loop kept running: {} steps", h.step);
+        assert!(sum > 0.1, "wetness summed over the guides {sum}");
+        assert!(report.haptic.steps > 3000);
+    }
+
+    #[test]
     fn the_live_sprayer_wets_the_guides() {
         // A live session: the sprayer held (button down) at the back of the head for 2 s wets the guides the
         // lattice snapshot reports.

@@ -72,6 +72,16 @@ impl Bvh {
         id
     }
 
+    /// Number of pieces the tree was built over.
+    pub fn len(&self) -> usize {
+        self.order.len()
+    }
+
+    /// True if the tree holds no piece.
+    pub fn is_empty(&self) -> bool {
+        self.order.is_empty()
+    }
+
     /// Recomputes every box for the pieces' new positions, keeping the tree's topology (same pieces, same order).
     pub fn refit(&mut self, pieces: &[Piece]) {
         for (b, p) in self.boxes.iter_mut().zip(pieces) {

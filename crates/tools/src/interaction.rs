@@ -294,7 +294,12 @@ impl LocalInteraction {
                 Self::sample_strand(k, strand, &mut self.pieces);
             }
         }
-        self.bvh.refit(&self.pieces);
+        if self.pieces.len() == self.bvh.len() {
+            self.bvh.refit(&self.pieces);
+        } else {
+            // A strand changed its number of pieces (cut by the scissors, or replaced): new tree.
+            self.bvh = Bvh::build(&self.pieces, Self::hair_radius(&self.strands));
+        }
         let t_sample = clock.elapsed().as_secs_f64();
         timings.sample = t_sample - t_dynamics;
         let mut contacts = std::mem::take(&mut self.contacts);

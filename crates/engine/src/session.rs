@@ -328,11 +328,15 @@ pub struct SessionParams {
     /// Hairs each simulated guide stands for in the force on the tool (a wisp): the local strands' reaction
     /// is multiplied by it. Dimensionless, >= 1. Default 20.
     pub wisp: f64,
+    /// Real-time (`SCHED_FIFO`) priority asked for the haptic thread, 1..=99 (`haptics::realtime`), or None
+    /// for normal priority. A refusal (no permission) is logged and the loop runs at normal priority.
+    /// Default None (`coiffure serve` asks for 10).
+    pub haptic_priority: Option<i32>,
 }
 
 impl Default for SessionParams {
     fn default() -> Self {
-        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_active: 12, activation_radius: 0.05, profile: DeviceProfile::PHANTOM_OMNI, follow_speed: 1.0, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, wisp: 20.0 }
+        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_active: 12, activation_radius: 0.05, profile: DeviceProfile::PHANTOM_OMNI, follow_speed: 1.0, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, wisp: 20.0, haptic_priority: None }
     }
 }
 
@@ -357,6 +361,9 @@ impl SessionParams {
         }
         if self.publish_every == 0 {
             return p("publish_every must be > 0".into());
+        }
+        if let Some(prio) = self.haptic_priority.filter(|x| !haptics::realtime::PRIORITY_RANGE.contains(x)) {
+            return p(format!("haptic_priority must be in 1..=99, got {prio}"));
         }
         Ok(())
     }
@@ -1406,7 +1413,9 @@ impl Session {
             }
             cmd
         };
-        let haptic = HapticLoop::spawn(params.haptic_rate_hz, dev, step, None).map_err(SessionError::Start)?;
+        let on_refused = |why: String| tracing::warn!("haptic thread: {why}");
+        let haptic = HapticLoop::spawn_with_priority(params.haptic_rate_hz, dev, step, None, params.haptic_priority, on_refused)
+            .map_err(SessionError::Start)?;
         let session = Session { scene, params, stop, reset_epoch, global: Some(global_thread), haptic: Some(haptic), record };
         Ok((session, SessionIo { device: handle, commands: cmd_tx, lattice: lat_v_out, haptic: hap_out }))
     }

@@ -30,6 +30,8 @@ pub struct LoopStats {
     pub period_p999: f64,
     /// Steps that finished after the next step's deadline.
     pub misses: u64,
+    /// Steps whose step function panicked: the device got zero force for them and the loop went on.
+    pub panics: u64,
     /// True if the loop thread ran with real-time priority ([`HapticLoop::spawn_with_priority`]).
     pub realtime: bool,
 }
@@ -122,7 +124,7 @@ impl<D: HapticDevice + 'static> HapticLoop<D> {
                 let (mut steps_h, mut periods_h) = (Histogram::new(), Histogram::new());
                 let start = Instant::now();
                 let mut last_start: Option<Instant> = None;
-                let (mut n, mut misses) = (0u64, 0u64);
+                let (mut n, mut misses, mut panics) = (0u64, 0u64, 0u64);
                 while !flag.load(Ordering::Relaxed) && max_steps.map_or(true, |m| n < m) {
                     let deadline = start + period * n as u32;
                     // Sleep until shortly before the deadline, then spin for precision.
@@ -140,7 +142,15 @@ impl<D: HapticDevice + 'static> HapticLoop<D> {
                     last_start = Some(t0);
                     let t = n as f64 * dt;
                     let reading = device.read(t);
-                    let cmd = step(reading, t, dt);
+                    // A panic in the step must not leave the device with its last force or kill the loop:
+                    // zero force for that step, counted.
+                    let cmd = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| step(reading, t, dt))) {
+                        Ok(cmd) => cmd,
+                        Err(_) => {
+                            panics += 1;
+                            DeviceCommand::default()
+                        }
+                    };
                     device.write(&cmd);
                     let t1 = Instant::now();
                     steps_h.add((t1 - t0).as_secs_f64());
@@ -158,6 +168,7 @@ impl<D: HapticDevice + 'static> HapticLoop<D> {
                     period_mean: periods_h.mean(),
                     period_p999: periods_h.quantile(0.999),
                     misses,
+                    panics,
                     realtime,
                 };
                 (stats, device)
@@ -217,5 +228,24 @@ mod tests {
             Err(_) => assert!(stats.realtime),
         }
         assert!(HapticLoop::spawn_with_priority(1000.0, ScriptedDevice::new(|_| None), |_, _, _| DeviceCommand::default(), Some(1), Some(0), |_| {}).is_ok());
+    }
+
+    #[test]
+    fn a_panicking_step_gives_zero_force_and_the_loop_goes_on() {
+        // Every third step panics: those steps send zero force, the others their own, and all 30 run.
+        let dev = ScriptedDevice::new(|t| Some(DeviceReading { time: t, position: Vector3::new(1.0, 0.0, 0.0), rotation: Matrix3::identity(), buttons: 0 }));
+        let mut k = 0;
+        let step = move |r: Option<DeviceReading>, _: f64, _: f64| {
+            k += 1;
+            assert!(k % 3 != 0, "step {k} fails on purpose");
+            DeviceCommand { force: r.unwrap().position, torque: Vector3::zeros() }
+        };
+        let (stats, dev) = HapticLoop::spawn(1000.0, dev, step, Some(30)).unwrap().join();
+        assert_eq!(stats.steps, 30);
+        assert_eq!(stats.panics, 10);
+        for (i, c) in dev.commands.iter().enumerate() {
+            let expect = if (i + 1) % 3 == 0 { 0.0 } else { 1.0 };
+            assert_eq!(c.force.x, expect, "step {}", i + 1);
+        }
     }
 }

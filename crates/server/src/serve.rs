@@ -52,6 +52,10 @@ pub struct ServeArgs {
     /// Stop by itself after this many seconds (for benchmarks and scripts).
     #[arg(long)]
     pub duration: Option<f64>,
+    /// Real-time (SCHED_FIFO) priority of the 1 kHz haptic thread, 1..=99, or 0 for normal priority. Needs
+    /// root or CAP_SYS_NICE; without the right the loop runs at normal priority and a warning says so.
+    #[arg(long, default_value_t = 10)]
+    pub haptic_priority: i32,
 }
 
 /// The viewer folder: `--web`, else `./web/dist`, else `web/dist` beside the sources.
@@ -118,7 +122,8 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let opts = SceneOptions { render_strands: args.render_strands, guides: args.guides, ..SceneOptions::default() };
     let scene = Arc::new(Scene::builtin(&opts).context("building the built-in scene")?);
     tracing::info!("scene: {} render strands, {} guides, {} lattice nodes, built in {:.2} s", scene.render.strands(), scene.guides.len(), scene.lattice.node_count(), t0.elapsed().as_secs_f64());
-    let params = SessionParams { record: args.record.is_some(), ..SessionParams::default() };
+    let haptic_priority = (args.haptic_priority != 0).then_some(args.haptic_priority);
+    let params = SessionParams { record: args.record.is_some(), haptic_priority, ..SessionParams::default() };
     let (session, io) = Session::start(scene.clone(), params).context("starting the session")?;
     let SessionIo { device, commands, lattice, haptic } = io;
     let scene_msg = Arc::new(protocol::encode_scene(&scene));
@@ -210,8 +215,8 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let report = session.stop();
     let f = st.frames.max(1) as f64;
     println!(
-        "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame); haptic loop: {} steps, step mean {:.1} us, p99 {:.0} us, p99.9 {:.0} us, {} misses; global: {} steps, mean {:.2} ms",
-        st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, report.haptic.steps, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, report.haptic.misses, report.global_steps, 1e3 * report.global_step_mean
+        "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame); haptic loop: {} steps, step mean {:.1} us, p99 {:.0} us, p99.9 {:.0} us, {} misses, {} step panics, real-time priority: {}; global: {} steps, mean {:.2} ms",
+        st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, report.haptic.steps, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, report.haptic.misses, report.haptic.panics, report.haptic.realtime, report.global_steps, 1e3 * report.global_step_mean
     );
     if let (Some(path), Some(rec)) = (&args.record, report.record) {
         write_record(path, &rec)?;

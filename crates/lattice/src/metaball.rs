@@ -309,43 +309,26 @@ impl MetaballSet {
     /// [`push_out`](Self::push_out) applied to every point of `points` in place (both cores,
     /// rayon), with `threshold` (dimensionless) and `skin` (m). Returns how many points moved.
     pub fn push_out_many(&self, points: &mut [Point3<f64>], threshold: f64, skin: f64) -> usize {
-        use rayon::prelude::*;
-        if self.balls.is_empty() {
-            return 0;
-        }
-        // a cheap reject: bounding box of all balls
-        let mut lo = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
-        let mut hi = -lo;
-        for b in &self.balls {
-            for a in 0..3 {
-                lo[a] = lo[a].min(b.centre[a] - b.radius);
-                hi[a] = hi[a].max(b.centre[a] + b.radius);
-            }
-        }
-        points
-            .par_chunks_mut(4096)
-            .map(|chunk| {
-                let mut moved = 0;
-                for x in chunk {
-                    if (0..3).any(|a| x[a] < lo[a] || x[a] > hi[a]) {
-                        continue;
-                    }
-                    let y = self.push_out(x, threshold, skin);
-                    if y != *x {
-                        *x = y;
-                        moved += 1;
-                    }
-                }
-                moved
-            })
-            .sum()
+        self.push_out_each(points, |x| *x, |x, y| *x = y, threshold, skin)
     }
-}
 
-impl MetaballSet {
     /// [`push_out_many`](Self::push_out_many) for f32 points (m; e.g.
     /// [`crate::ffd::CompactBinding`]'s output), computed in f64. Returns how many points moved.
     pub fn push_out_many_f32(&self, points: &mut [[f32; 3]], threshold: f64, skin: f64) -> usize {
+        let get = |x: &[f32; 3]| Point3::new(x[0] as f64, x[1] as f64, x[2] as f64);
+        self.push_out_each(points, get, |x, y| *x = [y.x as f32, y.y as f32, y.z as f32], threshold, skin)
+    }
+
+    /// Pushes out every point (read with `get`, written with `set` when it moves) on all cores,
+    /// skipping points outside the bounding box of every ball's reach. Returns how many moved.
+    fn push_out_each<T: Send>(
+        &self,
+        points: &mut [T],
+        get: impl Fn(&T) -> Point3<f64> + Sync,
+        set: impl Fn(&mut T, Point3<f64>) + Sync,
+        threshold: f64,
+        skin: f64,
+    ) -> usize {
         use rayon::prelude::*;
         if self.balls.is_empty() {
             return 0;
@@ -363,13 +346,13 @@ impl MetaballSet {
             .map(|chunk| {
                 let mut moved = 0;
                 for x in chunk {
-                    let p = Point3::new(x[0] as f64, x[1] as f64, x[2] as f64);
+                    let p = get(x);
                     if (0..3).any(|a| p[a] < lo[a] || p[a] > hi[a]) {
                         continue;
                     }
                     let y = self.push_out(&p, threshold, skin);
                     if y != p {
-                        *x = [y.x as f32, y.y as f32, y.z as f32];
+                        set(x, y);
                         moved += 1;
                     }
                 }

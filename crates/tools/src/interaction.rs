@@ -92,7 +92,8 @@ pub struct LocalInteraction {
     /// Workspaces of the batches, and each strand's (batch, lane) this step.
     batches: Vec<StrandBatch>,
     lane_of: Vec<Option<(usize, usize)>>,
-    /// Twisting torques from last step's surface friction, applied to each strand at the next step.
+    /// Loads applied to each strand at the next step: twisting torques from last step's surface friction
+    /// and the loads given to [`LocalInteraction::add_load`].
     surface_torques: Vec<Vec<PointForce>>,
     pieces: Vec<Piece>,
     bvh: Bvh,
@@ -166,6 +167,20 @@ impl LocalInteraction {
                 }
                 b += 1;
             }
+        }
+    }
+
+    /// Adds a point load (force in N, torque in N m, at arc length `load.s` m) on strand `strand` for the
+    /// next step only, e.g. the air of a hair dryer. False (and nothing added) if there is no such strand
+    /// or the load is not finite.
+    pub fn add_load(&mut self, strand: usize, load: PointForce) -> bool {
+        let finite = load.s.is_finite() && load.force.iter().chain(load.torque.iter()).all(|x| x.is_finite());
+        match self.surface_torques.get_mut(strand) {
+            Some(loads) if finite => {
+                loads.push(load);
+                true
+            }
+            _ => false,
         }
     }
 
@@ -333,7 +348,10 @@ impl LocalInteraction {
                             })
                             .collect()
                     };
-                    let r = strand.step(dt, &applied);
+                    // The contact forces first (their reactions are read below), then the strand's other loads.
+                    let mut loads = applied.clone();
+                    loads.extend(self.surface_torques[k].iter().copied());
+                    let r = strand.step(dt, &loads);
                     self.surface_torques[k].clear();
                     if let Err(e) = r {
                         first_error.get_or_insert(e);

@@ -109,6 +109,41 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     assert.ok(dried < wet, `wetness after drying ${dried} < ${wet}`);
   });
 
+  test('loading a hairstyle file replaces the live hairstyle; a malformed one is answered with an error', async () => {
+    // A Cem Yuksel .hair file written here from its specification: 2000 strands of 12 points hanging
+    // down from the back of the scalp (points only, default segment count 11).
+    const n = 2000, pts = 12;
+    const buf = Buffer.alloc(128 + n * pts * 12);
+    buf.write('HAIR', 0, 'ascii');
+    buf.writeUInt32LE(n, 4); buf.writeUInt32LE(n * pts, 8); buf.writeUInt32LE(2, 12); buf.writeUInt32LE(pts - 1, 16);
+    buf.writeFloatLE(1, 20); buf.writeFloatLE(0, 24);
+    let o = 128;
+    for (let i = 0; i < n; i++) {
+      const a = -1.2 + 2.4 * (i / n), b = 0.2 + 0.6 * ((i * 7919) % n) / n; // azimuth, elevation (rad)
+      const root = [0.1 * Math.sin(a) * Math.cos(b), -0.1 * Math.cos(a) * Math.cos(b), 0.1 * Math.sin(b)];
+      for (let j = 0; j < pts; j++) {
+        const out = 0.004 * j; // hangs down, a little away from the head
+        buf.writeFloatLE(root[0] * (1 + out), o); buf.writeFloatLE(root[1] * (1 + out) - 0.002 * j, o + 4); buf.writeFloatLE(root[2] - 0.018 * j, o + 8);
+        o += 12;
+      }
+    }
+    const errorsBefore = await page.evaluate(() => window.coiffure.errors.length);
+    await page.setInputFiles('#load', { name: 'tress.hair', mimeType: 'application/octet-stream', buffer: buf });
+    await page.waitForFunction((k) => window.coiffure.strands === k, n, { timeout: 60_000 });
+    const frames = await page.evaluate(() => window.coiffure.framesReceived);
+    await page.waitForFunction((f) => window.coiffure.framesReceived > f + 5, frames, { timeout: 30_000 });
+    const errs = await page.evaluate((k) => window.coiffure.errors.slice(k), errorsBefore);
+    assert.deepEqual(errs, [], 'no error after a good file');
+    await page.screenshot({ path: join(artifacts, 'after-load.png') });
+    // A truncated file: an error naming the byte offset, and the loaded hairstyle stays.
+    await page.setInputFiles('#load', { name: 'broken.hair', mimeType: 'application/octet-stream', buffer: buf.subarray(0, 1000) });
+    await page.waitForFunction((k) => window.coiffure.errors.length > k, errorsBefore, { timeout: 30_000 });
+    const e = await page.evaluate(() => window.coiffure.errors.at(-1));
+    console.log('load', { strands: n, error: e });
+    assert.match(e.message, /cannot read the hair file/);
+    assert.equal(await page.evaluate(() => window.coiffure.strands), n);
+  });
+
   test('a second viewer watches; it controls only after TAKE_CONTROL', async () => {
     const { page: second } = await openViewer(browser, server.url);
     await second.waitForFunction(() => window.coiffure.viewers === 2);

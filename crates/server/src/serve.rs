@@ -12,7 +12,8 @@ use axum::routing::get;
 use axum::Router;
 use clap::Args;
 use engine::record::Record;
-use engine::session::{Command, Scene, SceneOptions, Session, SessionIo, SessionParams};
+use engine::session::{Command, HapticSnapshot, LatticeSnapshot, Scene, SceneOptions, Session, SessionIo, SessionParams};
+use triple_buffer::Output;
 use futures_util::{SinkExt, StreamExt};
 use haptics::backends::VirtualHandle;
 use haptics::device::DeviceReading;
@@ -92,6 +93,14 @@ struct App {
     latest_lattice: Mutex<Vec<[f32; 3]>>,
     /// Latest (kept length per guide, active guides, their displacements, samples per guide).
     latest_guides: Mutex<(Arc<Vec<u16>>, Vec<u32>, Vec<nalgebra::Vector3<f64>>, usize)>,
+    /// Options of the built-in scene (head, guides, lattice cell) a loaded hairstyle is put on.
+    opts: SceneOptions,
+    /// Parameters every session of this server starts with.
+    params: SessionParams,
+    /// The running session (replaced when a hairstyle file is loaded).
+    session: Mutex<Option<Session>>,
+    /// A new session's snapshot outputs, for the frame thread to take over.
+    swap: Mutex<Option<(Output<LatticeSnapshot>, Output<HapticSnapshot>)>>,
 }
 
 impl App {
@@ -140,7 +149,12 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         started: Instant::now(),
         latest_lattice: Mutex::new(Vec::new()),
         latest_guides: Mutex::new((Arc::new(Vec::new()), Vec::new(), Vec::new(), 2)),
+        opts,
+        params,
+        session: Mutex::new(Some(session)),
+        swap: Mutex::new(None),
     });
+    let app_end = app.clone();
 
     // Frame pump thread.
     let (stop_p, app_p, fps) = (stop.clone(), app.clone(), args.fps);
@@ -151,6 +165,11 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         let period = Duration::from_secs_f64(1.0 / fps);
         let start = Instant::now();
         while !stop_p.load(Ordering::Relaxed) {
+            // A loaded hairstyle's session: its snapshots from now on, and its strands' kept points to all.
+            if let Some((l, h)) = app_p.swap.lock().ok().and_then(|mut s| s.take()) {
+                (lattice, haptic) = (l, h);
+                kept_sent = u64::MAX;
+            }
             let c0 = cpu_time();
             let w0 = Instant::now();
             let (lat, hap) = (lattice.read(), haptic.read());
@@ -212,6 +231,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     });
     stop.store(true, Ordering::Relaxed);
     let st = pump.join().map_err(|_| anyhow!("the frame thread panicked"))?;
+    let session = app_end.session.lock().unwrap().take().ok_or_else(|| anyhow!("no session to stop"))?;
     let report = session.stop();
     let f = st.frames.max(1) as f64;
     println!(
@@ -360,14 +380,44 @@ fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
             }
             let f = hairstyle::formats::Format::from_path(Path::new(&format!("x.{}", protocol::FORMATS[format]))).expect("known extension");
             match f.read(&bytes) {
-                Ok(c) => Some(protocol::encode_error(&WireError {
-                    code: protocol::code::FILE,
-                    message: format!("read {} strands, {} points; replacing the live hairstyle is not supported yet", c.strands.len(), c.num_points()),
-                })),
+                Ok(c) => load(app, &c).err().map(|message| protocol::encode_error(&WireError { code: protocol::code::FILE, message })),
                 Err(e) => Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message: format!("cannot read the {} file: {e}", protocol::FORMATS[format]) })),
             }
         }
     }
+}
+
+/// Replaces the live hairstyle by `curves` (m, head frame): a scene of the built-in head and guides
+/// carrying them ([`Scene::from_curves`]), a new session on it, the new SCENE sent to every viewer, then
+/// the frame thread switched to the new session's snapshots. The old session stops. Refused while
+/// recording (a record is of one scene).
+fn load(app: &App, curves: &hairstyle::HairCurves) -> Result<(), String> {
+    if app.params.record {
+        return Err("cannot load a hairstyle while recording (--record): a record replays one scene".into());
+    }
+    let t0 = Instant::now();
+    let scene = Arc::new(Scene::from_curves(curves, &app.opts).map_err(|e| format!("cannot use the loaded hairstyle: {e}"))?);
+    let (session, io) = Session::start(scene.clone(), app.params).map_err(|e| e.to_string())?;
+    let SessionIo { device, commands, lattice, haptic } = io;
+    let old = app.session.lock().unwrap().replace(session);
+    *app.device.lock().unwrap() = device;
+    *app.commands.lock().unwrap() = commands;
+    let msg = Arc::new(protocol::encode_scene(&scene));
+    *app.scene.lock().unwrap() = scene.clone();
+    *app.scene_msg.lock().unwrap() = msg.clone();
+    app.latest_guides.lock().unwrap().0 = Arc::new(Vec::new());
+    {
+        let c = app.control.lock().unwrap();
+        for (_, tx) in &c.viewers {
+            let _ = tx.send((*msg).clone());
+        }
+    }
+    *app.swap.lock().unwrap() = Some((lattice, haptic));
+    if let Some(old) = old {
+        old.stop();
+    }
+    tracing::info!("loaded a hairstyle: {} render strands, {} lattice nodes, in {:.2} s", scene.render.strands(), scene.lattice.node_count(), t0.elapsed().as_secs_f64());
+    Ok(())
 }
 
 /// The current hairstyle (render strands through the latest lattice, cut strands shortened) as file bytes.

@@ -89,6 +89,11 @@ pub struct LocalInteraction {
     /// Constraint model: prepare the steps of reduced strands four at a time ([`StrandBatch`], SIMD lanes)
     /// instead of one by one. Same results to round-off; default true.
     pub use_batches: bool,
+    /// Constraint model: the body the strands rest on (the head, neck and shoulders as metaballs, world
+    /// frame) and its iso-surface threshold. Each strand's sampled points that are inside it, or within a
+    /// hair's radius of its surface, get a frictionless contact pushing them out (the tool does not feel
+    /// it). Default None (no body).
+    pub body: Option<(lattice::metaball::MetaballSet, f64)>,
     /// Workspaces of the batches, and each strand's (batch, lane) this step.
     batches: Vec<StrandBatch>,
     lane_of: Vec<Option<(usize, usize)>>,
@@ -119,6 +124,7 @@ impl LocalInteraction {
             model,
             pins: Vec::new(),
             use_batches: true,
+            body: None,
             batches: Vec::new(),
             lane_of,
             surface_torques,
@@ -330,7 +336,22 @@ impl LocalInteraction {
             let held = self.shape.kind == crate::shape::ToolKind::Clip && self.pins.iter().any(|p| p.0 == k);
             let mine: Vec<&Contact> = if held { Vec::new() } else { contacts.iter().filter(|c| c.strand == k).collect() };
             let pinned = self.pins.iter().any(|p| p.0 == k);
-            let touched = !mine.is_empty() || pinned;
+            // Body contacts (constraint model): sampled points inside the body or within a hair's radius of it.
+            let mut resting: Vec<PointConstraint> = Vec::new();
+            if let (Some((body, threshold)), ForceModel::Constraint { .. }) = (&self.body, &self.model) {
+                for piece in self.pieces.iter().filter(|p| p.strand == k) {
+                    for (s, x) in [(piece.s, piece.a), (piece.s + piece.length, piece.b)] {
+                        let q = body.push_out(&x.into(), *threshold, radius).coords;
+                        let d = q - x;
+                        let depth = d.norm();
+                        if depth > 0.0 && !resting.iter().any(|c| c.s == s) {
+                            let kind = ConstraintKind::Contact { normal: d / depth, depth, friction: 0.0 };
+                            resting.push(PointConstraint { s, kind, velocity: Vector3::zeros() });
+                        }
+                    }
+                }
+            }
+            let touched = !mine.is_empty() || pinned || !resting.is_empty();
             let forces: Vec<(Vector3<f64>, Vector3<f64>)> = match self.model {
                 ForceModel::Paper { gain } => {
                     let w = strand.model.material.density * strand.model.gravity.norm();
@@ -374,6 +395,9 @@ impl LocalInteraction {
                         cons.push(PointConstraint { s, kind: ConstraintKind::Pin { target }, velocity: (target - before) / dt });
                         levers.push(target - pose.position);
                     }
+                    // After the tool's and the pins' constraints: their impulses are not the tool's (the
+                    // reactions below pair impulses with `levers` and `mine` only).
+                    cons.extend(resting.iter().cloned());
                     let outcome = if self.prepared[k] {
                         // A batched strand with constraints takes over its lane's solver workspace.
                         let handed = match (cons.is_empty(), self.lane_of[k]) {

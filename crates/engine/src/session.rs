@@ -2023,6 +2023,16 @@ mod tests {
         assert!(worst <= 1e-9, "a node went into the body: field {worst} above the threshold");
     }
 
+    /// Pushes one mouse reading every 5 ms for each k of `ks` (position in m and buttons from `at(k)`,
+    /// the tests' tool rotation, time 5 ms k) into a live session, waiting 5 ms between readings.
+    fn hold(io: &mut SessionIo, ks: std::ops::Range<usize>, at: impl Fn(usize) -> (Vector3<f64>, u32)) {
+        for k in ks {
+            let (position, buttons) = at(k);
+            io.device.push(DeviceReading { time: k as f64 * 0.005, position, rotation: test_rot(), buttons });
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
     #[test]
     fn after_a_scissors_drag_the_session_takes_the_next_tool() {
         // The browser's sequence: the scissors closed and dragged across the back of the head (a cut every
@@ -2031,17 +2041,10 @@ mod tests {
         let scene = small_scene();
         let (session, mut io) = Session::start(scene.clone(), SessionParams::default()).unwrap();
         io.commands.send(Command::SelectTool(Tool::Scissors)).unwrap();
-        for k in 0..300 {
-            let x = 0.05 - 0.1 * (k as f64 / 300.0);
-            io.device.push(DeviceReading { time: k as f64 * 0.005, position: Vector3::new(x, -0.1, -0.06), rotation: test_rot(), buttons: (k < 280) as u32 });
-            std::thread::sleep(Duration::from_millis(5));
-        }
+        hold(&mut io, 0..300, |k| (Vector3::new(0.05 - 0.1 * (k as f64 / 300.0), -0.1, -0.06), (k < 280) as u32));
         let cuts = io.lattice.read().kept_version;
         io.commands.send(Command::SelectTool(Tool::Sprayer)).unwrap();
-        for k in 300..700 {
-            io.device.push(DeviceReading { time: k as f64 * 0.005, position: Vector3::new(0.0, -0.1, 0.0), rotation: test_rot(), buttons: 1 });
-            std::thread::sleep(Duration::from_millis(5));
-        }
+        hold(&mut io, 300..700, |_| (Vector3::new(0.0, -0.1, 0.0), 1));
         let h = io.haptic.read().clone();
         let l = io.lattice.read().clone();
         let sum = l.wetness.iter().sum::<f32>();
@@ -2061,10 +2064,7 @@ mod tests {
         let scene = small_scene();
         let (session, mut io) = Session::start(scene.clone(), SessionParams::default()).unwrap();
         io.commands.send(Command::SelectTool(Tool::Sprayer)).unwrap();
-        for k in 0..400 {
-            io.device.push(DeviceReading { time: k as f64 * 0.005, position: Vector3::new(0.0, -0.1, 0.0), rotation: test_rot(), buttons: 1 });
-            std::thread::sleep(Duration::from_millis(5));
-        }
+        hold(&mut io, 0..400, |_| (Vector3::new(0.0, -0.1, 0.0), 1));
         let h = io.haptic.read().clone();
         let l = io.lattice.read().clone();
         let sum = l.wetness.iter().sum::<f32>();

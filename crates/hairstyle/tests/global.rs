@@ -84,17 +84,7 @@ fn min_render_distance(
 fn head_shake_moves_hair_with_inertia_and_it_settles_back() {
     use hairstyle::global::body_in_world;
     use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
-    let h = Hairstyle::generate(&HairstyleParams {
-        guide_count: 60,
-        render_count: 2000,
-        seed: 21,
-        ..Default::default()
-    })
-    .unwrap();
-    let carry = CarryParams {
-        cell: 0.04,
-        ..Default::default()
-    };
+    let (h, carry) = shake_hairstyle();
     let hl = h.lattice(&carry, LatticeParams::default()).unwrap();
     let m = &hl.model;
     assert_eq!((m.ffd.nx, m.ffd.ny, m.ffd.nz), (9, 9, 11));
@@ -162,12 +152,8 @@ fn head_shake_moves_hair_with_inertia_and_it_settles_back() {
 /// force-weighted displacement of the blown nodes along the force, largest displacement, largest
 /// distance from the pre-dryer equilibrium 3 s after the dryer stops, total dryer force, anchors'
 /// total force), m and N.
-type DryerRun = (f64, f64, f64, f64, nalgebra::Vector3<f64>, nalgebra::Vector3<f64>);
-
-/// Settle 2 s, blow 3 s, stop 3 s (the scenario of `dryer_blows_the_hair_and_it_settles_back`).
-fn dryer_run(params: LatticeParams) -> DryerRun {
-    use nalgebra::{Isometry3, Vector3};
-    use tools::dryer::{Cone, HairDrag, HairDryer};
+/// The hairstyle of the head-shake and dryer tests (2000 render strands, 60 guides) and its 4 cm lattice cells.
+fn shake_hairstyle() -> (Hairstyle, CarryParams) {
     let h = Hairstyle::generate(&HairstyleParams {
         guide_count: 60,
         render_count: 2000,
@@ -175,10 +161,16 @@ fn dryer_run(params: LatticeParams) -> DryerRun {
         ..Default::default()
     })
     .unwrap();
-    let carry = CarryParams {
-        cell: 0.04,
-        ..Default::default()
-    };
+    (h, CarryParams { cell: 0.04, ..Default::default() })
+}
+
+type DryerRun = (f64, f64, f64, f64, nalgebra::Vector3<f64>, nalgebra::Vector3<f64>);
+
+/// Settle 2 s, blow 3 s, stop 3 s (the scenario of `dryer_blows_the_hair_and_it_settles_back`).
+fn dryer_run(params: LatticeParams) -> DryerRun {
+    use nalgebra::{Isometry3, Vector3};
+    use tools::dryer::{Cone, HairDrag, HairDryer};
+    let (h, carry) = shake_hairstyle();
     let hl = h.lattice(&carry, params).unwrap();
     let m = &hl.model;
     let hair = h.params.hair().unwrap();

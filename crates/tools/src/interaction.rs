@@ -339,15 +339,19 @@ impl LocalInteraction {
             // Body contacts (constraint model): sampled points inside the body or within a hair's radius of it.
             let mut resting: Vec<PointConstraint> = Vec::new();
             if let (Some((body, threshold)), ForceModel::Constraint { .. }) = (&self.body, &self.model) {
-                for piece in self.pieces.iter().filter(|p| p.strand == k) {
-                    for (s, x) in [(piece.s, piece.a), (piece.s + piece.length, piece.b)] {
-                        let q = body.push_out(&x.into(), *threshold, radius).coords;
-                        let d = q - x;
-                        let depth = d.norm();
-                        if depth > 0.0 && !resting.iter().any(|c| c.s == s) {
-                            let kind = ConstraintKind::Contact { normal: d / depth, depth, friction: 0.0 };
-                            resting.push(PointConstraint { s, kind, velocity: Vector3::zeros() });
-                        }
+                // Each piece's start, and the strand's last end (a piece's end is the next one's start).
+                let pieces = &self.pieces;
+                let points = pieces.iter().enumerate().filter(|(_, p)| p.strand == k).flat_map(|(i, p)| {
+                    let last = pieces.get(i + 1).map_or(true, |n| n.strand != k);
+                    std::iter::once((p.s, p.a)).chain(last.then_some((p.s + p.length, p.b)))
+                });
+                for (s, x) in points {
+                    let q = body.push_out(&x.into(), *threshold, radius).coords;
+                    let d = q - x;
+                    let depth = d.norm();
+                    if depth > 0.0 {
+                        let kind = ConstraintKind::Contact { normal: d / depth, depth, friction: 0.0 };
+                        resting.push(PointConstraint { s, kind, velocity: Vector3::zeros() });
                     }
                 }
             }

@@ -1,7 +1,8 @@
-// Not a test: renders preview images of the look into test-artifacts/preview (node test/preview.mjs [strands]).
+// Renders preview images of the look into web/test-artifacts/preview, for docs/rendering.md and tuning:
+// node tools/preview.mjs [strands] [width] [height] ['[{"name":..., "o": {look options}}]'] (from web/).
 import { writeFileSync, mkdirSync } from 'node:fs';
 import { join } from 'node:path';
-import { artifacts, launchBrowser, startServer, stopServer } from './harness.mjs';
+import { artifacts, launchBrowser, startServer, stopServer } from '../test/harness.mjs';
 
 const strands = process.argv[2] ?? '20000';
 const dir = join(artifacts, 'preview');

@@ -9,8 +9,9 @@ import { Person } from './person';
 import { GpuTimer } from './gpuTimer';
 import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS, sigmaFromMelanin, type Melanin } from './hairColor';
 
-/** Default direction towards the key light (head frame: from behind, right and above, as the camera). */
-export const DEFAULT_LIGHT = new THREE.Vector3(0.45, -0.55, 0.7).normalize();
+/** Default direction towards the key light (head frame: from behind, right and a little above, so that the
+ * default view shows the R highlight band). */
+export const DEFAULT_LIGHT = new THREE.Vector3(0.7, -0.55, 0.3).normalize();
 
 export class View {
   readonly renderer: THREE.WebGLRenderer;

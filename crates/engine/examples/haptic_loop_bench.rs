@@ -8,14 +8,63 @@
 //! FIFO priority, as a haptic application would run it (`haptics::realtime`); the tails then show the loop's
 //! own cost rather than the scheduler's.
 
-use engine::local_session::run_local_session;
 use haptics::backends::ScriptedDevice;
-use haptics::device::{DeviceProfile, DeviceReading};
+use haptics::coupling::{Coupling, CouplingParams};
+use haptics::device::{DeviceCommand, DeviceProfile, DeviceReading, HapticDevice};
+use haptics::haptic_loop::{HapticLoop, LoopStats};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 use nalgebra::{Matrix3, Vector3};
 use strand::{HairType, ModelKind, RootFrame, Strand, StrandModel};
 use tools::contact::ToolPose;
 use tools::interaction::{ForceModel, LocalInteraction};
 use tools::shape::ToolShape;
+
+/// Counters shared with the haptic thread (atomics: readable without locking).
+#[derive(Debug, Default)]
+struct Counters {
+    /// Steps with at least one contact.
+    contact_steps: AtomicU64,
+    /// Total wall time of the interaction steps' phases, ns (`tools::interaction::StepTimings`): strand
+    /// dynamics and unconstrained solves, centreline sampling and tree refit, contact detection, strands with
+    /// contacts, strands without.
+    phase_ns: [AtomicU64; 5],
+    /// Total strands with contacts over all steps.
+    touched_strands: AtomicU64,
+    /// Largest force of the hair on the tool in one step, as the bits of a non-negative f64 in N.
+    peak_hair_force_bits: AtomicU64,
+}
+
+/// The loop under test: per step, device reading -> coupling (proxy pose, safe device force) -> local
+/// interaction step -> the hair's reaction feeds the coupling at the next step. (The live session's
+/// `HapticCore` adds the active set, roots on the lattice and the tools' actions around the same step.)
+fn run<D: HapticDevice + 'static>(device: D, profile: DeviceProfile, mut interaction: LocalInteraction, steps: u64) -> (LoopStats, D, Arc<Counters>) {
+    let counters = Arc::new(Counters::default());
+    let shared = counters.clone();
+    let mut coupling = Coupling::new(profile, CouplingParams::for_profile(&profile), interaction.pose.position);
+    let mut hair = Vector3::zeros();
+    let step = move |reading: Option<DeviceReading>, _t: f64, dt: f64| -> DeviceCommand {
+        let Some(r) = reading else { return DeviceCommand::default() };
+        let Ok(force) = coupling.update(&r, dt, &hair) else { return DeviceCommand::default() };
+        let pose = ToolPose { position: coupling.proxy, rotation: r.rotation };
+        if let Ok(res) = interaction.step(dt, pose) {
+            hair = res.force;
+            let t = &res.timings;
+            for (slot, secs) in shared.phase_ns.iter().zip([t.dynamics, t.sample, t.detect, t.constrained, t.free]) {
+                slot.fetch_add((secs * 1e9) as u64, Ordering::Relaxed);
+            }
+            shared.touched_strands.fetch_add(t.touched_strands as u64, Ordering::Relaxed);
+            shared.peak_hair_force_bits.fetch_max(res.force.norm().to_bits(), Ordering::Relaxed);
+            if !res.contacts.is_empty() {
+                shared.contact_steps.fetch_add(1, Ordering::Relaxed);
+            }
+        }
+        DeviceCommand { force, torque: Vector3::zeros() }
+    };
+    let lp = HapticLoop::spawn(1000.0, device, step, Some(steps)).expect("the haptic loop starts");
+    let (stats, dev) = lp.join();
+    (stats, dev, counters)
+}
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -47,10 +96,10 @@ fn main() {
         it.use_batches = batches;
         let script = |t: f64| Some(DeviceReading { time: t, position: Vector3::new(0.0004, -0.02 + 0.2 * t, 0.22), rotation: Matrix3::identity(), buttons: 0 });
         let steps = 2000;
-        let (s, dev, c) = run_local_session(1000.0, ScriptedDevice::new(script), DeviceProfile::PHANTOM_DESKTOP, it, steps).unwrap();
+        let (s, dev, c) = run(ScriptedDevice::new(script), DeviceProfile::PHANTOM_DESKTOP, it, steps);
         let peak = dev.commands.iter().map(|c| c.force.norm()).fold(0.0, f64::max);
-        let per_step = |i: usize| c.phase_ns[i].load(std::sync::atomic::Ordering::Relaxed) as f64 / s.steps as f64 / 1e3;
-        phases.push((n, [per_step(0), per_step(1), per_step(2), per_step(3), per_step(4)], c.touched_strands.load(std::sync::atomic::Ordering::Relaxed) as f64 / s.steps as f64));
+        let per_step = |i: usize| c.phase_ns[i].load(Ordering::Relaxed) as f64 / s.steps as f64 / 1e3;
+        phases.push((n, [per_step(0), per_step(1), per_step(2), per_step(3), per_step(4)], c.touched_strands.load(Ordering::Relaxed) as f64 / s.steps as f64));
         println!(
             "| {n} | {} | {:.0} us | {:.0} us | {:.0} us | {:.0} us | {} | {} | {:.2} N | {:.3e} N |",
             s.steps,
@@ -59,9 +108,9 @@ fn main() {
             s.step_p999 * 1e6,
             s.step_max * 1e6,
             s.misses,
-            c.contact_steps.load(std::sync::atomic::Ordering::Relaxed),
+            c.contact_steps.load(Ordering::Relaxed),
             peak,
-            f64::from_bits(c.peak_hair_force_bits.load(std::sync::atomic::Ordering::Relaxed))
+            f64::from_bits(c.peak_hair_force_bits.load(Ordering::Relaxed))
         );
     }
     println!();

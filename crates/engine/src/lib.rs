@@ -9,7 +9,8 @@
 //!   exchange;
 //! - [`global`]: the global layer's core (lattice, nozzles, cuts), [`haptic`]: the haptic layer's core
 //!   (coupling, active set, local strands, tool actions);
-//! - [`live`]: the two threads and their triple buffers; [`record`] and [`replay`]: deterministic replay.
+//! - [`live`]: the two threads and their triple buffers; [`record`] and [`replay`]: deterministic replay;
+//!   [`lockstep`]: both cores on one thread (replay and `[live]` scenarios).
 //!
 //! [`session`] gathers the live session's public names. Headless: [`scenario`] (scripted tools through a
 //! patch of strands or a generated hairstyle), with tool paths from [`path`].
@@ -19,7 +20,7 @@ pub mod error;
 pub mod global;
 pub mod haptic;
 pub mod live;
-pub mod local_session;
+pub mod lockstep;
 pub mod params;
 pub mod path;
 pub mod record;

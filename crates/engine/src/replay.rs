@@ -1,41 +1,25 @@
 //! Replay of a recorded live session, headless and deterministic.
 
 use crate::error::SessionError;
-use crate::global::GlobalCore;
-use crate::haptic::HapticCore;
+use crate::lockstep::Lockstep;
 use crate::params::SessionParams;
 use crate::record::Record;
 use crate::scene::Scene;
 use nalgebra::Vector3;
 use std::sync::Arc;
-use std::time::Duration;
 
-/// Re-runs a recorded session in lockstep on this thread: the global core is stepped up to the lattice
+/// Re-runs a recorded session in lockstep on this thread ([`Lockstep::replay`]): the global core is stepped up to the lattice
 /// version each haptic step used (applying the recorded lattice resets), the recorded commands are applied,
 /// the global steps read the recorded tool inputs (dryer jet, sprayer and dryer wetness, scissors cuts, the tool
 /// pushing the lattice), and the haptic core steps with the recorded reading. Returns the force of every step.
 pub fn replay(scene: Arc<Scene>, params: SessionParams, record: &Record) -> Result<Vec<Vector3<f64>>, SessionError> {
-    let mut core = HapticCore::new(scene.clone(), params)?;
-    let mut global = GlobalCore::new(scene, &params);
-    let mut snap = global.snapshot();
-    // The same step lengths as the live threads (which go through Duration).
-    let gdt = Duration::from_secs_f64(1.0 / params.global_rate_hz).as_secs_f64();
-    let dt = Duration::from_secs_f64(1.0 / record.rate_hz).as_secs_f64();
+    let mut ls = Lockstep::new(scene, params, record.rate_hz)?;
     let mut out = Vec::with_capacity(record.steps.len());
-    for s in &record.steps {
-        while snap.version < s.lattice_version {
-            if record.global_resets.contains(&(global.version + 1)) {
-                global.reset();
-            }
-            // The tool input that global step read (none in a version-1 record).
-            let input = record.global_inputs.get(global.version as usize).copied().unwrap_or_default();
-            snap = global.step(gdt, &input).0;
+    ls.replay(record, |_, cmd| {
+        if let Some(c) = cmd {
+            out.push(c.force);
         }
-        for c in &s.commands {
-            core.apply(c);
-        }
-        out.push(core.step(s.reading, &snap, dt).force);
-    }
+    });
     Ok(out)
 }
 
@@ -46,6 +30,7 @@ mod tests {
     use crate::live::Session;
     use crate::testing::{small_scene, test_rot};
     use crate::tool::Tool;
+    use std::time::Duration;
     use haptics::device::DeviceReading;
 
     #[test]

@@ -1,10 +1,13 @@
-//! `coiffure run SCENARIO.toml`: a scripted tool session, headless; writes the force trace and a summary.
+//! `coiffure run SCENARIO.toml`: a scenario of any kind (patch, global tools, `[live]`), headless; writes
+//! its trace, `summary.txt` and `summary.json` (the engine's in-memory output, `engine::scenario::run`).
+//! `coiffure replay RECORD`: a `coiffure serve --record` file replayed into the outputs of a live scenario.
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use engine::path::{ToolPath, Waypoint};
-use engine::scenario::{GlobalScenario, Scenario};
+use engine::scenario::{GlobalScenario, LiveScenario, Scenario, ScenarioFile, ScenarioOutput, ScenarioSummary};
 use std::io::Write;
+use std::sync::Arc;
 use std::path::{Path, PathBuf};
 use tools::shape::ToolShape;
 
@@ -47,16 +50,40 @@ fn read_path_csv(path: &Path) -> Result<Vec<Waypoint>> {
 
 pub fn run(args: &RunArgs) -> Result<()> {
     let text = std::fs::read_to_string(&args.scenario).with_context(|| format!("cannot read scenario {}", args.scenario.display()))?;
-    // A scenario with [[action]] tables (scissors, dryer, sprayer) is a global-tool scenario.
-    let table: toml::Table = toml::from_str(&text).with_context(|| format!("malformed scenario {}", args.scenario.display()))?;
-    if table.contains_key("action") || table.contains_key("hairstyle") {
-        let scenario: GlobalScenario = toml::from_str(&text).with_context(|| format!("malformed scenario {}", args.scenario.display()))?;
-        return run_global(args, &scenario);
-    }
-    let scenario: Scenario = toml::from_str(&text).with_context(|| format!("malformed scenario {}", args.scenario.display()))?;
-    let dir = args.scenario.parent().unwrap_or(Path::new("."));
+    let file = ScenarioFile::from_toml(&text).with_context(|| format!("malformed scenario {}", args.scenario.display()))?;
     let stem = args.scenario.file_stem().and_then(|s| s.to_str()).unwrap_or("scenario").to_string();
-    let name = scenario.name.clone().unwrap_or(stem);
+    let name = file.name().map(str::to_string).unwrap_or(stem);
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from(&name));
+    match &file {
+        ScenarioFile::Patch(s) => run_patch(args, s, &name, &out),
+        ScenarioFile::Global(s) => run_global(s, &name, &out, engine::scenario::run(&file)?),
+        ScenarioFile::Live(s) => run_live(s, &name, &out, engine::scenario::run(&file)?),
+    }
+}
+
+/// Writes `summary.json` (the summary as the engine serialises it, with the kind).
+fn write_json(out: &Path, o: &ScenarioOutput) -> Result<()> {
+    #[derive(serde::Serialize)]
+    struct J<'a> {
+        kind: &'a str,
+        #[serde(flatten)]
+        summary: &'a ScenarioSummary,
+    }
+    let text = serde_json::to_string_pretty(&J { kind: o.kind, summary: &o.summary })?;
+    let p = out.join("summary.json");
+    std::fs::write(&p, text + "\n").with_context(|| format!("cannot write {}", p.display()))
+}
+
+/// Writes `force.csv`.
+fn write_force(out: &Path, o: &ScenarioOutput) -> Result<PathBuf> {
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let p = out.join("force.csv");
+    std::fs::write(&p, o.force.to_csv()).with_context(|| format!("cannot write {}", p.display()))?;
+    Ok(p)
+}
+
+fn run_patch(args: &RunArgs, scenario: &Scenario, name: &str, out: &Path) -> Result<()> {
+    let dir = args.scenario.parent().unwrap_or(Path::new("."));
     let shape = match ToolShape::builtin(&scenario.tool.shape) {
         Ok(s) => s,
         Err(_) => {
@@ -72,22 +99,11 @@ pub fn run(args: &RunArgs) -> Result<()> {
         (None, true) => bail!("the tool needs a path: tool.path or tool.path_file"),
     };
     let path = ToolPath::new(waypoints).map_err(|e| anyhow::anyhow!("tool path: {e}"))?;
-    let started = std::time::Instant::now();
-    let (rows, summary) = scenario.run(shape, &path)?;
-    let wall = started.elapsed().as_secs_f64();
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from(&name));
-    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
-    let trace_path = out.join("force.csv");
-    let mut w = std::io::BufWriter::new(std::fs::File::create(&trace_path).with_context(|| format!("cannot write {}", trace_path.display()))?);
-    writeln!(w, "t,fx,fy,fz,tx,ty,tz,contacts,tool_x,tool_y,tool_z")?;
-    for r in &rows {
-        writeln!(
-            w,
-            "{:.4},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{:.6e},{:.6e},{:.6e}",
-            r.t, r.force.x, r.force.y, r.force.z, r.torque.x, r.torque.y, r.torque.z, r.contacts, r.tool.x, r.tool.y, r.tool.z
-        )?;
-    }
-    w.flush()?;
+    let o = engine::scenario::run_patch(scenario, shape, &path)?;
+    let ScenarioSummary::Patch(summary) = &o.summary else { unreachable!("a patch run gives a patch summary") };
+    let wall = o.wall_time_s;
+    let trace_path = write_force(out, &o)?;
+    write_json(out, &o)?;
     let text = format!(
         "scenario        {name}\nhair type       {} ({} strands x {} segments, {:?} model), each standing for {:.1} hairs; tress {:.3} g\n\
          tool            {} ({} force model)\nsteps           {} at {} s ({} with contact, {} clamped by the safety net)\n\
@@ -117,18 +133,16 @@ pub fn run(args: &RunArgs) -> Result<()> {
 
 /// `coiffure run` for a global-tool scenario: writes `wetness.csv`, `summary.txt`, `hairstyle.hair` (the final
 /// render strands) and `pieces.hair` (the cut pieces where they came to rest).
-fn run_global(args: &RunArgs, scenario: &GlobalScenario) -> Result<()> {
-    let stem = args.scenario.file_stem().and_then(|s| s.to_str()).unwrap_or("scenario").to_string();
-    let name = scenario.name.clone().unwrap_or(stem);
-    let started = std::time::Instant::now();
-    let out_data = scenario.run()?;
-    let wall = started.elapsed().as_secs_f64();
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from(&name));
-    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+fn run_global(scenario: &GlobalScenario, name: &str, out: &Path, o: ScenarioOutput) -> Result<()> {
+    let wall = o.wall_time_s;
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    write_json(out, &o)?;
+    let ScenarioSummary::Global(s) = &o.summary else { unreachable!("a global run gives a global summary") };
+    let (hair, pieces) = o.hair.as_ref().expect("a global run gives the hairstyle");
     let trace_path = out.join("wetness.csv");
     let mut w = std::io::BufWriter::new(std::fs::File::create(&trace_path).with_context(|| format!("cannot write {}", trace_path.display()))?);
     writeln!(w, "t,wetness_mean,wetness_min,wetness_max,guides_in_cone,blow_force,cluster_energy,mean_tip_z")?;
-    for r in &out_data.rows {
+    for r in &o.global_rows {
         writeln!(
             w,
             "{:.4},{:.6e},{:.6e},{:.6e},{},{:.6e},{:.6e},{:.6e}",
@@ -137,10 +151,9 @@ fn run_global(args: &RunArgs, scenario: &GlobalScenario) -> Result<()> {
     }
     w.flush()?;
     let hair_path = out.join("hairstyle.hair");
-    hairstyle::write_file(&hair_path, &out_data.hairstyle)?;
+    hairstyle::write_file(&hair_path, hair)?;
     let pieces_path = out.join("pieces.hair");
-    hairstyle::write_file(&pieces_path, &out_data.pieces)?;
-    let s = &out_data.summary;
+    hairstyle::write_file(&pieces_path, pieces)?;
     let h = &scenario.hairstyle;
     let text = format!(
         "scenario        {name}\n\
@@ -195,4 +208,75 @@ fn run_global(args: &RunArgs, scenario: &GlobalScenario) -> Result<()> {
     std::fs::write(out.join("summary.txt"), &text).with_context(|| format!("cannot write {}", out.join("summary.txt").display()))?;
     print!("{text}");
     Ok(())
+}
+
+/// `coiffure run` for a `[live]` scenario: `force.csv`, `summary.txt`, `summary.json`.
+fn run_live(scenario: &LiveScenario, name: &str, out: &Path, o: ScenarioOutput) -> Result<()> {
+    let trace_path = write_force(out, &o)?;
+    write_json(out, &o)?;
+    let l = &scenario.live;
+    let head = format!(
+        "scenario        {name} (live session, lockstep)\n\
+         scene           built-in head, {} render strands, {} guides, {} hair (curliness {}, combing ease {}, wetness {})\n\
+         tool            {} on a {} device\n",
+        l.render_strands, l.guides, l.hair_type, l.curliness, l.combing_ease, l.wetness, scenario.tool.shape, l.device
+    );
+    finish_live(out, &o, &head, &trace_path)
+}
+
+/// Writes `summary.txt` of a live run or a replay and prints it.
+fn finish_live(out: &Path, o: &ScenarioOutput, head: &str, trace_path: &Path) -> Result<()> {
+    let ScenarioSummary::Live(s) = &o.summary else { unreachable!("a live run gives a live summary") };
+    let text = format!(
+        "{head}steps           {} haptic steps ({} with contact, {} at the device's force limit; {} readings rejected, {} strand steps failed)\n\
+         peak force      {:.4e} N\n\
+         mean force      {:.4e} N (over steps with contact)\n\
+         displacement    largest {:.4e} m during the run, {:.4e} m at the end (guide points from their settled positions)\n\
+         haptic step     p99.9 {:.1} us, mean {:.1} us (one thread, lockstep)\n\
+         wall time       {:.2} s\n\
+         outputs         {}, {}, {}\n",
+        s.steps, s.contact_steps, s.clamp_steps, s.rejected_readings, s.failed_steps,
+        s.peak_force_n, s.mean_force_n, s.max_displacement_m, s.final_max_displacement_m, s.haptic_step_p999_us, s.haptic_step_mean_us, s.wall_time_s,
+        trace_path.display(), out.join("summary.txt").display(), out.join("summary.json").display()
+    );
+    std::fs::write(out.join("summary.txt"), &text).with_context(|| format!("cannot write {}", out.join("summary.txt").display()))?;
+    print!("{text}");
+    Ok(())
+}
+
+/// Arguments of `coiffure replay`.
+#[derive(Debug, Args)]
+pub struct ReplayArgs {
+    /// A record written by `coiffure serve --record FILE`.
+    record: PathBuf,
+    /// Output folder (default: a folder named after the record in the current directory).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Render strands of the built-in hairstyle the server ran (as `coiffure serve`).
+    #[arg(long, default_value_t = 100_000)]
+    render_strands: usize,
+    /// Guide strands the server ran (as `coiffure serve`).
+    #[arg(long, default_value_t = 200)]
+    guides: usize,
+}
+
+/// `coiffure replay RECORD`: the recorded session replayed headless into `force.csv`, `summary.txt` and
+/// `summary.json` (the outputs of a `[live]` scenario).
+pub fn replay(args: &ReplayArgs) -> Result<()> {
+    let bytes = std::fs::read(&args.record).with_context(|| format!("cannot read the record {}", args.record.display()))?;
+    let rec = engine::record::Record::from_bytes(&bytes).with_context(|| format!("{}", args.record.display()))?;
+    let opts = engine::session::SceneOptions { render_strands: args.render_strands, guides: args.guides, ..Default::default() };
+    let scene = Arc::new(engine::session::Scene::builtin(&opts)?);
+    let params = engine::session::SessionParams::default();
+    let (force, summary) = engine::scenario::live::replay_record(scene, params, &rec)?;
+    let o = ScenarioOutput { kind: "replay", wall_time_s: summary.wall_time_s, force, global_rows: vec![], summary: ScenarioSummary::Live(summary), hair: None };
+    let stem = args.record.file_stem().and_then(|s| s.to_str()).unwrap_or("replay").to_string();
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from(&stem));
+    let trace_path = write_force(&out, &o)?;
+    write_json(&out, &o)?;
+    let head = format!(
+        "record          {} ({} haptic steps at {} Hz, {} global steps)\nscene           built-in head, {} render strands, {} guides\n",
+        args.record.display(), rec.steps.len(), rec.rate_hz, rec.global_inputs.len(), args.render_strands, args.guides
+    );
+    finish_live(&out, &o, &head, &trace_path)
 }

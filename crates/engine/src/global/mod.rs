@@ -17,9 +17,9 @@ mod body;
 pub mod cut;
 mod nozzle;
 
-pub use cut::{CutJob, CutReport, CutResult, MAX_PIECES_PER_CUT};
+pub use cut::{CutJob, CutReport, CutResult};
 
-use crate::params::SessionParams;
+use crate::params::{GlobalParams, SessionParams};
 use crate::scene::{ffd_map, Scene};
 use crate::snapshot::LatticeSnapshot;
 use crate::tool::{tool_metaballs, ToolInput};
@@ -61,6 +61,10 @@ pub struct GlobalCore {
     pub(crate) lambda: f64,
     /// Air drag per unit length of a hair, N s/m^2.
     pub(crate) air_drag: f64,
+    /// The global step's constants.
+    pub(crate) params: GlobalParams,
+    /// Each tool's shape (by wire id), built once.
+    pub(crate) shapes: Vec<tools::shape::ToolShape>,
     pub(crate) clusters: Vec<ClusterSet>,
     pub(crate) cluster_params: ClusterParams,
     /// The last cut's report.
@@ -96,11 +100,12 @@ impl GlobalCore {
         let v = rh.vertices_per_strand;
         let g0 = scene.guides.first();
         let lambda = g0.map_or(6.5e-5, |g| g.model.linear_density());
-        let air_drag = g0.map_or(2e-5, |g| g.model.air_drag.max(2e-5));
+        let min_drag = params.haptic.min_air_drag;
+        let air_drag = g0.map_or(min_drag, |g| g.model.air_drag.max(min_drag));
         Self {
             model, state, version: 0, head, outside, sprayer, dryer, wet: WetnessField::dry(&segs), centres,
             kept_len: vec![v.saturating_sub(1) as f64; rh.strands()], kept: Arc::new(vec![v as u16; rh.strands()]), kept_version: 0, cuts: 0,
-            lambda, air_drag, clusters: Vec::new(), cluster_params: ClusterParams::default(), last_cut: None, deferred: false, pending: Vec::new(), failed: 0, scene,
+            lambda, air_drag, params: params.global, shapes: crate::tool::Tool::ALL.iter().map(|t| t.shape()).collect(), clusters: Vec::new(), cluster_params: ClusterParams::default(), last_cut: None, deferred: false, pending: Vec::new(), failed: 0, scene,
         }
     }
     /// Back to rest: lattice, wetness, cuts and falling clusters (keeps counting versions and cuts).
@@ -157,14 +162,14 @@ impl GlobalCore {
             self.cuts = input.cuts;
             if input.present {
                 if self.deferred {
-                    self.pending.push(input.blade());
+                    self.pending.push(input.blade(self.params.blade_radius));
                 } else {
-                    self.cut(&input.blade());
+                    self.cut(&input.blade(self.params.blade_radius));
                 }
             }
         }
         self.blow(input, dt);
-        let obstacle = input.present.then(|| tool_metaballs(&input.tool.shape(), &input.position, &input.rotation));
+        let obstacle = input.present.then(|| tool_metaballs(&self.shapes[input.tool as usize], &input.position, &input.rotation, &self.params));
         self.model.step(&mut self.state, dt, &self.head, obstacle.as_ref());
         self.push_out_of_body();
         let bad = self.state.positions.iter().any(|p| !p.coords.iter().all(|x| x.is_finite()));
@@ -216,7 +221,7 @@ mod tests {
         let (mut free, mut pushed) = (GlobalCore::new(scene.clone(), &p), GlobalCore::new(scene.clone(), &p));
         let tool = Vector3::new(0.0, -0.13, 0.0);
         let input = ToolInput { tool: Tool::Comb, present: true, position: tool, rotation: test_rot(), pressed: false, cuts: 0 };
-        let balls = tool_metaballs(&Tool::Comb.shape(), &tool, &test_rot());
+        let balls = tool_metaballs(&Tool::Comb.shape(), &tool, &test_rot(), &GlobalParams::default());
         for _ in 0..30 {
             free.step(0.01, &ToolInput::default());
             pushed.step(0.01, &input);

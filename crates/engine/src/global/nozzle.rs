@@ -11,7 +11,7 @@ impl GlobalCore {
     /// with F the jet's drag on the hair a node stands for (m / lambda metres of it).
     pub(crate) fn blow(&mut self, input: &ToolInput, dt: f64) {
         if input.present && input.pressed && input.tool == Tool::Dryer {
-            let d = HairDryer { cone: input.cone(self.dryer.cone), ..self.dryer };
+            let d = HairDryer { cone: input.cone(self.dryer.cone, self.params.nozzle_standoff), ..self.dryer };
             for (i, x) in self.state.positions.iter().enumerate() {
                 let m = self.model.masses[i];
                 let f = d.force(&x.coords, self.air_drag * m / self.lambda);
@@ -25,9 +25,9 @@ impl GlobalCore {
         if input.present && input.pressed && matches!(input.tool, Tool::Dryer | Tool::Sprayer) {
             let centres = self.centres_now();
             let r = if input.tool == Tool::Sprayer {
-                Sprayer { cone: input.cone(self.sprayer.cone), ..self.sprayer }.spray(&mut self.wet, &centres, dt)
+                Sprayer { cone: input.cone(self.sprayer.cone, self.params.nozzle_standoff), ..self.sprayer }.spray(&mut self.wet, &centres, dt)
             } else {
-                HairDryer { cone: input.cone(self.dryer.cone), ..self.dryer }.dry(&mut self.wet, &centres, dt)
+                HairDryer { cone: input.cone(self.dryer.cone, self.params.nozzle_standoff), ..self.dryer }.dry(&mut self.wet, &centres, dt)
             };
             self.failed += r.is_err() as u64;
         }
@@ -57,7 +57,7 @@ mod tests {
             for _ in 0..100 {
                 g.step(0.01, &input);
             }
-            let cone = input.cone(if tool == Tool::Sprayer { Sprayer::default().cone } else { HairDryer::default().cone });
+            let cone = input.cone(if tool == Tool::Sprayer { Sprayer::default().cone } else { HairDryer::default().cone }, params.global.nozzle_standoff);
             let wide = Cone { half_angle: cone.half_angle + 0.15, range: cone.range + 0.02, ..cone };
             let (mut inside, mut outside) = (0, 0);
             for (gi, cs) in g.centres_now().iter().enumerate() {

@@ -43,6 +43,8 @@ use tools::wetness::WetnessModel;
 pub struct HapticCore {
     pub(crate) scene: Arc<Scene>,
     pub(crate) params: SessionParams,
+    /// Each tool's shape (by wire id), built once.
+    pub(crate) shapes: Vec<tools::shape::ToolShape>,
     pub(crate) tool: Tool,
     pub(crate) hair_type: HairType,
     pub(crate) curliness: f64,
@@ -80,14 +82,15 @@ impl HapticCore {
     pub fn new(scene: Arc<Scene>, params: SessionParams) -> Result<Self, SessionError> {
         params.validate()?;
         let h = scene.hair_type;
-        let strands = Self::build_strands(&scene, &h, 0.0)?;
-        let start = Vector3::new(0.0, -0.25, 0.0);
+        let strands = Self::build_strands(&scene, &h, 0.0, params.haptic.min_air_drag)?;
+        let start = Vector3::from(params.haptic.start);
         let coupling = Coupling::new(params.profile, CouplingParams::for_profile(&params.profile), start);
         let pose = ToolPose { position: start, rotation: Matrix3::identity() };
         let n = scene.guides.len();
-        let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), Tool::Comb.shape(), pose, Self::force_model(&h, 0.0)));
+        let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape()).collect();
+        let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
         Ok(Self {
-            scene, params, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), interaction,
+            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), interaction,
             hair_force: Vector3::zeros(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, rejected: 0, failed: 0,
         })
     }
@@ -102,13 +105,13 @@ impl HapticCore {
                 self.active.clear();
                 self.last_select = None;
                 self.clipped = false;
-                self.interaction = resting_on(&self.scene, LocalInteraction::new(Vec::new(), t.shape(), self.interaction.pose, Self::force_model(&self.hair_type, self.combing_ease)));
+                self.renew_interaction(Vec::new());
             }
             Command::SetHair { hair_type, curliness, combing_ease } => {
                 let h = HairType::ALL.get(hair_type as usize).copied().unwrap_or(self.hair_type);
                 let (c, e) = (if curliness.is_finite() { curliness.clamp(0.0, 1.0) } else { 0.0 }, if combing_ease.is_finite() { combing_ease.clamp(0.0, 1.0) } else { 0.0 });
                 if h != self.hair_type || c != self.curliness {
-                    if let Ok(s) = Self::build_strands(&self.scene, &h, c) {
+                    if let Ok(s) = Self::build_strands(&self.scene, &h, c, self.params.haptic.min_air_drag) {
                         self.strands = s;
                         self.active.clear();
                     }
@@ -117,16 +120,16 @@ impl HapticCore {
                 self.curliness = c;
                 self.combing_ease = e;
                 self.last_select = None;
-                self.interaction = resting_on(&self.scene, LocalInteraction::new(Vec::new(), self.tool.shape(), self.interaction.pose, Self::force_model(&h, e)));
+                self.renew_interaction(Vec::new());
             }
             Command::Reset => {
-                if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness) {
+                if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, self.params.haptic.min_air_drag) {
                     self.strands = s;
                 }
                 self.active.clear();
                 self.last_select = None;
                 self.clipped = false;
-                self.interaction = resting_on(&self.scene, LocalInteraction::new(Vec::new(), self.tool.shape(), self.interaction.pose, Self::force_model(&self.hair_type, self.combing_ease)));
+                self.renew_interaction(Vec::new());
                 self.wet_version = u64::MAX;
             }
         }
@@ -220,7 +223,7 @@ impl HapticCore {
                 let base = if ok { ffd_map(&self.scene.lattice.ffd, &lattice.positions, &reference) } else { reference };
                 let d = p - base;
                 // Keep the viewer's displacement sane even if a strand misbehaves.
-                out.displacement.push(if d.iter().all(|x| x.is_finite()) && d.norm() < 0.5 { d } else { Vector3::zeros() });
+                out.displacement.push(if d.iter().all(|x| x.is_finite()) && d.norm() < self.params.haptic.max_displacement { d } else { Vector3::zeros() });
             }
         }
     }
@@ -248,6 +251,26 @@ mod tests {
     use super::*;
     use crate::global::GlobalCore;
     use crate::testing::{small_scene, test_rot};
+
+    #[test]
+    fn absurd_device_input_never_reaches_the_hand() {
+        // (From the removed second live session, local_session.rs.) NaN readings in the middle of a comb
+        // stroke: zero force on those steps, counted, and the stroke goes on with finite forces.
+        let scene = small_scene();
+        let mut core = HapticCore::new(scene.clone(), SessionParams::default()).unwrap();
+        let snap = GlobalCore::new(scene, &SessionParams::default()).snapshot();
+        let mut forces = Vec::new();
+        for n in 0..300 {
+            let t = n as f64 * 1e-3;
+            let p = if n == 50 || n == 80 { Vector3::new(f64::NAN, 0.0, 0.0) } else { Vector3::new(0.0, -0.118, 0.05 - 0.1 * t) };
+            forces.push(core.step(Some(DeviceReading { time: t, position: p, rotation: test_rot(), buttons: 0 }), &snap, 1e-3).force);
+        }
+        assert_eq!(core.rejected, 2);
+        assert_eq!(forces[50], Vector3::zeros());
+        assert_eq!(forces[80], Vector3::zeros());
+        assert!(forces.iter().all(|f| f.iter().all(|x| x.is_finite())));
+        assert!(forces[100..].iter().any(|f| f.norm() > 0.0), "the stroke goes on");
+    }
 
     #[test]
     fn combing_through_the_guides_gives_force_and_moves_them() {

@@ -28,7 +28,7 @@ impl HapticCore {
             }
         }
         if let Ok(m) = self.wet_model.wet(&dry, h.friction_coefficient(), section.area(), mean) {
-            self.interaction.model = ForceModel::Constraint { friction: m.friction * (1.0 - 0.8 * self.combing_ease), options: Default::default() };
+            self.interaction.model = ForceModel::Constraint { friction: self.params.haptic.combing_friction(m.friction, self.combing_ease), options: Default::default() };
         }
     }
 }

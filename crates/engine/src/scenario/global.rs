@@ -95,7 +95,7 @@ impl Default for HairstyleSpec {
 }
 
 /// One row of a global scenario's trace (every `global_dt`).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct GlobalRow {
     /// Time, s.
     pub t: f64,
@@ -112,7 +112,7 @@ pub struct GlobalRow {
 }
 
 /// What a global scenario did.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct GlobalSummary {
     /// Guide strands and render strands.
     pub guides: usize,
@@ -169,6 +169,8 @@ pub struct GlobalSummary {
     pub lattice_end_displacement: f64,
     /// Largest total dryer force on the lattice at one time, N.
     pub lattice_peak_force: f64,
+    /// Wall time of the run, s (set by [`super::run`]; 0 from [`GlobalScenario::run`]).
+    pub wall_time_s: f64,
 }
 
 /// Everything a global scenario produces (the server writes it to files).
@@ -597,6 +599,7 @@ impl GlobalScenario {
                 })
                 .unwrap_or(0.0),
             lattice_peak_force,
+            wall_time_s: 0.0,
         };
         Ok(GlobalOutput {
             rows,

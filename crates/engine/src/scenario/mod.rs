@@ -3,14 +3,23 @@
 //!   the result is the force trace the tool (the hand) feels and a summary.
 //! - [`global`]: a generated hairstyle on the built-in head and timed actions of the scissors, the hair
 //!   dryer and the water sprayer ([`actions`]).
+//! - [`live`]: the live session's own cores driven headless, the tool moved as a device would move it.
+//!
+//! [`run`] runs any kind into memory ([`ScenarioOutput`]); the CLI only writes that to files.
 
 pub mod actions;
 pub mod global;
+pub mod live;
+pub mod output;
 pub mod patch;
+pub mod run;
 
 pub use actions::{Action, ConeAction, ConePose, CutAction};
 pub use global::{GlobalOutput, GlobalRow, GlobalScenario, GlobalSummary, HairstyleSpec};
+pub use live::{LiveScenario, LiveSpec, LiveTool, LiveWaypoint};
+pub use output::{ForceTrace, LiveSummary};
 pub use patch::{PatchSpec, Scenario, Summary, ToolSpec, TraceRow};
+pub use run::{run, run_patch, ScenarioFile, ScenarioOutput, ScenarioSummary};
 
 use strand::StrandError;
 

@@ -154,7 +154,7 @@ pub struct TraceRow {
 }
 
 /// Summary of a run.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Summary {
     /// Largest force magnitude, N.
     pub peak_force: f64,
@@ -172,6 +172,8 @@ pub struct Summary {
     pub represents: f64,
     /// Steps in which some strand's velocities were scaled down by the safety net.
     pub clamped_steps: u64,
+    /// Wall time of the run, s (set by [`super::run_patch`]; 0 from [`Scenario::run`]).
+    pub wall_time_s: f64,
 }
 
 /// splitmix64: a small deterministic generator for the patch layout.
@@ -307,6 +309,7 @@ impl Scenario {
             tress_mass,
             represents: k,
             clamped_steps: it.strands.iter().map(|s| s.clamped_steps).sum(),
+            wall_time_s: 0.0,
         };
         Ok((rows, summary))
     }

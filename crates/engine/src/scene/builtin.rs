@@ -105,7 +105,7 @@ mod tests {
         assert_eq!(s.render.guide.len(), 2000 * s.render.guides_per_strand);
         assert!(s.render.guide.iter().all(|&g| (g as usize) < s.guides.len()));
         assert!(s.guides.iter().all(|g| g.reference.len() == 16));
-        let strands = HapticCore::build_strands(&s, &s.hair_type, 0.0).unwrap();
+        let strands = HapticCore::build_strands(&s, &s.hair_type, 0.0, crate::params::HapticParams::default().min_air_drag).unwrap();
         for (st, g) in strands.iter().zip(&s.guides) {
             for (a, b) in centreline(st, 16).iter().zip(&g.reference) {
                 assert!((a - b).norm() < 1e-12);

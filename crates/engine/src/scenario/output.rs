@@ -1,0 +1,138 @@
+//! What a scenario produces, in memory (the CLI writes it to files; the Python binding hands it over as
+//! arrays): the force trace as columns, the summary of its kind, serde-serialisable.
+
+use nalgebra::Vector3;
+use serde::Serialize;
+
+/// A force trace as columns, one entry per haptic step (the force on the hand, N; the torque, N m; the
+/// contacts; the tool position, m). `force.csv` has these columns in this order.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ForceTrace {
+    /// Time, s (from the start of the tool's path).
+    pub t: Vec<f64>,
+    /// Force x, N.
+    pub fx: Vec<f64>,
+    /// Force y, N.
+    pub fy: Vec<f64>,
+    /// Force z, N.
+    pub fz: Vec<f64>,
+    /// Torque x, N m.
+    pub tx: Vec<f64>,
+    /// Torque y, N m.
+    pub ty: Vec<f64>,
+    /// Torque z, N m.
+    pub tz: Vec<f64>,
+    /// Contacts in the step.
+    pub contacts: Vec<u32>,
+    /// Tool position x, m.
+    pub tool_x: Vec<f64>,
+    /// Tool position y, m.
+    pub tool_y: Vec<f64>,
+    /// Tool position z, m.
+    pub tool_z: Vec<f64>,
+}
+
+impl ForceTrace {
+    /// Appends one step.
+    pub fn push(&mut self, t: f64, force: &Vector3<f64>, torque: &Vector3<f64>, contacts: u32, tool: &Vector3<f64>) {
+        self.t.push(t);
+        self.fx.push(force.x);
+        self.fy.push(force.y);
+        self.fz.push(force.z);
+        self.tx.push(torque.x);
+        self.ty.push(torque.y);
+        self.tz.push(torque.z);
+        self.contacts.push(contacts);
+        self.tool_x.push(tool.x);
+        self.tool_y.push(tool.y);
+        self.tool_z.push(tool.z);
+    }
+    /// Steps.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+    /// No step.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+    /// Force of step `i`, N.
+    pub fn force(&self, i: usize) -> Vector3<f64> {
+        Vector3::new(self.fx[i], self.fy[i], self.fz[i])
+    }
+    /// The CSV text: header `t,fx,fy,fz,tx,ty,tz,contacts,tool_x,tool_y,tool_z`, one line per step.
+    pub fn to_csv(&self) -> String {
+        let mut s = String::with_capacity(self.len() * 120 + 64);
+        s.push_str("t,fx,fy,fz,tx,ty,tz,contacts,tool_x,tool_y,tool_z\n");
+        for i in 0..self.len() {
+            s.push_str(&format!(
+                "{:.4},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{:.6e},{:.6e},{:.6e}\n",
+                self.t[i], self.fx[i], self.fy[i], self.fz[i], self.tx[i], self.ty[i], self.tz[i], self.contacts[i], self.tool_x[i], self.tool_y[i], self.tool_z[i]
+            ));
+        }
+        s
+    }
+}
+
+/// Summary of a `[live]` scenario or a replayed record.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LiveSummary {
+    /// Haptic steps traced.
+    pub steps: usize,
+    /// Largest force sent to the device, N.
+    pub peak_force_n: f64,
+    /// Mean force magnitude over the steps with contact, N (0 without contact).
+    pub mean_force_n: f64,
+    /// Steps with at least one contact.
+    pub contact_steps: usize,
+    /// Steps at the device's force limit (|F| within 1e-9 relative of `max_force`).
+    pub clamp_steps: usize,
+    /// Largest distance of any guide point (as shown: lattice motion plus local strand motion) from its
+    /// settled position over the run (measured at every global step and at the end), m.
+    pub max_displacement_m: f64,
+    /// The same at the last step, m.
+    pub final_max_displacement_m: f64,
+    /// 99.9th percentile of the haptic step's wall time, microseconds (this machine, one thread).
+    pub haptic_step_p999_us: f64,
+    /// Mean haptic step wall time, microseconds.
+    pub haptic_step_mean_us: f64,
+    /// Rejected device readings.
+    pub rejected_readings: u64,
+    /// Strand steps that failed (state kept).
+    pub failed_steps: u64,
+    /// Wall time of the run, s.
+    pub wall_time_s: f64,
+}
+
+impl LiveSummary {
+    pub(crate) fn new(trace: &ForceTrace, max_force: f64, meter: &super::live::Meter, timing: &mut [f64], rejected: u64, failed: u64, wall: f64) -> Self {
+        let (mut peak, mut sum, mut contact, mut clamp) = (0.0f64, 0.0, 0usize, 0usize);
+        for i in 0..trace.len() {
+            let f = trace.force(i).norm();
+            peak = peak.max(f);
+            if trace.contacts[i] > 0 {
+                contact += 1;
+                sum += f;
+            }
+            if f >= max_force * (1.0 - 1e-9) {
+                clamp += 1;
+            }
+        }
+        timing.sort_by(f64::total_cmp);
+        let p999 = if timing.is_empty() { 0.0 } else { timing[((timing.len() as f64 * 0.999).ceil() as usize).clamp(1, timing.len()) - 1] };
+        let mean = timing.iter().sum::<f64>() / timing.len().max(1) as f64;
+        Self {
+            steps: trace.len(),
+            peak_force_n: peak,
+            mean_force_n: if contact > 0 { sum / contact as f64 } else { 0.0 },
+            contact_steps: contact,
+            clamp_steps: clamp,
+            max_displacement_m: meter.max,
+            final_max_displacement_m: meter.last,
+            haptic_step_p999_us: p999 * 1e6,
+            haptic_step_mean_us: mean * 1e6,
+            rejected_readings: rejected,
+            failed_steps: failed,
+            wall_time_s: wall,
+        }
+    }
+}

@@ -48,15 +48,17 @@ impl HapticCore {
         }
     }
 
-    /// The active strands' roots follow the lattice (FFD of each guide's rest root position).
-    pub(crate) fn roots_follow(&mut self, nodes: &[Point3<f64>], dt: f64) {
-        if nodes.len() == self.scene.lattice.node_count() {
-            for (slot, &g) in self.active.iter().enumerate() {
-                let target = ffd_map(&self.scene.lattice.ffd, nodes, &self.scene.guides[g].state.root.position);
-                let root = &mut self.interaction.strands[slot].state.root;
-                root.velocity = (target - root.position) / dt;
-                root.acceleration = Vector3::zeros();
-            }
+    /// The active strands' roots move with the head, which is rigid (and fixed in the scene's frame): each
+    /// root is held at its guide's root on the scalp, at rest. Not with the lattice: the tool's own
+    /// repelling obstacle deforms the lattice, and roots following it sank into the head and were kicked out.
+    pub(crate) fn roots_follow(&mut self, _nodes: &[Point3<f64>], dt: f64) {
+        for (slot, &g) in self.active.iter().enumerate() {
+            let target = self.scene.guides[g].state.root.position;
+            let root = &mut self.interaction.strands[slot].state.root;
+            // A root that is elsewhere (a state from before) is brought back over one step.
+            root.velocity = (target - root.position) / dt;
+            root.angular_velocity = Vector3::zeros();
+            root.acceleration = Vector3::zeros();
         }
     }
 }

@@ -40,7 +40,7 @@ const canvas = document.getElementById('view') as HTMLCanvasElement;
 const statusEl = document.getElementById('status') as HTMLSpanElement;
 const view = new View(canvas);
 const plot = new ForcePlot(document.getElementById('plot') as HTMLCanvasElement);
-const device = new MouseDevice(view.camera, canvas, view.controls.target);
+const device = new MouseDevice(view.camera, canvas);
 
 const status: Status = {
   webgl2: view.renderer.getContext() instanceof WebGL2RenderingContext,
@@ -210,9 +210,12 @@ document.getElementById('load')!.addEventListener('change', async (ev) => {
 
 // The mouse drives the device.
 canvas.addEventListener('contextmenu', (e) => e.preventDefault());
-canvas.addEventListener('pointerdown', (e) => { if (e.button === 0) { canvas.setPointerCapture(e.pointerId); device.down(e); } });
-canvas.addEventListener('pointerup', (e) => { if (e.button === 0) device.up(e); });
-canvas.addEventListener('pointermove', (e) => device.move(e));
+// Each pointer event sends the pose at once (besides every drawn frame): the device's target must not wait
+// for a slow frame (software rendering draws a frame every second or two), or a stroke reaches the server as
+// a few large jumps.
+canvas.addEventListener('pointerdown', (e) => { if (e.button === 0) { canvas.setPointerCapture(e.pointerId); device.down(e); sendPose(); } });
+canvas.addEventListener('pointerup', (e) => { if (e.button === 0) { device.up(e); sendPose(); } });
+canvas.addEventListener('pointermove', (e) => { device.move(e); sendPose(); });
 
 function sendPose(): void {
   if (!status.youControl || ws.readyState !== WebSocket.OPEN) return;

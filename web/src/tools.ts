@@ -6,9 +6,14 @@ import * as THREE from 'three';
 
 export const TOOL_NAMES = ['comb', 'brush', 'scissors', 'dryer', 'sprayer', 'clip'];
 
-/** Distance from the head centre to the device plane, m: pressed into the hair, and lifted. */
-export const PRESSED_DEPTH = 0.115;
-export const LIFTED_DEPTH = 0.175;
+/** Distance from the head's centre (the scene's origin) to the device plane, m: pressed into the hair, and
+ * lifted. Pressed, a comb's teeth (2.5 cm, pointing into the screen) end at least 9.5 cm from the centre, 5 mm
+ * outside the 9 cm cranium: they go through the hair, not into the scalp (the plane used to be measured from
+ * the orbit target, 5 cm below the centre, and put the teeth 1.4 cm inside the head). */
+export const PRESSED_DEPTH = 0.12;
+export const LIFTED_DEPTH = 0.18;
+/** The head's centre, m (scene frame). */
+const HEAD_CENTRE = new THREE.Vector3(0, 0, 0);
 /** Force at which the pseudo-haptic gain halves, N. */
 export const PSEUDO_HAPTIC_FORCE = 0.05;
 
@@ -68,13 +73,13 @@ export class MouseDevice {
   /** Current pseudo-haptic gain in (0, 1]. */
   gain = 1;
 
-  constructor(private readonly camera: THREE.Camera, private readonly canvas: HTMLCanvasElement, private readonly centre: THREE.Vector3) {}
+  constructor(private readonly camera: THREE.Camera, private readonly canvas: HTMLCanvasElement) {}
 
   private plane(): THREE.Plane {
     const forward = new THREE.Vector3();
     this.camera.getWorldDirection(forward);
     const depth = this.pressed ? PRESSED_DEPTH : LIFTED_DEPTH;
-    const p = this.centre.clone().addScaledVector(forward, -depth);
+    const p = HEAD_CENTRE.clone().addScaledVector(forward, -depth);
     return new THREE.Plane().setFromNormalAndCoplanarPoint(forward.clone().negate(), p);
   }
 

@@ -12,7 +12,7 @@ export const repoDir = resolve(webDir, '..');
 export const artifacts = join(webDir, 'test-artifacts');
 mkdirSync(artifacts, { recursive: true });
 
-const binary = process.env.COIFFURE_BIN ?? join(process.env.CARGO_TARGET_DIR ?? join(repoDir, 'target'), 'release', 'coiffure');
+export const binary = process.env.COIFFURE_BIN ?? join(process.env.CARGO_TARGET_DIR ?? join(repoDir, 'target'), 'release', 'coiffure');
 const chromiumPath = process.env.CHROMIUM ?? '/usr/bin/chromium';
 
 /** Starts `coiffure serve --port 0 ...extra`; resolves with { url, proc, output() } once it listens. */
@@ -69,8 +69,9 @@ export async function openViewer(browser, url) {
   return { page, logs };
 }
 
-/** Drags with the left button from world point a to world point b in `steps` steps (ms between steps). */
-export async function dragWorld(page, a, b, steps = 40, pause = 30) {
+/** Drags with the left button from world point a to world point b in `steps` steps (ms between steps);
+ * `onStep(i)` (optional) is called after step i without being awaited. */
+export async function dragWorld(page, a, b, steps = 40, pause = 30, onStep = null) {
   const pa = await page.evaluate((p) => window.coiffureDebug.project(...p), a);
   const pb = await page.evaluate((p) => window.coiffureDebug.project(...p), b);
   await page.mouse.move(pa[0], pa[1]);
@@ -78,6 +79,7 @@ export async function dragWorld(page, a, b, steps = 40, pause = 30) {
   for (let i = 1; i <= steps; i++) {
     const t = i / steps;
     await page.mouse.move(pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1]));
+    if (onStep) onStep(i);
     await page.waitForTimeout(pause);
   }
   await page.mouse.up();

@@ -13,17 +13,19 @@ pub struct SessionParams {
     pub haptic_rate_hz: f64,
     /// Global (lattice) step rate, Hz. Default 100.
     pub global_rate_hz: f64,
-    /// Most guide strands simulated at once near the tool. Default 12.
+    /// Most guide strands simulated at once near the tool (the chosen ones and those still relaxing after
+    /// they left, `crate::haptic` active set). Default 48: enough strands around a comb for a continuous
+    /// force, within the 1 ms haptic step (bench/RESULTS.md).
     pub max_active: usize,
-    /// A guide joins the active set when its settled shape comes within this distance of the tool, m.
-    /// Default 0.05.
+    /// A guide joins the active set when its settled shape comes within this distance of the tool's shape
+    /// (its capsules) on its way over the next `HapticParams::lookahead` s, m. Default 0.03.
     pub activation_radius: f64,
     /// Device limits. Default: a Phantom Omni (3.3 N, 300 N/s), also for the mouse, whose force is shown.
     pub profile: DeviceProfile,
     /// How the device point follows a pointer's target (the mouse reports at 60-125 Hz): interpolated at the
     /// haptic rate between events (`haptics::target::TargetParams`: event-interval bounds 0.004-0.05 s,
-    /// running-mean weight 0.2, largest speed 1.5 m/s). A real device's reading passes through it unchanged
-    /// when it reports every step.
+    /// running-mean weight 0.2, largest speed 1.5 m/s, largest acceleration 1 m/s^2: a jump of the mouse
+    /// target, e.g. when the button presses the tool into the hair, never throws the proxy).
     pub pointer: TargetParams,
     /// Haptic steps between two snapshots published for the viewer. Default 5 (200 Hz).
     pub publish_every: u64,
@@ -50,7 +52,7 @@ pub struct SessionParams {
 
 impl Default for SessionParams {
     fn default() -> Self {
-        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_active: 12, activation_radius: 0.05, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5 }, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default() }
+        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_active: 48, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0 }, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default() }
     }
 }
 
@@ -71,8 +73,8 @@ impl SessionParams {
             return p(format!("activation_radius must be > 0 and wetting_rate, drying_rate finite and >= 0: {self:?}"));
         }
         let t = &self.pointer;
-        if !(t.min_interval > 0.0 && t.max_interval >= t.min_interval && t.max_interval.is_finite() && t.smoothing > 0.0 && t.smoothing <= 1.0 && t.max_speed > 0.0 && t.max_speed.is_finite()) {
-            return p(format!("pointer: need 0 < min_interval <= max_interval (finite), smoothing in (0, 1], max_speed > 0 finite, got {t:?}"));
+        if !(t.min_interval > 0.0 && t.max_interval >= t.min_interval && t.max_interval.is_finite() && t.smoothing > 0.0 && t.smoothing <= 1.0 && t.max_speed > 0.0 && t.max_speed.is_finite() && t.max_acceleration > 0.0 && t.max_acceleration.is_finite()) {
+            return p(format!("pointer: need 0 < min_interval <= max_interval (finite), smoothing in (0, 1], max_speed and max_acceleration > 0 finite, got {t:?}"));
         }
         if !(self.hairs_per_render_strand > 0.0 && self.hairs_per_render_strand.is_finite()) {
             return p(format!("hairs_per_render_strand must be finite and > 0, got {}", self.hairs_per_render_strand));
@@ -116,11 +118,32 @@ pub struct HapticParams {
     pub cut_pieces: usize,
     /// Where the tool waits before the first device reading (head frame), m. Default (0, -0.25, 0).
     pub start: [f64; 3],
+    /// The active set is chosen around the tool's path over the next `lookahead` s (its position and
+    /// velocity now), so that strands join before the tool reaches them, s. Default 0.1.
+    pub lookahead: f64,
+    /// A strand that left the active set is still simulated until its tip has moved slower than this for
+    /// `rest_time`, m/s. Default 0.02.
+    pub rest_speed: f64,
+    /// How long a leaving strand's tip must stay slower than `rest_speed` to count as at rest, s.
+    /// Default 0.2.
+    pub rest_time: f64,
+    /// A leaving strand is let go after this time even if not at rest, s. Default 0.6 (a strand the tool
+    /// flung swings for seconds; it then blends back to the global layer).
+    pub max_relax_time: f64,
+    /// A strand let go whose tip is farther than this from its groomed tip returns to its groomed shape
+    /// (what the viewer shows once it has faded out), m. Default 0.005.
+    pub rest_distance: f64,
+    /// The displacement shown of a strand fades in over this time when it joins the active set and out
+    /// when it is let go (while still simulated), s. Default 0.3.
+    pub blend_time: f64,
+    /// The ends of the tool's capsules stay this far outside the body (head, neck, shoulders), m: the teeth
+    /// ride on the hair near the scalp and never reach the roots. Default 0.004.
+    pub body_clearance: f64,
 }
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { reselect_distance: 0.01, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0] }
+        Self { reselect_distance: 0.01, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004 }
     }
 }
 
@@ -128,10 +151,26 @@ impl HapticParams {
     /// Checks every field; the error names the bad one.
     pub fn validate(&self) -> Result<(), SessionError> {
         let p = |m: String| Err(SessionError::Param(m));
-        for (k, v) in [("reselect_distance", self.reselect_distance), ("clip_reach", self.clip_reach), ("max_displacement", self.max_displacement), ("snip_distance", self.snip_distance)] {
+        for (k, v) in [("reselect_distance", self.reselect_distance), ("clip_reach", self.clip_reach), ("max_displacement", self.max_displacement), ("snip_distance", self.snip_distance), ("rest_distance", self.rest_distance)] {
             if !(v > 0.0 && v.is_finite()) {
                 return p(format!("haptic.{k} must be > 0 m, got {v}"));
             }
+        }
+        if !(self.body_clearance >= 0.0 && self.body_clearance.is_finite()) {
+            return p(format!("haptic.body_clearance must be >= 0 m, got {}", self.body_clearance));
+        }
+        for (k, v) in [("lookahead", self.lookahead), ("rest_time", self.rest_time)] {
+            if !(v >= 0.0 && v.is_finite()) {
+                return p(format!("haptic.{k} must be >= 0 s, got {v}"));
+            }
+        }
+        for (k, v) in [("max_relax_time", self.max_relax_time), ("blend_time", self.blend_time)] {
+            if !(v > 0.0 && v.is_finite()) {
+                return p(format!("haptic.{k} must be > 0 s, got {v}"));
+            }
+        }
+        if !(self.rest_speed > 0.0 && self.rest_speed.is_finite()) {
+            return p(format!("haptic.rest_speed must be > 0 m/s, got {}", self.rest_speed));
         }
         if !(self.min_air_drag >= 0.0 && self.min_air_drag.is_finite()) {
             return p(format!("haptic.min_air_drag must be >= 0 N s/m^2, got {}", self.min_air_drag));

@@ -231,12 +231,14 @@ fn finish_live(out: &Path, o: &ScenarioOutput, head: &str, trace_path: &Path) ->
         "{head}steps           {} haptic steps ({} with contact, {} at the device's force limit; {} readings rejected, {} strand steps failed)\n\
          peak force      {:.4e} N\n\
          mean force      {:.4e} N (over steps with contact)\n\
-         displacement    largest {:.4e} m during the run, {:.4e} m at the end (guide points from their settled positions)\n\
+         displacement    largest {:.4e} m during the run, {:.4e} m during the stroke, {:.4e} m at the end (guide points from their settled positions)\n\
+         continuity      {} steps with the tool in the hair, {:.1} % of them above 5 mN; largest one-step change {:.4e} N; fastest strand tip {:.3} m/s\n\
          haptic step     p99.9 {:.1} us, mean {:.1} us (one thread, lockstep)\n\
          wall time       {:.2} s\n\
          outputs         {}, {}, {}\n",
         s.steps, s.contact_steps, s.clamp_steps, s.rejected_readings, s.failed_steps,
-        s.peak_force_n, s.mean_force_n, s.max_displacement_m, s.final_max_displacement_m, s.haptic_step_p999_us, s.haptic_step_mean_us, s.wall_time_s,
+        s.peak_force_n, s.mean_force_n, s.max_displacement_m, s.stroke_max_displacement_m, s.final_max_displacement_m,
+        s.in_hair_steps, 100.0 * s.in_hair_force_share, s.max_force_change_n, s.max_strand_speed_m_s, s.haptic_step_p999_us, s.haptic_step_mean_us, s.wall_time_s,
         trace_path.display(), out.join("summary.txt").display(), out.join("summary.json").display()
     );
     std::fs::write(out.join("summary.txt"), &text).with_context(|| format!("cannot write {}", out.join("summary.txt").display()))?;
@@ -258,6 +260,9 @@ pub struct ReplayArgs {
     /// Guide strands the server ran (as `coiffure serve`).
     #[arg(long, default_value_t = 200)]
     guides: usize,
+    /// Real hairs per render strand the server ran with (as `coiffure serve`).
+    #[arg(long, default_value_t = 1.0)]
+    hairs_per_render_strand: f64,
 }
 
 /// `coiffure replay RECORD`: the recorded session replayed headless into `force.csv`, `summary.txt` and
@@ -267,7 +272,8 @@ pub fn replay(args: &ReplayArgs) -> Result<()> {
     let rec = engine::record::Record::from_bytes(&bytes).with_context(|| format!("{}", args.record.display()))?;
     let opts = engine::session::SceneOptions { render_strands: args.render_strands, guides: args.guides, ..Default::default() };
     let scene = Arc::new(engine::session::Scene::builtin(&opts)?);
-    let params = engine::session::SessionParams::default();
+    let params = engine::session::SessionParams { hairs_per_render_strand: args.hairs_per_render_strand, ..Default::default() };
+    params.validate().context("--hairs-per-render-strand")?;
     let (force, summary) = engine::scenario::live::replay_record(scene, params, &rec)?;
     let o = ScenarioOutput { kind: "replay", wall_time_s: summary.wall_time_s, force, global_rows: vec![], summary: ScenarioSummary::Live(summary), hair: None };
     let stem = args.record.file_stem().and_then(|s| s.to_str()).unwrap_or("replay").to_string();

@@ -44,6 +44,11 @@ pub struct ServeArgs {
     /// Number of guide strands.
     #[arg(long, default_value_t = 200)]
     pub guides: usize,
+    /// Real hairs each render strand stands for (`SessionParams::hairs_per_render_strand`: the local strands'
+    /// reaction on the tool scales with it). With fewer render strands than hairs on a head (100 000), e.g.
+    /// 5000 for software rendering, 20 keeps the hand's force that of a full head.
+    #[arg(long, default_value_t = 1.0)]
+    pub hairs_per_render_strand: f64,
     /// Visual frames per second sent to viewers.
     #[arg(long, default_value_t = 60.0)]
     pub fps: f64,
@@ -132,7 +137,8 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let scene = Arc::new(Scene::builtin(&opts).context("building the built-in scene")?);
     tracing::info!("scene: {} render strands, {} guides, {} lattice nodes, built in {:.2} s", scene.render.strands(), scene.guides.len(), scene.lattice.node_count(), t0.elapsed().as_secs_f64());
     let haptic_priority = (args.haptic_priority != 0).then_some(args.haptic_priority);
-    let params = SessionParams { record: args.record.is_some(), haptic_priority, ..SessionParams::default() };
+    let params = SessionParams { record: args.record.is_some(), haptic_priority, hairs_per_render_strand: args.hairs_per_render_strand, ..SessionParams::default() };
+    params.validate().context("--hairs-per-render-strand")?;
     let (session, io) = Session::start(scene.clone(), params).context("starting the session")?;
     let SessionIo { device, commands, lattice, haptic } = io;
     let scene_msg = Arc::new(protocol::encode_scene(&scene));

@@ -7,7 +7,11 @@
 //! 2. **Coupling**: the virtual coupling gives the proxy (the tool) and the force on the hand, from the
 //!    hair's reaction of the previous step taken implicitly (its force and damping, so the reaction can
 //!    never throw the proxy: `haptics::coupling::HairReaction`).
-//! 3. **Active set**: the guides nearest the tool become the local strands ([`active`]).
+//!    2b. **Body**: the tool stays outside the head (`HapticParams::body_clearance`), a god-object for the
+//!    body: the hand feels the head through the coupling ([`body`]).
+//! 3. **Active set**: the guides near the tool's path over the next `HapticParams::lookahead` s become the
+//!    local strands; strands that left it are still stepped until at rest, then fade back to the global
+//!    layer ([`active`]).
 //! 4. **Roots**: the local strands' roots stay with the head (rigid), not with the tool-deformed lattice.
 //! 5. **Wetness**: the guides' wetness from the lattice snapshot sets the strands' material and the
 //!    friction ([`wetness`]).
@@ -15,9 +19,12 @@
 //! 7. **Local strands**: the local interaction steps the strands with the tool's contacts; its reaction
 //!    and its damping, times the real hairs each guide stands for ([`HapticCore::hairs_per_guide`]), feed the
 //!    coupling at the next step.
+//! 8. **Tracking**: each local strand's tip speed, the leaving strands' rest, the display's fade in and out
+//!    ([`active`]).
 
 pub mod actions;
 mod active;
+mod body;
 mod strands;
 mod wetness;
 
@@ -58,8 +65,12 @@ pub struct HapticCore {
     pub(crate) device: Option<TargetFilter>,
     /// Every guide's strand (inactive ones keep their last state).
     pub(crate) strands: Vec<Strand>,
-    /// Active guides and their interaction (strands inside are clones, written back on a change).
+    /// Simulated guides, in the interaction's order (their strands live in the interaction meanwhile and
+    /// move back to `strands` when they leave), and each one's membership.
     pub(crate) active: Vec<usize>,
+    pub(crate) members: Vec<active::Member>,
+    /// Fastest tip of the simulated strands over the last step, m/s.
+    pub(crate) max_tip_speed: f64,
     pub(crate) interaction: LocalInteraction,
     /// The hair's reaction on the proxy from the last step (scaled to the real hairs), linearised.
     pub(crate) hair_force: HairReaction,
@@ -95,7 +106,7 @@ impl HapticCore {
         let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape()).collect();
         let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
         Ok(Self {
-            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), interaction,
+            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), max_tip_speed: 0.0, interaction,
             hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, rejected: 0, failed: 0,
         })
     }
@@ -107,32 +118,32 @@ impl HapticCore {
             Command::SelectTool(t) => {
                 self.write_back();
                 self.tool = t;
-                self.active.clear();
-                self.last_select = None;
+                self.clear_active();
                 self.clipped = false;
                 self.renew_interaction(Vec::new());
             }
             Command::SetHair { hair_type, curliness, combing_ease } => {
                 let h = HairType::ALL.get(hair_type as usize).copied().unwrap_or(self.hair_type);
                 let (c, e) = (if curliness.is_finite() { curliness.clamp(0.0, 1.0) } else { 0.0 }, if combing_ease.is_finite() { combing_ease.clamp(0.0, 1.0) } else { 0.0 });
+                // The simulated strands go back to the store (and are rebuilt there for a new hair).
+                self.write_back();
+                self.clear_active();
+                self.clipped = false;
                 if h != self.hair_type || c != self.curliness {
                     if let Ok(s) = Self::build_strands(&self.scene, &h, c, self.params.haptic.min_air_drag) {
                         self.strands = s;
-                        self.active.clear();
                     }
                 }
                 self.hair_type = h;
                 self.curliness = c;
                 self.combing_ease = e;
-                self.last_select = None;
                 self.renew_interaction(Vec::new());
             }
             Command::Reset => {
                 if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, self.params.haptic.min_air_drag) {
                     self.strands = s;
                 }
-                self.active.clear();
-                self.last_select = None;
+                self.clear_active();
                 self.clipped = false;
                 self.renew_interaction(Vec::new());
                 self.wet_version = u64::MAX;
@@ -155,10 +166,13 @@ impl HapticCore {
                 return DeviceCommand::default();
             }
         };
+        // 2b. Body.
+        self.keep_tool_out_of_body(&r.rotation);
         let proxy = self.coupling.proxy;
         // 3. Active set; 4. roots.
-        self.reselect(&proxy, &lattice.positions);
-        self.roots_follow(&lattice.positions, dt);
+        let velocity = self.coupling.proxy_velocity;
+        self.update_active(&proxy, &velocity, &r.rotation, &lattice.positions);
+        self.roots_follow(dt);
         // 5. Wetness.
         self.apply_wetness(lattice);
         // 6. Tool actions (the primary button closes the scissors and the clip, blows the dryer).
@@ -178,6 +192,8 @@ impl HapticCore {
                 self.last_contacts = 0;
             }
         }
+        // 8. Tracking.
+        self.track_active(dt);
         DeviceCommand { force, torque: Vector3::zeros() }
     }
 
@@ -228,11 +244,12 @@ impl HapticCore {
         for (slot, &g) in self.active.iter().enumerate() {
             out.active.push(g as u32);
             let s = &self.interaction.strands[slot];
+            let weight = self.members.get(slot).map_or(1.0, |m| m.weight);
             let pts = samples_along(s, self.scene.guides[g].model.length, samples);
             for (k, p) in pts.into_iter().enumerate() {
                 let reference = self.scene.guides[g].reference[k];
                 let base = if ok { ffd_map(&self.scene.lattice.ffd, &lattice.positions, &reference) } else { reference };
-                let d = p - base;
+                let d = (p - base) * weight;
                 // Keep the viewer's displacement sane even if a strand misbehaves.
                 out.displacement.push(if d.iter().all(|x| x.is_finite()) && d.norm() < self.params.haptic.max_displacement { d } else { Vector3::zeros() });
             }
@@ -250,6 +267,10 @@ impl HapticCore {
     /// Wetness per guide as last read from the lattice snapshot.
     pub fn wetness(&self) -> &[f32] {
         &self.wetness
+    }
+    /// Fastest tip of the simulated strands over the last step, m/s.
+    pub fn max_tip_speed(&self) -> f64 {
+        self.max_tip_speed
     }
     /// Length of each active strand, m (shorter than its guide's once cut).
     pub fn active_lengths(&self) -> Vec<f64> {

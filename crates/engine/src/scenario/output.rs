@@ -91,6 +91,18 @@ pub struct LiveSummary {
     pub max_displacement_m: f64,
     /// The same at the last step, m.
     pub final_max_displacement_m: f64,
+    /// The same over the stroke only (the measures while the tool is in the hair), m.
+    pub stroke_max_displacement_m: f64,
+    /// Steps with the tool in the hair (a capsule of the tool within `ContinuityParams::in_hair_distance` of a
+    /// guide point's settled position).
+    pub in_hair_steps: usize,
+    /// Share of the in-hair steps with a force above `ContinuityParams::force_floor` (5 mN), in [0, 1]
+    /// (0 without an in-hair step).
+    pub in_hair_force_share: f64,
+    /// Largest change of the force between two consecutive steps, N.
+    pub max_force_change_n: f64,
+    /// Fastest tip of a simulated strand over the run, m/s.
+    pub max_strand_speed_m_s: f64,
     /// 99.9th percentile of the haptic step's wall time, microseconds (this machine, one thread).
     pub haptic_step_p999_us: f64,
     /// Mean haptic step wall time, microseconds.
@@ -106,8 +118,16 @@ pub struct LiveSummary {
 impl LiveSummary {
     pub(crate) fn new(trace: &ForceTrace, max_force: f64, meter: &super::live::Meter, timing: &mut [f64], rejected: u64, failed: u64, wall: f64) -> Self {
         let (mut peak, mut sum, mut contact, mut clamp) = (0.0f64, 0.0, 0usize, 0usize);
+        let (mut in_hair, mut felt, mut change) = (0usize, 0usize, 0.0f64);
         for i in 0..trace.len() {
             let f = trace.force(i).norm();
+            if meter.in_hair.get(i) == Some(&true) {
+                in_hair += 1;
+                felt += (f > meter.force_floor()) as usize;
+            }
+            if i > 0 {
+                change = change.max((trace.force(i) - trace.force(i - 1)).norm());
+            }
             peak = peak.max(f);
             if trace.contacts[i] > 0 {
                 contact += 1;
@@ -128,6 +148,11 @@ impl LiveSummary {
             clamp_steps: clamp,
             max_displacement_m: meter.max,
             final_max_displacement_m: meter.last,
+            stroke_max_displacement_m: meter.stroke_max,
+            in_hair_steps: in_hair,
+            in_hair_force_share: if in_hair > 0 { felt as f64 / in_hair as f64 } else { 0.0 },
+            max_force_change_n: change,
+            max_strand_speed_m_s: meter.max_tip_speed,
             haptic_step_p999_us: p999 * 1e6,
             haptic_step_mean_us: mean * 1e6,
             rejected_readings: rejected,

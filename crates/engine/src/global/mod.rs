@@ -27,7 +27,7 @@ use crate::snapshot::LatticeSnapshot;
 use crate::tool::{tool_metaballs, ToolInput};
 use hairstyle::cut::Blade;
 use lattice::cluster::{ClusterParams, ClusterSet};
-use lattice::lattice::{LatticeModel, LatticeState};
+use lattice::lattice::{LatticeModel, LatticeState, LatticeWorkspace};
 use nalgebra::{Isometry3, Point3, Vector3};
 use std::sync::Arc;
 use std::time::Instant;
@@ -44,6 +44,8 @@ pub struct GlobalCore {
     /// The scene's lattice with the obstacle's attraction switched off (the tool repels only).
     pub(crate) model: LatticeModel,
     pub(crate) state: LatticeState,
+    /// The lattice step's cached factorisation and scratch (not state).
+    pub(crate) workspace: LatticeWorkspace,
     pub(crate) version: u64,
     pub(crate) head: Isometry3<f64>,
     /// Nodes outside the body at rest: only these are pushed out of it.
@@ -111,7 +113,7 @@ impl GlobalCore {
         let lambda = g0.map_or(6.5e-5, |g| g.model.linear_density());
         let drag = g0.map_or_else(HairDrag::default, |g| HairDrag::for_section_area(g.model.section.area()));
         Self {
-            model, state, version: 0, head, outside, tools, drag, forces: Vec::new(), blow_force: 0.0, wet: WetnessField::dry(&segs), centres,
+            model, state, workspace: LatticeWorkspace::default(), version: 0, head, outside, tools, drag, forces: Vec::new(), blow_force: 0.0, wet: WetnessField::dry(&segs), centres,
             kept_len: vec![v.saturating_sub(1) as f64; rh.strands()], kept: Arc::new(vec![v as u16; rh.strands()]), kept_version: 0, cuts: 0,
             lambda, params: params.global, shapes: crate::tool::Tool::ALL.iter().map(|t| t.shape()).collect(), clusters: Vec::new(), cluster_params: ClusterParams::default(), last_cut: None, deferred: false, pending: Vec::new(), failed: 0, scene,
         }
@@ -209,10 +211,10 @@ impl GlobalCore {
         }
         self.blow(input);
         let obstacle = input.present.then(|| tool_metaballs(&self.shapes[input.tool as usize], &input.position, &input.rotation, &self.params));
-        if self.model.step_with_forces(&mut self.state, dt, &self.head, obstacle.as_ref(), &self.forces).is_err() {
+        if self.model.step_with_forces(&mut self.state, &mut self.workspace, dt, &self.head, obstacle.as_ref(), &self.forces).is_err() {
             // A non-finite jet force (never expected): the step without it, counted.
             self.failed += 1;
-            self.model.step(&mut self.state, dt, &self.head, obstacle.as_ref());
+            self.model.step(&mut self.state, &mut self.workspace, dt, &self.head, obstacle.as_ref());
         }
         self.push_out_of_body();
         let bad = self.state.positions.iter().any(|p| !p.coords.iter().all(|x| x.is_finite()));

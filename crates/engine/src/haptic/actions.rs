@@ -3,9 +3,9 @@
 
 use super::HapticCore;
 use crate::tool::{Tool, ToolInput};
-use hairstyle::cut::cut_guide;
+use hairstyle::cut::cut_strand;
 use nalgebra::{Matrix3, Vector3};
-use strand::{PointForce, Strand};
+use strand::PointForce;
 use tools::dryer::{HairDrag, HairDryer};
 
 
@@ -25,13 +25,8 @@ impl HapticCore {
             self.last_cut_at = Some(*proxy);
             let blade = ToolInput { position: *proxy, rotation: *rotation, ..Default::default() }.blade(self.params.global.blade_radius);
             for (slot, &g) in self.active.iter().enumerate() {
-                let s = &self.interaction.strands[slot];
-                if let Ok(Some((m, st, _piece))) = cut_guide(&s.model, &s.state, &blade, self.params.haptic.cut_pieces, g) {
-                    if let Ok(mut ns) = Strand::new(m, st.root.clone()) {
-                        ns.state = st;
-                        ns.integrator = s.integrator;
-                        self.interaction.strands[slot] = ns;
-                    }
+                if let Ok(Some((kept, _piece))) = cut_strand(&self.interaction.strands[slot], &blade, self.params.haptic.cut_pieces, g) {
+                    self.interaction.strands[slot] = kept;
                 }
             }
         }

@@ -1,6 +1,8 @@
-//! Where the render strands are now: the one law of the render hair following the lattice and the local
-//! strands, used by the `[[action]]` scenarios' output and the server's save. The viewer's vertex shader
-//! (`web/src/hair.ts`) computes the same thing on the GPU.
+//! Where the render strands are now: the one Rust law of the render hair following the lattice and the
+//! local strands, used by the `[[action]]` scenarios' output and the server's save. The viewer's vertex
+//! shader (`web/src/shaders/hairDeform.glsl.ts`, steps 2 and 3: FFD of the rest position, then the
+//! guides' displacement interpolated along the guide) computes the same on the GPU; its wet clumping,
+//! curl helix and body push-out (steps 1, 4, 5) are display effects that are not saved.
 
 use super::{ffd_map, Scene};
 use nalgebra::{Point3, Vector3};

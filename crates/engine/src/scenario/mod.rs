@@ -17,7 +17,7 @@ pub mod run;
 pub use actions::{Action, ConeAction, ConePose, CutAction};
 pub use global::{GlobalOutput, GlobalRow, GlobalScenario, GlobalSummary, HairstyleSpec};
 pub use live::{LiveScenario, LiveSpec, LiveTool, LiveWaypoint};
-pub use output::{ForceTrace, LiveSummary};
+pub use output::{ForceStats, ForceTrace, LiveSummary};
 pub use patch::{PatchSpec, Scenario, Summary, ToolSpec, TraceRow};
 pub use run::{run, run_patch, ScenarioFile, ScenarioOutput, ScenarioSummary};
 

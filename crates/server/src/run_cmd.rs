@@ -225,12 +225,12 @@ fn finish_live(out: &Path, o: &ScenarioOutput, head: &str, trace_path: &Path) ->
          mean force      {:.4e} N (over steps with contact)\n\
          displacement    largest {:.4e} m during the run, {:.4e} m during the stroke, {:.4e} m at the end (guide points from their settled positions)\n\
          continuity      {} steps with the tool in the hair, {:.1} % of them above 5 mN; largest one-step change {:.4e} N; fastest strand tip {:.3} m/s\n\
-         haptic step     p99.9 {:.1} us, mean {:.1} us (one thread, lockstep)\n\
+         haptic step     p50 {:.1} us, p99 {:.1} us, p99.9 {:.1} us, mean {:.1} us (one thread, lockstep)\n\
          wall time       {:.2} s\n\
          outputs         {}, {}, {}\n",
         s.steps, s.contact_steps, s.clamp_steps, s.rejected_readings, s.failed_steps,
         s.peak_force_n, s.mean_force_n, s.max_displacement_m, s.stroke_max_displacement_m, s.final_max_displacement_m,
-        s.in_hair_steps, 100.0 * s.in_hair_force_share, s.max_force_change_n, s.max_strand_speed_m_s, s.haptic_step_p999_us, s.haptic_step_mean_us, s.wall_time_s,
+        s.in_hair_steps, 100.0 * s.in_hair_force_share, s.max_force_change_n, s.max_strand_speed_m_s, s.haptic_step_p50_us, s.haptic_step_p99_us, s.haptic_step_p999_us, s.haptic_step_mean_us, s.wall_time_s,
         trace_path.display(), out.join("summary.txt").display(), out.join("summary.json").display()
     );
     std::fs::write(out.join("summary.txt"), &text).with_context(|| format!("cannot write {}", out.join("summary.txt").display()))?;

@@ -187,6 +187,10 @@ pub struct LiveSummary {
     pub max_force_change_n: f64,
     /// Fastest tip of a simulated strand over the run, m/s.
     pub max_strand_speed_m_s: f64,
+    /// Median of the haptic step's wall time, microseconds (this machine, one thread).
+    pub haptic_step_p50_us: f64,
+    /// 99th percentile of the haptic step's wall time, microseconds.
+    pub haptic_step_p99_us: f64,
     /// 99.9th percentile of the haptic step's wall time, microseconds (this machine, one thread).
     pub haptic_step_p999_us: f64,
     /// Mean haptic step wall time, microseconds.
@@ -215,7 +219,8 @@ impl LiveSummary {
             }
         }
         timing.sort_by(f64::total_cmp);
-        let p999 = if timing.is_empty() { 0.0 } else { timing[((timing.len() as f64 * 0.999).ceil() as usize).clamp(1, timing.len()) - 1] };
+        let pct = |q: f64| if timing.is_empty() { 0.0 } else { timing[((timing.len() as f64 * q).ceil() as usize).clamp(1, timing.len()) - 1] };
+        let (p50, p99, p999) = (pct(0.5), pct(0.99), pct(0.999));
         let mean = timing.iter().sum::<f64>() / timing.len().max(1) as f64;
         Self {
             steps: trace.len(),
@@ -230,6 +235,8 @@ impl LiveSummary {
             in_hair_force_share: if in_hair > 0 { felt as f64 / in_hair as f64 } else { 0.0 },
             max_force_change_n: change,
             max_strand_speed_m_s: meter.max_tip_speed,
+            haptic_step_p50_us: p50 * 1e6,
+            haptic_step_p99_us: p99 * 1e6,
             haptic_step_p999_us: p999 * 1e6,
             haptic_step_mean_us: mean * 1e6,
             rejected_readings: rejected,

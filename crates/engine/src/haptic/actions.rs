@@ -27,6 +27,10 @@ impl HapticCore {
             for (slot, &g) in self.active.iter().enumerate() {
                 if let Ok(Some((kept, _piece))) = cut_strand(&self.interaction.strands[slot], &blade, self.params.haptic.cut_pieces, g) {
                     self.interaction.strands[slot] = kept;
+                    // Its tip is now the cut end: no speed across the cut.
+                    if let Some(m) = self.members.get_mut(slot) {
+                        m.tip = None;
+                    }
                 }
             }
         }

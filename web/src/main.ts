@@ -272,7 +272,7 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     }
     return { hairFraction: changed / n, nonBackground: nonBg / n, pixels: n };
   },
-  /** Renders the hair with a colour preset, every strand at `wetness`, the key light towards `light` and the
+  /** Renders the scene without the tool with a colour preset, every strand at `wetness`, the key light towards `light` and the
    * debug view (0 shaded, 1 deep-opacity transmittance, 2 highlight only); returns the RGBA pixels (base64)
    * and a PNG data URL. Restores the live state afterwards (no server message is handled in between). */
   look(o: { colour?: string; wetness?: number; light?: [number, number, number]; view?: number; camera?: [number, number, number]; target?: [number, number, number]; hideHair?: boolean }) {
@@ -288,6 +288,8 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     if (o.camera) view.camera.position.set(...o.camera);
     if (o.target) view.controls.target.set(...o.target);
     if (o.hideHair && view.hairMesh) view.hairMesh.visible = false;
+    const toolsShown = [toolGroup.visible, arrow.visible, ghost.visible];
+    toolGroup.visible = arrow.visible = ghost.visible = false;
     const t0 = performance.now();
     view.render();
     const gl = view.renderer.getContext();
@@ -297,6 +299,7 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     const ms = performance.now() - t0;
     const png = canvas.toDataURL('image/png');
     if (view.hairMesh) view.hairMesh.visible = true;
+    [toolGroup.visible, arrow.visible, ghost.visible] = toolsShown;
     u.wetnessOverride.value = -1;
     u.debugView.value = 0;
     view.setLight(oldLight);

@@ -1,9 +1,11 @@
 //! Benchmark of the haptic loop: a comb drawn at 0.2 m/s through N hanging strands of 16 segments (full
 //! model, constraint contacts), 1 kHz, one haptic thread. Prints step-time mean, p99, p99.9, max and deadline
 //! misses, then the mean time per step of each phase of the interaction step. Run:
-//! `cargo run --release -p coiffure-engine --example haptic_loop_bench [-- [full|reduced] [nobatch] [rt] N...]`
+//! `cargo run --release -p coiffure-engine --example haptic_loop_bench [-- [full|reduced] [nobatch] [rt] [hair] N...]`
 //! (default: full model, 16 32 64 strands). Reduced strands are prepared four at a time (SIMD batches,
-//! `LocalInteraction::use_batches`) unless `nobatch` is given.
+//! `LocalInteraction::use_batches`) unless `nobatch` is given. With `hair`, the strands also touch each other
+//! (`LocalInteraction::hair_contact`, each strand standing for 100 fibres: contact distance 1.3 mm, more than the
+//! roots' spacing at 64 strands, so every strand is in hair-hair contact at every step: the worst case).
 //! With `rt` (or under `chrt -f 10`; both need root or CAP_SYS_NICE) the haptic thread runs with real-time
 //! FIFO priority, as a haptic application would run it (`haptics::realtime`); the tails then show the loop's
 //! own cost rather than the scheduler's.
@@ -23,13 +25,14 @@ fn main() {
     let counts: Vec<usize> = args.iter().filter_map(|a| a.parse().ok()).collect();
     let counts = if counts.is_empty() { vec![16, 32, 64] } else { counts };
     let batches = !args.iter().any(|a| a == "nobatch");
+    let hair = args.iter().any(|a| a == "hair");
     if args.iter().any(|a| a == "rt") {
         // Threads started from here inherit the policy (Linux default), so the haptic thread gets it too.
         if let Err(why) = haptics::realtime::request_realtime(10) {
             eprintln!("rt: {why}");
         }
     }
-    println!("model: {kind:?}, batches: {batches}, real-time priority: {}", haptics::realtime::is_realtime());
+    println!("model: {kind:?}, batches: {batches}, hair-hair contact: {hair}, real-time priority: {}", haptics::realtime::is_realtime());
     println!("| strands x 16 segments | steps | step mean | p99 | p99.9 | max | misses | contact steps | peak device force | peak hair force |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
     let mut phases = Vec::new();
@@ -45,6 +48,9 @@ fn main() {
         let pose = ToolPose { position: Vector3::new(0.0004, -0.02, 0.22), rotation: Matrix3::identity() };
         let mut it = LocalInteraction::new(strands, ToolShape::builtin("comb").unwrap(), pose, ForceModel::Constraint { friction: h.friction_coefficient(), options: Default::default() });
         it.use_batches = batches;
+        if hair {
+            it.hair_contact = Some(tools::interaction::HairContact { fibres: 100.0, ..Default::default() });
+        }
         let script = |t: f64| Some(DeviceReading { time: t, position: Vector3::new(0.0004, -0.02 + 0.2 * t, 0.22), rotation: Matrix3::identity(), buttons: 0 });
         let steps = 2000;
         let (s, dev, c) = run_local_session(1000.0, ScriptedDevice::new(script), DeviceProfile::PHANTOM_DESKTOP, it, steps).unwrap();

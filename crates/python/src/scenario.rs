@@ -75,8 +75,7 @@ fn output_to_py<'py>(py: Python<'py>, name: &str, out: &ScenarioOutput) -> PyRes
     let contacts: Vec<i64> = f.contacts.iter().map(|&c| c as i64).collect();
     d.set_item("contacts", contacts.into_pyarray(py))?;
     d.set_item("tool", columns3(py, &f.tool_x, &f.tool_y, &f.tool_z))?;
-    let summary = serde_json::to_value(&out.summary).map_err(|e| PyValueError::new_err(format!("summary: {e}")))?;
-    d.set_item("summary", json_to_py(py, &summary)?)?;
+    d.set_item("summary", json_to_py(py, &engine::scenario::summary_json(out))?)?;
     d.set_item("wall_time", out.wall_time_s)?;
     if !out.global_rows.is_empty() {
         let rows = &out.global_rows;
@@ -109,7 +108,7 @@ fn run_interruptible(py: Python<'_>, file: ScenarioFile, dir: PathBuf, cancel: O
             let _ = tx.send(engine::scenario::run_in(&file, &dir));
         })
         .map_err(|e| PyOSError::new_err(format!("cannot start the scenario thread: {e}")))?;
-    py.detach(|| loop {
+    py.detach(move || loop {
         match rx.recv_timeout(POLL) {
             Ok(result) => return result.map_err(scenario_err),
             Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => return Err(SimulationError::new_err("the scenario thread panicked")),
@@ -145,9 +144,9 @@ pub fn run_scenario<'py>(py: Python<'py>, scenario: &Bound<'py, PyAny>, out: Opt
     };
     let stem = source.path().and_then(|p| p.file_stem()).and_then(|s| s.to_str()).unwrap_or("scenario").to_string();
     let name = file.name().map(str::to_string).unwrap_or(stem);
-    let output = run_interruptible(py, file, dir, cancel)?;
+    let output = run_interruptible(py, file.clone(), dir, cancel)?;
     if let Some(out_dir) = out {
-        py.detach(|| engine::scenario::write_output(&output, &name, &out_dir)).map_err(|e| PyOSError::new_err(format!("cannot write {}: {e}", out_dir.display())))?;
+        py.detach(|| engine::scenario::write_output(&file, &output, &name, &out_dir)).map_err(|e| PyOSError::new_err(format!("cannot write {}: {e}", out_dir.display())))?;
     }
     output_to_py(py, &name, &output)
 }

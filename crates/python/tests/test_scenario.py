@@ -78,7 +78,9 @@ def test_scenario_arrays_equal_the_cli_force_csv(cli, tmp_path):
         # The summary is the CLI's summary.json.
         summary = json.loads((tmp_path / "cli" / "summary.json").read_text())
         for k, v in summary.items():
-            if "wall" not in k:
+            if isinstance(v, str):
+                assert r["summary"][k] == v, k
+            elif "wall" not in k:
                 assert r["summary"][k] == pytest.approx(v, rel=1e-12), k
         # Peak force = the largest |force| of the trace.
         peak = next(v for k, v in r["summary"].items() if k.startswith("peak_force"))
@@ -117,3 +119,41 @@ def test_global_scenario_gives_rows_and_the_hairstyle():
     assert g["t"].shape == g["mean_tip_z"].shape and g["wetness"].shape == (len(g["t"]), 3)
     assert len(r["hairstyle"]) == 50 and all(s.shape[1] == 3 for s in r["hairstyle"])
     assert r["summary"]["render_strands"] == 50
+
+
+def short_live_comb() -> dict:
+    """A shortened examples/scenarios/live-comb.toml: the live session's cores in lockstep, 2,000 render
+    strands, the comb drawn 3 cm down the back of the head."""
+    rot = [0.0, 2.2214415, -2.2214415]
+    return {
+        "name": "short-live-comb",
+        "settle": 0.1,
+        "duration": 0.3,
+        "live": {"render_strands": 2000, "device": "phantom-omni", "hair_type": "caucasian"},
+        "tool": {
+            "shape": "comb",
+            "path": [
+                {"t": 0.0, "position": [0.0, -0.118, 0.05], "rotation": rot},
+                {"t": 0.3, "position": [0.0, -0.118, 0.02], "rotation": rot},
+            ],
+        },
+    }
+
+
+def test_live_scenario_equals_the_cli(cli, tmp_path):
+    """A `[live]` scenario from Python runs the live session's own cores: the same force trace and summary as
+    `coiffure run` on the same TOML (deterministic lockstep; equal to force.csv's printed rounding)."""
+    scenario = short_live_comb()
+    toml_path = tmp_path / "live.toml"
+    write_toml(toml_path, scenario)
+    subprocess.run([str(cli), "run", str(toml_path), "--out", str(tmp_path / "cli")], check=True, capture_output=True)
+    csv = np.loadtxt(tmp_path / "cli" / "force.csv", delimiter=",", skiprows=1)
+    r = coiffure.run_scenario(scenario)
+    assert r["kind"] == "live" and r["summary"]["kind"] == "live"
+    assert r["force"].shape == (csv.shape[0], 3)
+    assert np.all(np.abs(r["force"] - csv[:, 1:4]) <= 5e-7 * np.abs(csv[:, 1:4]) + 1e-300)
+    assert np.allclose(r["tool"], csv[:, 8:11], rtol=5e-7, atol=1e-12)
+    summary = json.loads((tmp_path / "cli" / "summary.json").read_text())
+    for k in ("steps", "clamp_steps", "peak_force_n", "max_displacement_m", "final_max_displacement_m"):
+        assert r["summary"][k] == pytest.approx(summary[k], rel=1e-12), k
+    assert r["summary"]["steps"] > 0

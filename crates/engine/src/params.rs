@@ -116,11 +116,14 @@ pub struct HapticParams {
     pub cut_pieces: usize,
     /// Where the tool waits before the first device reading (head frame), m. Default (0, -0.25, 0).
     pub start: [f64; 3],
+    /// Share of the rest shape a wet set holds once dry (`strand::styling::SetModel::hydrogen_share`),
+    /// dimensionless in [0, 1]. Default 0.8.
+    pub hydrogen_share: f64,
 }
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { reselect_distance: 0.01, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0] }
+        Self { reselect_distance: 0.01, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], hydrogen_share: 0.8 }
     }
 }
 
@@ -141,6 +144,9 @@ impl HapticParams {
         }
         if self.dryer_pieces == 0 || self.cut_pieces == 0 {
             return p("haptic.dryer_pieces and haptic.cut_pieces must be > 0".into());
+        }
+        if !(0.0..=1.0).contains(&self.hydrogen_share) {
+            return p(format!("haptic.hydrogen_share must be in [0, 1], got {}", self.hydrogen_share));
         }
         if !self.start.iter().all(|x| x.is_finite()) {
             return p(format!("haptic.start must be finite, got {:?}", self.start));

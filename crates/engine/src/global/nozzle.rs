@@ -7,17 +7,30 @@ use tools::dryer::HairDryer;
 use tools::sprayer::Sprayer;
 
 impl GlobalCore {
-    /// Dryer jet on the lattice nodes (while the dryer is held pressed), as a velocity change dv = F dt / m
-    /// with F the jet's drag on the hair a node stands for (m / lambda metres of it).
-    pub(crate) fn blow(&mut self, input: &ToolInput, dt: f64) {
-        if input.present && input.pressed && input.tool == Tool::Dryer {
-            let d = HairDryer { cone: input.cone(self.dryer.cone, self.params.nozzle_standoff), ..self.dryer };
-            for (i, x) in self.state.positions.iter().enumerate() {
-                let m = self.model.masses[i];
-                let f = d.force(&x.coords, self.air_drag * m / self.lambda);
-                self.state.velocities[i] += f * (dt / m);
-            }
+    /// The dryer's jet on the lattice nodes (while the dryer is held pressed): on each node, the drag of the
+    /// jet on the hair it carries (`m / lambda` metres of hair, presenting at most a cell's face `h^2` to the
+    /// flow), `HairDryer::hair_force`: quadratic in the air speed (White's cross-flow drag of each hair,
+    /// saturating at a bluff body's). Fills `self.forces` (N, one per node; empty when not blowing) for the
+    /// lattice step and `self.blow_force`, the magnitude of their sum.
+    pub(crate) fn blow(&mut self, input: &ToolInput) {
+        self.forces.clear();
+        self.blow_force = 0.0;
+        if !(input.present && input.pressed && input.tool == Tool::Dryer) {
+            return;
         }
+        let d = HairDryer { cone: input.cone(self.tools.dryer.cone, self.params.nozzle_standoff), ..self.tools.dryer };
+        let face = self.model.ffd.h * self.model.ffd.h;
+        let mut total = nalgebra::Vector3::zeros();
+        for (i, x) in self.state.positions.iter().enumerate() {
+            let length = self.model.masses[i] / self.lambda;
+            let f = d.hair_force(&x.coords, length, face, &self.drag).unwrap_or_else(|_| {
+                self.failed += 1;
+                nalgebra::Vector3::zeros()
+            });
+            total += f;
+            self.forces.push(f);
+        }
+        self.blow_force = total.norm();
     }
 
     /// Wetness: the held sprayer or dryer in its cone, at the guides' segment centres through the lattice.
@@ -25,9 +38,11 @@ impl GlobalCore {
         if input.present && input.pressed && matches!(input.tool, Tool::Dryer | Tool::Sprayer) {
             let centres = self.centres_now();
             let r = if input.tool == Tool::Sprayer {
-                Sprayer { cone: input.cone(self.sprayer.cone, self.params.nozzle_standoff), ..self.sprayer }.spray(&mut self.wet, &centres, dt)
+                let s = &self.tools.sprayer;
+                Sprayer { cone: input.cone(s.cone, self.params.nozzle_standoff), ..*s }.spray(&mut self.wet, &centres, dt)
             } else {
-                HairDryer { cone: input.cone(self.dryer.cone, self.params.nozzle_standoff), ..self.dryer }.dry(&mut self.wet, &centres, dt)
+                let d = &self.tools.dryer;
+                HairDryer { cone: input.cone(d.cone, self.params.nozzle_standoff), ..*d }.dry(&mut self.wet, &centres, dt)
             };
             self.failed += r.is_err() as u64;
         }

@@ -10,7 +10,7 @@
 //! 3. **Active set**: the guides nearest the tool become the local strands ([`active`]).
 //! 4. **Roots**: the local strands' roots stay with the head (rigid), not with the tool-deformed lattice.
 //! 5. **Wetness**: the guides' wetness from the lattice snapshot sets the strands' material and the
-//!    friction ([`wetness`]).
+//!    friction, and the wet-set law updates their rest shapes as they dry ([`wetness`]).
 //! 6. **Tool actions**: scissors cut, clip pins, dryer blows ([`actions`]).
 //! 7. **Local strands**: the local interaction steps the strands with the tool's contacts; its reaction
 //!    and its damping, times the real hairs each guide stands for ([`HapticCore::hairs_per_guide`]), feed the
@@ -40,6 +40,7 @@ use strand::{HairType, Strand};
 use strands::samples_along;
 use tools::contact::ToolPose;
 use tools::interaction::LocalInteraction;
+use strand::styling::SetState;
 use tools::wetness::WetnessModel;
 
 /// The haptic layer's state and step (coupling, local strands, wetness, cuts), shared by the live thread
@@ -68,6 +69,9 @@ pub struct HapticCore {
     pub(crate) wetness: Vec<f32>,
     pub(crate) wet_version: u64,
     pub(crate) wet_model: WetnessModel,
+    /// Each guide's wet set (`strand::styling`): the shape its hydrogen bonds hold, updated while it is
+    /// a local strand (one per guide, remade with the strands).
+    pub(crate) sets: Vec<SetState>,
     /// Scissors closes so far, and whether the primary button was held in the last step.
     pub(crate) cuts: u64,
     pub(crate) was_pressed: bool,
@@ -88,6 +92,7 @@ impl HapticCore {
         params.validate()?;
         let h = scene.hair_type;
         let strands = Self::build_strands(&scene, &h, 0.0, params.haptic.min_air_drag)?;
+        let sets = strands.iter().map(|s| SetState::new(&s.model)).collect();
         let start = Vector3::from(params.haptic.start);
         let coupling = Coupling::new(params.profile, CouplingParams::for_profile(&params.profile), start);
         let pose = ToolPose { position: start, rotation: Matrix3::identity() };
@@ -96,7 +101,7 @@ impl HapticCore {
         let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
         Ok(Self {
             scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), interaction,
-            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, rejected: 0, failed: 0,
+            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, rejected: 0, failed: 0,
         })
     }
 
@@ -117,6 +122,7 @@ impl HapticCore {
                 let (c, e) = (if curliness.is_finite() { curliness.clamp(0.0, 1.0) } else { 0.0 }, if combing_ease.is_finite() { combing_ease.clamp(0.0, 1.0) } else { 0.0 });
                 if h != self.hair_type || c != self.curliness {
                     if let Ok(s) = Self::build_strands(&self.scene, &h, c, self.params.haptic.min_air_drag) {
+                        self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
                         self.strands = s;
                         self.active.clear();
                     }
@@ -129,6 +135,7 @@ impl HapticCore {
             }
             Command::Reset => {
                 if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, self.params.haptic.min_air_drag) {
+                    self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
                     self.strands = s;
                 }
                 self.active.clear();

@@ -185,15 +185,13 @@ fn write_global(scenario: &GlobalScenario, o: &ScenarioOutput, name: &str, out: 
     Ok(format!(
         "scenario        {name}\n\
          hairstyle       {} hair, {:.3} m, {} guides x {} segments, {} render strands\n\
-         steps           {} at {} s ({} clamped by the safety net)\n\
+         steps           {} global steps of {} s ({} lattice recoveries)\n\
          wetness before  {:.6}\n\
          wetness after   {:.6} (min {:.6}, max {:.6})\n\
-         rest change     {:.6e} rad/m (rms over guide coordinates, wet set)\n\
-         guides cut      {} (mean length {:.6} m -> {:.6} m; dry mass {:.9e} kg -> {:.9e} kg on head + pieces)\n\
          render cut      {} (mean length {:.6} m -> {:.6} m)\n\
-         render mass     {:.9e} kg before; {:.9e} kg on head + {:.9e} kg cut = {:.9e} kg\n\
+         render mass     {:.9e} kg before (strands cut); {:.9e} kg on head + {:.9e} kg cut = {:.9e} kg\n\
          clusters        {} (kinetic energy at the end {:.3e} J; largest body field at a piece point {:.4}, surface 0.25)\n\
-         lattice dryer   largest node displacement {:.3e} m (end {:.3e} m), peak dryer force {:.3e} N\n\
+         lattice         largest node displacement by the tools {:.3e} m (end {:.3e} m), peak dryer force {:.3e} N\n\
          wall time       {:.2} s\n\
          outputs         {}, {}, {}\n",
         h.hair_type,
@@ -202,18 +200,12 @@ fn write_global(scenario: &GlobalScenario, o: &ScenarioOutput, name: &str, out: 
         h.segments,
         s.render_strands,
         s.steps,
-        scenario.dt,
-        s.clamped_steps,
+        scenario.global_dt,
+        s.recovered_steps,
         s.wetness_before,
         s.wetness_after,
         s.wetness_range_after[0],
         s.wetness_range_after[1],
-        s.rest_change,
-        s.guides_cut,
-        s.guide_length_before,
-        s.guide_length_after,
-        s.guide_mass_before,
-        s.guide_mass_after,
         s.render_cut,
         s.render_length_before,
         s.render_length_after,

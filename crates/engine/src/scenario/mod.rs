@@ -20,7 +20,7 @@ pub use actions::{Action, ConeAction, ConePose, CutAction};
 pub use files::{load_tool, read_path_csv, run_in, summary_json, write_output, write_replay};
 pub use global::{GlobalOutput, GlobalRow, GlobalScenario, GlobalSummary, HairstyleSpec};
 pub use live::{LiveScenario, LiveSpec, LiveTool, LiveWaypoint};
-pub use output::{ForceTrace, LiveSummary};
+pub use output::{ForceStats, ForceTrace, LiveSummary};
 pub use patch::{PatchSpec, Scenario, Summary, ToolSpec, TraceRow};
 pub use run::{run, run_patch, ScenarioFile, ScenarioOutput, ScenarioSummary};
 

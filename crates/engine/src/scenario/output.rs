@@ -73,6 +73,40 @@ impl ForceTrace {
     }
 }
 
+/// What a force trace gives its summary (patch and live scenarios alike): peak and mean force, steps with
+/// contact, steps at the device's force limit.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ForceStats {
+    /// Largest force magnitude, N.
+    pub peak: f64,
+    /// Mean force magnitude over the steps with contact, N (0 without contact).
+    pub mean_in_contact: f64,
+    /// Steps with at least one contact.
+    pub contact_steps: usize,
+    /// Steps at the force limit (magnitude within 1e-9 relative of it).
+    pub clamp_steps: usize,
+}
+
+impl ForceStats {
+    /// From each step's force magnitude (N) and whether it had a contact; `max_force` is the device's force
+    /// limit, N (`f64::INFINITY`: none).
+    pub fn of(steps: impl IntoIterator<Item = (f64, bool)>, max_force: f64) -> Self {
+        let (mut s, mut sum) = (Self::default(), 0.0);
+        for (f, contact) in steps {
+            s.peak = s.peak.max(f);
+            if contact {
+                s.contact_steps += 1;
+                sum += f;
+            }
+            if f >= max_force * (1.0 - 1e-9) {
+                s.clamp_steps += 1;
+            }
+        }
+        s.mean_in_contact = if s.contact_steps > 0 { sum / s.contact_steps as f64 } else { 0.0 };
+        s
+    }
+}
+
 /// Summary of a `[live]` scenario or a replayed record.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LiveSummary {
@@ -105,27 +139,16 @@ pub struct LiveSummary {
 
 impl LiveSummary {
     pub(crate) fn new(trace: &ForceTrace, max_force: f64, meter: &super::live::Meter, timing: &mut [f64], rejected: u64, failed: u64, wall: f64) -> Self {
-        let (mut peak, mut sum, mut contact, mut clamp) = (0.0f64, 0.0, 0usize, 0usize);
-        for i in 0..trace.len() {
-            let f = trace.force(i).norm();
-            peak = peak.max(f);
-            if trace.contacts[i] > 0 {
-                contact += 1;
-                sum += f;
-            }
-            if f >= max_force * (1.0 - 1e-9) {
-                clamp += 1;
-            }
-        }
+        let stats = ForceStats::of((0..trace.len()).map(|i| (trace.force(i).norm(), trace.contacts[i] > 0)), max_force);
         timing.sort_by(f64::total_cmp);
         let p999 = if timing.is_empty() { 0.0 } else { timing[((timing.len() as f64 * 0.999).ceil() as usize).clamp(1, timing.len()) - 1] };
         let mean = timing.iter().sum::<f64>() / timing.len().max(1) as f64;
         Self {
             steps: trace.len(),
-            peak_force_n: peak,
-            mean_force_n: if contact > 0 { sum / contact as f64 } else { 0.0 },
-            contact_steps: contact,
-            clamp_steps: clamp,
+            peak_force_n: stats.peak,
+            mean_force_n: stats.mean_in_contact,
+            contact_steps: stats.contact_steps,
+            clamp_steps: stats.clamp_steps,
             max_displacement_m: meter.max,
             final_max_displacement_m: meter.last,
             haptic_step_p999_us: p999 * 1e6,
@@ -134,5 +157,19 @@ impl LiveSummary {
             failed_steps: failed,
             wall_time_s: wall,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn force_stats_of_a_short_trace() {
+        // Peak 3.3 (at the limit, counted once), mean over the two contact steps (1 + 3.3) / 2.
+        let s = ForceStats::of([(1.0, true), (0.5, false), (3.3, true)], 3.3);
+        assert_eq!((s.peak, s.contact_steps, s.clamp_steps), (3.3, 2, 1));
+        assert!((s.mean_in_contact - 2.15).abs() < 1e-15, "{s:?}");
+        assert_eq!(ForceStats::of([(1.0, false)], f64::INFINITY).mean_in_contact, 0.0);
     }
 }

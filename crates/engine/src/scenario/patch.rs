@@ -5,6 +5,7 @@
 //! step the [`tools::interaction::LocalInteraction`] and record the force and torque on the tool, scaled by
 //! the number of real hairs each simulated strand stands for.
 
+use super::output::ForceStats;
 use super::{default_dt, ScenarioError};
 use crate::path::{ToolPath, Waypoint};
 use nalgebra::Vector3;
@@ -284,27 +285,23 @@ impl Scenario {
         let duration = self.duration.unwrap_or(path.end_time() + 0.05);
         let steps = (duration / self.dt).round() as usize;
         let mut rows = Vec::with_capacity(steps);
-        let (mut peak, mut sum, mut work, mut contact_steps) = (0.0f64, 0.0, 0.0, 0usize);
+        let mut work = 0.0;
         let mut last = path.pose(0.0).position;
         for n in 1..=steps {
             let t = n as f64 * self.dt;
             let pose = path.pose(t);
             let r = it.step(self.dt, pose).map_err(|e| ScenarioError::Simulation { time: t, source: e })?;
             let force = r.force * k;
-            peak = peak.max(force.norm());
-            if !r.contacts.is_empty() {
-                contact_steps += 1;
-                sum += force.norm();
-            }
             work -= force.dot(&(pose.position - last));
             last = pose.position;
             rows.push(TraceRow { t, force, torque: r.torque * k, contacts: r.contacts.len(), tool: pose.position });
         }
+        let stats = ForceStats::of(rows.iter().map(|r| (r.force.norm(), r.contacts > 0)), f64::INFINITY);
         let summary = Summary {
-            peak_force: peak,
-            mean_force: if contact_steps > 0 { sum / contact_steps as f64 } else { 0.0 },
+            peak_force: stats.peak,
+            mean_force: stats.mean_in_contact,
             work,
-            contact_steps,
+            contact_steps: stats.contact_steps,
             steps,
             tress_mass,
             represents: k,

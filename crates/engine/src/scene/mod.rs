@@ -1,8 +1,12 @@
 //! The scene (model: immutable once built, shared by the threads): head, render hair, guides and lattice.
-//! Built from the built-in hairstyle ([`builtin`]) or from a file's curves ([`from_curves`]).
+//! Built from the built-in hairstyle ([`builtin`]) or from a file's curves ([`from_curves`]); where the render
+//! strands are now ([`render`]: [`Scene::render_curves`]).
 
 mod builtin;
 mod from_curves;
+mod render;
+
+pub use render::GuideDisplacements;
 
 use lattice::ffd::FfdLattice;
 use lattice::lattice::LatticeModel;

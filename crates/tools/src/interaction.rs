@@ -12,6 +12,8 @@
 //! brush torque), applied at the next step, and the tool feels the opposite torque.
 
 use crate::bvh::{Bvh, Piece};
+pub use crate::hair_contact::HairContact;
+use crate::hair_contact::HairContactFinder;
 use crate::contact::{detect, Contact, DetectReport, ToolPose};
 use crate::shape::ToolShape;
 use nalgebra::{Matrix3, Vector3};
@@ -39,79 +41,6 @@ pub enum ForceModel {
     },
 }
 
-/// Contact and Coulomb friction between the simulated strands (the local layer's hair-hair interaction), in the
-/// same soft constraint solve as the tool's contacts ([`ConstraintOptions`] gives their compliance).
-///
-/// Each simulated strand stands for a wisp of `fibres` real fibres, and two wisps touch when their centrelines
-/// come closer than twice the wisp's radius `r_w = r_f sqrt(fibres / packing)` (`r_f` the fibre's semi-major
-/// axis): the fibres of a wisp fill a round section at the packing fraction `packing`. For one fibre per strand
-/// (`fibres = 1`, `packing = 1`) the contact distance is the fibre diameter.
-///
-/// Each step the sampled pieces of different strands closer than the contact distance give one contact per
-/// pair of pieces (at their closest points); each strand sees the other strand's point as an obstacle moving
-/// with that point's velocity over the last step, pushed apart by half the overlap (the other half is the
-/// other strand's), with Coulomb friction `friction` (and the wetness's clumping, see
-/// `tools::wetness::WetnessModel::fibre_friction`). The strands are solved one after the other with last
-/// step's neighbours (a Jacobi iteration between strands, one per haptic step); the compliance keeps it stable.
-/// The tool feels these contacts only through the strands it touches.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HairContact {
-    /// Real fibres each simulated strand stands for (dimensionless, >= 1). Default 1.
-    pub fibres: f64,
-    /// Packing fraction of the fibres in a wisp's round section (dimensionless, (0, 1]). Default 0.5 (a
-    /// combed tress: hexagonal close packing of cylinders is 0.91, loose hair about 0.3).
-    pub packing: f64,
-    /// Fibre-fibre Coulomb friction coefficient (dimensionless, >= 0). Default 0.25 (dry hair on hair,
-    /// Robbins 2012 ch. 8: about 0.2 with the scales, 0.3 against them).
-    pub friction: f64,
-    /// Most hair-hair contacts one strand takes per step, nearest first (bounds the solve's cost). Default 16.
-    pub max_per_strand: usize,
-}
-
-impl Default for HairContact {
-    fn default() -> Self {
-        Self { fibres: 1.0, packing: 0.5, friction: 0.25, max_per_strand: 16 }
-    }
-}
-
-impl HairContact {
-    /// Contact distance between two strands' centrelines for fibres of semi-major axis `fibre_radius` (m):
-    /// twice the wisp radius `r_f sqrt(fibres / packing)`, m.
-    pub fn distance(&self, fibre_radius: f64) -> f64 {
-        2.0 * fibre_radius * (self.fibres / self.packing).sqrt()
-    }
-
-    /// Checks every field, naming the first bad one.
-    pub fn validate(&self) -> Result<(), StrandError> {
-        let bad = |field: &'static str, reason: String| Err(StrandError::InvalidParameter { field, reason });
-        if !(self.fibres.is_finite() && self.fibres >= 1.0) {
-            return bad("hair_contact.fibres", format!("must be >= 1, got {}", self.fibres));
-        }
-        if !(self.packing.is_finite() && self.packing > 0.0 && self.packing <= 1.0) {
-            return bad("hair_contact.packing", format!("must be in (0, 1], got {}", self.packing));
-        }
-        if !(self.friction.is_finite() && self.friction >= 0.0) {
-            return bad("hair_contact.friction", format!("must be >= 0, got {}", self.friction));
-        }
-        Ok(())
-    }
-}
-
-/// One hair-hair contact found in a step: the closest points of two strands' pieces.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HairPair {
-    /// The two strands (first < second).
-    pub strands: (usize, usize),
-    /// Arc lengths of the contact points on each, m.
-    pub s: (f64, f64),
-    /// Unit normal from the second strand's point to the first's.
-    pub normal: Vector3<f64>,
-    /// Overlap (contact distance minus the centrelines' distance), m.
-    pub depth: f64,
-    /// Velocities of the two points over the last step, m/s.
-    pub velocity: (Vector3<f64>, Vector3<f64>),
-}
-
 /// What one interaction step produced.
 #[derive(Debug, Clone, Default)]
 pub struct StepResult {
@@ -131,7 +60,8 @@ pub struct StepResult {
     pub contacts: Vec<Contact>,
     /// Detection details (sub-steps, too-fast flag).
     pub report: DetectReport,
-    /// Hair-hair contacts found this step (pairs of strand pieces; see [`HairContact`]).
+    /// Hair-hair contacts found this step (pairs of strand chords closer than the contact distance, before
+    /// each strand keeps its deepest; see [`crate::hair_contact`]).
     pub hair_pairs: usize,
     /// Where the step's time went (wall clock).
     pub timings: StepTimings,
@@ -180,10 +110,8 @@ pub struct LocalInteraction {
     /// Constraint model: contact and friction between the simulated strands ([`HairContact`]). Default None
     /// (strands pass through each other).
     pub hair_contact: Option<HairContact>,
-    /// Workspace: the pieces of the last step (for the velocities of hair-hair contact points).
-    last_pieces: Vec<Piece>,
-    /// Workspace: hair-hair contacts of this step.
-    hair_pairs: Vec<HairPair>,
+    /// Workspace: hair-hair contact detection ([`crate::hair_contact`]).
+    hair_finder: HairContactFinder,
     /// Workspaces of the batches, and each strand's (batch, lane) this step.
     batches: Vec<StrandBatch>,
     lane_of: Vec<Option<(usize, usize)>>,
@@ -216,8 +144,7 @@ impl LocalInteraction {
             use_batches: true,
             body: None,
             hair_contact: None,
-            last_pieces: Vec::new(),
-            hair_pairs: Vec::new(),
+            hair_finder: HairContactFinder::new(),
             batches: Vec::new(),
             lane_of,
             surface_torques,
@@ -370,47 +297,6 @@ impl LocalInteraction {
         push(strand.model.length, dy.frames[strand.model.segments].position);
     }
 
-    /// Hair-hair contacts between the pieces of different strands closer than `distance` (m), one per pair of
-    /// pieces at their closest points, appended to `out`. Velocities from `last` (the pieces of the last step,
-    /// same layout) over `dt`; zero if the layout changed.
-    fn detect_hair_pairs(pieces: &[Piece], last: &[Piece], bvh: &Bvh, distance: f64, dt: f64, out: &mut Vec<HairPair>) {
-        use crate::geometry::{closest_segment_params, Aabb};
-        let same_layout = last.len() == pieces.len();
-        let velocity = |i: usize, t: f64| {
-            if same_layout {
-                let (p, q) = (&pieces[i], &last[i]);
-                ((p.a - q.a) * (1.0 - t) + (p.b - q.b) * t) / dt
-            } else {
-                Vector3::zeros()
-            }
-        };
-        let mut candidates = Vec::new();
-        for (i, pi) in pieces.iter().enumerate() {
-            candidates.clear();
-            bvh.query(&Aabb::of_segment(&pi.a, &pi.b, distance), &mut candidates);
-            for &j in &candidates {
-                let pj = &pieces[j];
-                if pj.strand <= pi.strand {
-                    continue;
-                }
-                let (u, v) = closest_segment_params(&pi.a, &pi.b, &pj.a, &pj.b);
-                let (xi, xj) = (pi.a + (pi.b - pi.a) * u, pj.a + (pj.b - pj.a) * v);
-                let gap = xi - xj;
-                let dist = gap.norm();
-                if dist >= distance || dist < 1e-12 * distance {
-                    continue;
-                }
-                out.push(HairPair {
-                    strands: (pi.strand, pj.strand),
-                    s: (pi.s + u * pi.length, pj.s + v * pj.length),
-                    normal: gap / dist,
-                    depth: distance - dist,
-                    velocity: (velocity(i, u), velocity(j, v)),
-                });
-            }
-        }
-    }
-
     /// Moves the tool to `pose` over `dt` seconds and steps every strand. On a strand's failure the error is
     /// returned; the other strands have stepped.
     ///
@@ -461,32 +347,19 @@ impl LocalInteraction {
         contacts.clear();
         let radius = Self::hair_radius(&self.strands);
         let report = detect(&self.shape, &self.pose, &pose, dt, &self.pieces, &self.bvh, radius, &mut contacts);
-        // Hair-hair contacts (constraint model), as constraints per strand: deepest first, at most
-        // `max_per_strand` each.
-        let mut hair_cons: Vec<Vec<(f64, PointConstraint)>> = Vec::new();
-        if let (Some(hc), ForceModel::Constraint { .. }) = (self.hair_contact, &self.model) {
+        // Hair-hair contacts (constraint model): at most `max_per_strand` per strand, deepest first.
+        let mut hair_pairs = 0;
+        let hair_on = matches!(self.model, ForceModel::Constraint { .. }) && self.hair_contact.is_some();
+        if let (Some(hc), true) = (self.hair_contact, hair_on) {
             hc.validate()?;
-            let mut pairs = std::mem::take(&mut self.hair_pairs);
-            pairs.clear();
-            Self::detect_hair_pairs(&self.pieces, &self.last_pieces, &self.bvh, hc.distance(radius), dt, &mut pairs);
-            hair_cons = vec![Vec::new(); self.strands.len()];
-            for p in &pairs {
-                let half = 0.5 * p.depth;
-                let contact = |normal: Vector3<f64>| ConstraintKind::Contact { normal, depth: half, friction: hc.friction };
-                hair_cons[p.strands.0].push((p.depth, PointConstraint { s: p.s.0, kind: contact(p.normal), velocity: p.velocity.1 }));
-                hair_cons[p.strands.1].push((p.depth, PointConstraint { s: p.s.1, kind: contact(-p.normal), velocity: p.velocity.0 }));
-            }
-            for list in hair_cons.iter_mut() {
-                if list.len() > hc.max_per_strand {
-                    list.sort_by(|a, b| b.0.total_cmp(&a.0));
-                    list.truncate(hc.max_per_strand);
-                }
-            }
-            self.hair_pairs = pairs;
+            let strands = &self.strands;
+            let per_chord = |k: usize| strands[k].dynamics.quadrature_nodes().len() + 1;
+            self.hair_finder.detect(&hc, &self.pieces, per_chord, strands.len(), hc.distance(radius), dt);
+            hair_pairs = self.hair_finder.pairs();
         }
         let t_detect = clock.elapsed().as_secs_f64();
         timings.detect = t_detect - t_sample;
-        let mut result = StepResult { report, hair_pairs: self.hair_pairs.len(), ..Default::default() };
+        let mut result = StepResult { report, hair_pairs, ..Default::default() };
         for (k, strand) in self.strands.iter_mut().enumerate() {
             let t_strand = clock.elapsed().as_secs_f64();
             // A clip's jaws hold the strands it pins rather than pushing them.
@@ -513,7 +386,9 @@ impl LocalInteraction {
                 }
             }
             // Hair-hair contacts of this strand (their impulses are not the tool's either).
-            resting.extend(hair_cons.get(k).into_iter().flatten().map(|(_, c)| *c));
+            if hair_on {
+                resting.extend(self.hair_finder.constraints(k));
+            }
             let touched = !mine.is_empty() || pinned || !resting.is_empty();
             let forces: Vec<(Vector3<f64>, Vector3<f64>)> = match self.model {
                 ForceModel::Paper { gain } => {
@@ -627,8 +502,6 @@ impl LocalInteraction {
             }
         }
         self.pose = pose;
-        // This step's pieces become the last step's (the next step samples afresh).
-        std::mem::swap(&mut self.last_pieces, &mut self.pieces);
         result.contacts = contacts.clone();
         self.contacts = contacts;
         result.timings = timings;

@@ -73,6 +73,56 @@ impl ForceTrace {
     }
 }
 
+/// Quality figures of a tool stroke's force, computed in one place for every scenario kind that has a force
+/// trace ([`StrokeMetrics::of`]). The stroke is the steps from the first to the last step with a contact (the
+/// tool in the hair); the force is the magnitude of the force on the tool, N.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct StrokeMetrics {
+    /// Steps of the stroke (first to last step with contact, inclusive).
+    pub steps: usize,
+    /// Largest force during the stroke, N.
+    pub peak_n: f64,
+    /// Median force during the stroke, N.
+    pub median_n: f64,
+    /// 90th percentile of the force during the stroke, N.
+    pub p90_n: f64,
+    /// Share of the stroke's steps with a force above 2 % of the peak (dimensionless, 0..1): the force's
+    /// continuity (1: felt all along; a stroke of isolated spikes gives a small share).
+    pub continuity: f64,
+    /// Largest change of the force vector from one step to the next during the stroke, N.
+    pub max_step_change_n: f64,
+    /// The same as a share of the peak (dimensionless).
+    pub max_step_change_rel: f64,
+}
+
+impl StrokeMetrics {
+    /// Share of the peak above which a step counts as felt in [`StrokeMetrics::continuity`].
+    pub const FELT: f64 = 0.02;
+
+    /// The figures of `trace`'s stroke (all zero if no step has a contact).
+    pub fn of(trace: &ForceTrace) -> Self {
+        let Some(first) = trace.contacts.iter().position(|&c| c > 0) else { return Self::default() };
+        let last = trace.contacts.iter().rposition(|&c| c > 0).unwrap_or(first);
+        let mut f: Vec<f64> = (first..=last).map(|i| trace.force(i).norm()).collect();
+        let max_step_change_n = (first + 1..=last).map(|i| (trace.force(i) - trace.force(i - 1)).norm()).fold(0.0, f64::max);
+        let peak_n = f.iter().copied().fold(0.0, f64::max);
+        let felt = f.iter().filter(|&&x| x > Self::FELT * peak_n).count();
+        let steps = f.len();
+        f.sort_by(f64::total_cmp);
+        // Nearest-rank percentiles.
+        let rank = |q: f64| f[((q * steps as f64).ceil() as usize).clamp(1, steps) - 1];
+        Self {
+            steps,
+            peak_n,
+            median_n: rank(0.5),
+            p90_n: rank(0.9),
+            continuity: felt as f64 / steps as f64,
+            max_step_change_n,
+            max_step_change_rel: if peak_n > 0.0 { max_step_change_n / peak_n } else { 0.0 },
+        }
+    }
+}
+
 /// What a force trace gives its summary (patch and live scenarios alike): peak and mean force, steps with
 /// contact, steps at the device's force limit.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -163,6 +213,32 @@ impl LiveSummary {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stroke_metrics_of_a_known_trace() {
+        // 2 steps before the stroke and 1 after it without contact (ignored, however large), 10 stroke steps with
+        // forces 1..10 N along x except the 5th at 0.1 N (1 % of the 10 N peak, not felt).
+        // Stroke: 10 steps, peak 10 N, sorted forces 0.1, 1, 2, 3, 4, 6, 7, 8, 9, 10: median (rank 5) 4 N, p90
+        // (rank 9) 9 N; continuity 9 / 10; largest step change |6 - 0.1| = 5.9 N.
+        let mut t = ForceTrace::default();
+        let z = Vector3::zeros();
+        t.push(0.0, &Vector3::new(50.0, 0.0, 0.0), &z, 0, &z);
+        t.push(0.001, &z, &z, 0, &z);
+        for i in 1..=10 {
+            let f = if i == 5 { 0.1 } else { i as f64 };
+            t.push(0.001 * (i + 1) as f64, &Vector3::new(f, 0.0, 0.0), &z, 1, &z);
+        }
+        t.push(0.02, &Vector3::new(80.0, 0.0, 0.0), &z, 0, &z);
+        let m = StrokeMetrics::of(&t);
+        assert_eq!(m.steps, 10);
+        assert_eq!(m.peak_n, 10.0);
+        assert_eq!(m.median_n, 4.0);
+        assert_eq!(m.p90_n, 9.0);
+        assert!((m.continuity - 0.9).abs() < 1e-15);
+        assert!((m.max_step_change_n - 5.9).abs() < 1e-12);
+        assert!((m.max_step_change_rel - 0.59).abs() < 1e-12);
+        assert_eq!(StrokeMetrics::of(&ForceTrace::default()), StrokeMetrics::default());
+    }
 
     #[test]
     fn force_stats_of_a_short_trace() {

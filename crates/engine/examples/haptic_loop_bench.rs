@@ -1,12 +1,13 @@
 //! Benchmark of the haptic loop: a comb drawn at 0.2 m/s through N hanging strands of S segments (16 by default; full
 //! model, constraint contacts), 1 kHz, one haptic thread. Prints step-time mean, p99, p99.9, max and deadline
 //! misses, then the mean time per step of each phase of the interaction step. Run:
-//! `cargo run --release -p coiffure-engine --example haptic_loop_bench [-- [full|reduced] [nobatch] [rt] [hair] [segments=S] N...]`
+//! `cargo run --release -p coiffure-engine --example haptic_loop_bench [-- [full|reduced] [nobatch] [rt] [hair] [segments=S] [cap=C] N...]`
 //! (default: full model, 16 segments, 16 32 64 strands). Reduced strands are prepared four at a time (SIMD batches,
 //! `LocalInteraction::use_batches`) unless `nobatch` is given. With `hair`, the strands also touch each other
 //! (`LocalInteraction::hair_contact`, each strand standing for 100 fibres: contact distance 1.3 mm, more than the
 //! roots' spacing at 64 strands, so every strand is in hair-hair contact at every step: the worst case), and each
-//! count is run twice in the same process, contact off then on, and the ratio printed.
+//! count is run twice in the same process, contact off then on, and the ratio printed; `cap=C` sets
+//! `HairContact::max_per_strand`.
 //! With `rt` (or under `chrt -f 10`; both need root or CAP_SYS_NICE) the haptic thread runs with real-time
 //! FIFO priority, as a haptic application would run it (`haptics::realtime`); the tails then show the loop's
 //! own cost rather than the scheduler's.
@@ -74,7 +75,7 @@ type Phases = ([f64; 5], f64);
 
 /// One run: N strands of `segments` segments hanging in a row along x (6 cm wide), the comb drawn through them.
 /// Prints its table row; returns the loop's statistics and the phases.
-fn bench(n: usize, segments: usize, kind: ModelKind, batches: bool, hair: bool) -> (LoopStats, Phases) {
+fn bench(n: usize, segments: usize, kind: ModelKind, batches: bool, hair: bool, cap: usize) -> (LoopStats, Phases) {
     let h = HairType::H1;
     let m = StrandModel::new(kind, 0.15, segments, h.section().unwrap(), h.material().unwrap()).unwrap();
     let strands: Vec<Strand> = (0..n)
@@ -87,7 +88,7 @@ fn bench(n: usize, segments: usize, kind: ModelKind, batches: bool, hair: bool) 
     let mut it = LocalInteraction::new(strands, ToolShape::builtin("comb").unwrap(), pose, ForceModel::Constraint { friction: h.friction_coefficient(), options: Default::default() });
     it.use_batches = batches;
     if hair {
-        it.hair_contact = Some(tools::interaction::HairContact { fibres: 100.0, ..Default::default() });
+        it.hair_contact = Some(tools::interaction::HairContact { fibres: 100.0, max_per_strand: cap, ..Default::default() });
     }
     let script = |t: f64| Some(DeviceReading { time: t, position: Vector3::new(0.0004, -0.02 + 0.2 * t, 0.22), rotation: Matrix3::identity(), buttons: 0 });
     let steps = 2000;
@@ -117,6 +118,7 @@ fn main() {
     let counts: Vec<usize> = args.iter().filter_map(|a| a.parse().ok()).collect();
     let counts = if counts.is_empty() { vec![16, 32, 64] } else { counts };
     let segments = args.iter().find_map(|a| a.strip_prefix("segments=").and_then(|v| v.parse().ok())).unwrap_or(16);
+    let cap = args.iter().find_map(|a| a.strip_prefix("cap=").and_then(|v| v.parse().ok())).unwrap_or(tools::interaction::HairContact::default().max_per_strand);
     let batches = !args.iter().any(|a| a == "nobatch");
     let hair = args.iter().any(|a| a == "hair");
     if args.iter().any(|a| a == "rt") {
@@ -125,15 +127,15 @@ fn main() {
             eprintln!("rt: {why}");
         }
     }
-    println!("model: {kind:?}, batches: {batches}, hair-hair contact: {hair}, real-time priority: {}", haptics::realtime::is_realtime());
+    println!("model: {kind:?}, batches: {batches}, hair-hair contact: {hair} (at most {cap} per strand), real-time priority: {}", haptics::realtime::is_realtime());
     println!("| strands x segments | hair-hair | steps | step mean | p99 | p99.9 | max | misses | contact steps | peak device force | peak hair force |");
     println!("|---|---|---|---|---|---|---|---|---|---|---|");
     let mut phases = Vec::new();
     let mut ratios = Vec::new();
     for n in counts {
         // With `hair`, the contact-off baseline first, in the same run, then hair-hair contact on.
-        let off = hair.then(|| bench(n, segments, kind, batches, false));
-        let (on, p) = bench(n, segments, kind, batches, hair);
+        let off = hair.then(|| bench(n, segments, kind, batches, false, cap));
+        let (on, p) = bench(n, segments, kind, batches, hair, cap);
         phases.push((n, hair, p));
         if let Some((off, p_off)) = off {
             phases.push((n, false, p_off));

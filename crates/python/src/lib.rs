@@ -13,7 +13,7 @@ mod errors;
 mod formats;
 mod hair_types;
 mod interrupt;
-// mod scenario; (after the engine's in-memory scenario API lands)
+mod scenario;
 mod strand;
 
 /// The module `coiffure._coiffure`.
@@ -26,5 +26,6 @@ fn _coiffure(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(convert::load_toml, m)?)?;
     m.add_function(wrap_pyfunction!(formats::read_hair_flat, m)?)?;
     m.add_function(wrap_pyfunction!(formats::write_hair_flat, m)?)?;
+    m.add_function(wrap_pyfunction!(scenario::run_scenario, m)?)?;
     Ok(())
 }

@@ -169,8 +169,8 @@ impl GlobalScenario {
     /// tool at a time).
     pub fn validate(&self) -> Result<(), ScenarioError> {
         let bad = |m: String| Err(ScenarioError::Invalid(m));
-        if !(self.global_dt.is_finite() && self.global_dt >= 1e-4 && self.global_dt <= 0.1) {
-            return bad(format!("global_dt must be in [1e-4, 0.1] s, got {}", self.global_dt));
+        if !(self.global_dt.is_finite() && self.global_dt >= 1e-3 && self.global_dt <= 0.1) {
+            return bad(format!("global_dt must be in [0.001, 0.1] s (the live global rate is at most 1000 Hz), got {}", self.global_dt));
         }
         if !(self.wetness.is_finite() && (0.0..=1.0).contains(&self.wetness)) {
             return bad(format!("wetness must be in [0, 1], got {}", self.wetness));
@@ -466,6 +466,8 @@ mod tests {
         let mut s: GlobalScenario = toml::from_str(GLOBAL).unwrap();
         s.wetness = f64::NAN;
         assert!(s.validate().unwrap_err().to_string().contains("wetness"));
+        let s: GlobalScenario = toml::from_str(&format!("global_dt = 0.0005\n{GLOBAL}")).unwrap();
+        assert!(s.validate().unwrap_err().to_string().contains("global_dt"));
         let s: GlobalScenario = toml::from_str(&GLOBAL.replace("radius = 0.25", "radius = -1.0")).unwrap();
         assert!(s.validate().unwrap_err().to_string().contains("action 2 (cut)"));
         assert!(toml::from_str::<GlobalScenario>(&GLOBAL.replace("kind = \"cut\"", "kind = \"comb\"")).is_err());

@@ -31,8 +31,6 @@ def run_scenario(
     The GIL is released while the scenario runs; Ctrl-C stops it between steps (``KeyboardInterrupt``). Bad
     input raises ``ValueError`` naming the key; a failed simulation raises ``coiffure.SimulationError``.
     """
-    if not hasattr(_coiffure, "run_scenario"):
-        raise NotImplementedError("run_scenario needs the engine's in-memory scenario API, which is not on this branch yet")
     return _coiffure.run_scenario(
         scenario if isinstance(scenario, dict) else os.fspath(scenario),
         out=None if out is None else os.fspath(out),

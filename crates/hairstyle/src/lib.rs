@@ -7,11 +7,12 @@
 //! The built-in head, neck and shoulders with its scalp ([`head`]) and hairstyle generation
 //! ([`generate`]): guide Super-Helices and render strands bound to them, in SI units (m) in the
 //! head frame (origin at the head's centre, z up, y forward); the lattice that carries a
-//! hairstyle ([`global`]).
+//! hairstyle ([`global`]). Hairstyles from other tools are placed on the head by [`fit`].
 
 #![warn(missing_docs)]
 
 pub mod cut;
+pub mod fit;
 pub mod formats;
 pub mod generate;
 pub mod global;

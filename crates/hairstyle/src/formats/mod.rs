@@ -104,9 +104,15 @@ pub enum FormatError {
         /// Why.
         reason: String,
     },
-    /// The file extension is not one of `.hair`, `.data`, `.tfx`, `.usda`.
+    /// The file extension is not one of `.hair`, `.data`, `.tfx`, `.usda` (or `.usd` holding text).
     #[error("{0}: unknown hair file extension (expected .hair, .data, .tfx or .usda)")]
     UnknownExtension(PathBuf),
+    /// Binary (`.usdc`, crate) or zipped (`.usdz`) USD, which this build cannot read.
+    #[error("{what}: binary (.usdc) and zipped (.usdz) USD cannot be read: no maintained Rust USD library builds with this toolchain (the `openusd` crate needs rustc 1.96); convert it to text with Pixar's `usdcat FILE -o FILE.usda` (`pip install usd-core`) and load the .usda")]
+    UnsupportedUsd {
+        /// The file (or "the data" when read from bytes).
+        what: String,
+    },
     /// Reading or writing the file failed.
     #[error("{path}: {source}")]
     Io {
@@ -138,7 +144,7 @@ impl Format {
             "hair" => Some(Format::Hair),
             "data" => Some(Format::Usc),
             "tfx" => Some(Format::Tfx),
-            "usda" => Some(Format::Usda),
+            "usda" | "usd" => Some(Format::Usda),
             _ => None,
         }
     }
@@ -150,6 +156,15 @@ impl Format {
             Format::Usc => usc::read(bytes),
             Format::Tfx => tfx::read(bytes),
             Format::Usda => usda::read(bytes),
+        }
+    }
+
+    /// Parse bytes in this format, with the metadata the format carries (USD: `metersPerUnit`,
+    /// `upAxis`; the other formats carry none).
+    pub fn read_with_metadata(self, bytes: &[u8]) -> Result<(HairCurves, Metadata), FormatError> {
+        match self {
+            Format::Usda => usda::read_stage(bytes),
+            f => f.read(bytes).map(|c| (c, Metadata::default())),
         }
     }
 
@@ -166,14 +181,34 @@ impl Format {
 
 /// Read a hair file, choosing the format from its extension.
 pub fn read_file(path: impl AsRef<Path>) -> Result<HairCurves, FormatError> {
+    read_file_with_metadata(path).map(|r| r.0)
+}
+
+/// What a file says about its own frame, where the format can say it (USD's stage metadata);
+/// None where it does not.
+pub type Metadata = usda::StageMetadata;
+
+/// Read a hair file, choosing the format from its extension; also its format and authored
+/// metadata (units, up axis). `.usdc` and `.usdz` give [`FormatError::UnsupportedUsd`].
+pub fn read_file_with_metadata(
+    path: impl AsRef<Path>,
+) -> Result<(HairCurves, Format, Metadata), FormatError> {
     let path = path.as_ref();
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if matches!(ext.as_deref(), Some("usdc" | "usdz")) {
+        return Err(FormatError::UnsupportedUsd { what: path.display().to_string() });
+    }
     let format =
         Format::from_path(path).ok_or_else(|| FormatError::UnknownExtension(path.into()))?;
     let bytes = std::fs::read(path).map_err(|source| FormatError::Io {
         path: path.into(),
         source,
     })?;
-    format.read(&bytes)
+    let (curves, meta) = format.read_with_metadata(&bytes).map_err(|e| match e {
+        FormatError::UnsupportedUsd { .. } => FormatError::UnsupportedUsd { what: path.display().to_string() },
+        e => e,
+    })?;
+    Ok((curves, format, meta))
 }
 
 /// Write a hair file, choosing the format from its extension. Nothing is written on error.

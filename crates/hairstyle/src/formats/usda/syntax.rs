@@ -105,12 +105,16 @@ pub(super) enum Value {
 pub(super) struct Parser {
     toks: Vec<(Tok, usize)>,
     i: usize,
-    /// Attributes of the BasisCurves prim: (name, value, line, interpolation metadata).
-    pub(super) attrs: Vec<(String, Value, usize, Option<String>)>,
-    /// Line of the BasisCurves prim, once found.
-    pub(super) curves_line: Option<usize>,
+    /// The BasisCurves prims found, in file order.
+    pub(super) curves: Vec<CurvesPrim>,
     /// Current nesting of brackets and prims, limited to [`MAX_DEPTH`].
     depth: usize,
+}
+
+/// One `BasisCurves` prim: its line and attributes (name, value, line, interpolation metadata).
+pub(super) struct CurvesPrim {
+    pub(super) line: usize,
+    pub(super) attrs: Vec<(String, Value, usize, Option<String>)>,
 }
 
 /// Deepest nesting of brackets and prims accepted (guards the recursion against hostile files).
@@ -121,8 +125,7 @@ impl Parser {
         Self {
             toks,
             i: 0,
-            attrs: Vec::new(),
-            curves_line: None,
+            curves: Vec::new(),
             depth: 0,
         }
     }
@@ -159,9 +162,9 @@ impl Parser {
         hit
     }
 
-    /// Prims and properties until `}` (inside a prim: `inside` is `Some(is_curves)`) or the end
-    /// of the file (top level, `None`).
-    pub(super) fn prims(&mut self, inside: Option<bool>) -> Result<(), FormatError> {
+    /// Prims and properties until `}` (inside a prim: `inside` is `Some(curves prim index)`) or
+    /// the end of the file (top level, `None`).
+    pub(super) fn prims(&mut self, inside: Option<Option<usize>>) -> Result<(), FormatError> {
         loop {
             let line = self.line();
             match (self.peek(), inside) {
@@ -194,24 +197,21 @@ impl Parser {
             self.value()?; // prim metadata
         }
         self.expect('{')?;
-        let is_curves = kind == "BasisCurves";
-        if is_curves {
-            if let Some(first) = self.curves_line {
-                return Err(err(
-                    line,
-                    format!("one BasisCurves prim only (the first is at line {first})"),
-                ));
-            }
-            self.curves_line = Some(line);
-        }
+        let curves = (kind == "BasisCurves").then(|| {
+            self.curves.push(CurvesPrim {
+                line,
+                attrs: Vec::new(),
+            });
+            self.curves.len() - 1
+        });
         self.enter(line)?;
-        self.prims(Some(is_curves))?;
+        self.prims(Some(curves))?;
         self.depth -= 1;
         self.expect('}')
     }
 
     /// `[qualifiers] type name [= value] [(metadata)]` inside a prim.
-    fn property(&mut self, keep: bool) -> Result<(), FormatError> {
+    fn property(&mut self, keep: Option<usize>) -> Result<(), FormatError> {
         let line = self.line();
         let mut words = Vec::new();
         while let Some(Tok::Word(w)) = self.peek() {
@@ -252,8 +252,9 @@ impl Parser {
                     _ => None,
                 });
         }
-        if keep {
-            self.attrs
+        if let Some(k) = keep {
+            self.curves[k]
+                .attrs
                 .push((words.last().unwrap().clone(), value, line, interpolation));
         }
         Ok(())
@@ -268,6 +269,29 @@ impl Parser {
             ));
         }
         Ok(())
+    }
+
+    /// `key = value` pairs at the top level of the metadata `( ... )` starting at the current
+    /// token (layer metadata), as (key, value token); the metadata is consumed.
+    pub(super) fn metadata(&mut self) -> Result<Vec<(String, Tok)>, FormatError> {
+        let start = self.i;
+        self.value()?;
+        let toks = &self.toks[start..self.i];
+        let mut depth = 0usize;
+        let mut out = Vec::new();
+        for (k, (t, _)) in toks.iter().enumerate() {
+            match t {
+                Tok::Punct('(' | '[' | '{') => depth += 1,
+                Tok::Punct(')' | ']' | '}') => depth = depth.saturating_sub(1),
+                Tok::Word(key) if depth == 1 => {
+                    if let (Some((Tok::Punct('='), _)), Some((v, _))) = (toks.get(k + 1), toks.get(k + 2)) {
+                        out.push((key.clone(), v.clone()));
+                    }
+                }
+                _ => {}
+            }
+        }
+        Ok(out)
     }
 
     pub(super) fn value(&mut self) -> Result<Value, FormatError> {

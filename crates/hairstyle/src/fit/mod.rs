@@ -143,7 +143,7 @@ pub struct FitParams {
     pub candidate_iterations: usize,
     /// ICP iterations of the final fit. Default 60.
     pub fit_iterations: usize,
-    /// Fraction of roots (the closest to the scalp) trimmed ICP always keeps. Default 0.35.
+    /// Fraction of roots (the closest to the scalp) trimmed ICP always keeps. Default 0.2.
     pub trim: f64,
     /// Roots within this distance of the scalp are kept too (and count as on the scalp in
     /// [`FitReport::inliers`]), m. Default 0.01 m.
@@ -175,7 +175,7 @@ impl Default for FitParams {
             fit_roots: 4_000,
             candidate_iterations: 25,
             fit_iterations: 60,
-            trim: 0.35,
+            trim: 0.2,
             inlier_distance: 0.01,
             scale_range: (0.3, 3.0),
             band_height: 0.04,

@@ -13,7 +13,14 @@ pub struct ScalpIndex {
     /// The samples' indices in k-d order: the median of each range splits it on `axis[range mid]`.
     tree: Vec<u32>,
     axis: Vec<u8>,
+    /// Bounding sphere of the samples (centre, radius), m.
+    centre: Point3<f64>,
+    radius: f64,
 }
+
+/// Points further than this outside the samples' bounding sphere are matched through their
+/// radial projection onto it (m).
+const FAR: f64 = 0.02;
 
 /// The nearest scalp sample to a point, and the point's distance to the scalp.
 #[derive(Debug, Clone, Copy)]
@@ -59,7 +66,9 @@ impl ScalpIndex {
             build(pts, &mut right[1..], &mut ar[1..]);
         }
         build(&points, &mut tree, &mut axis);
-        Self { points, spacing, tree, axis }
+        let centre = Point3::from(points.iter().fold(Vector3::zeros(), |s, p| s + p.position.coords) / points.len() as f64);
+        let radius = points.iter().map(|p| (p.position - centre).norm()).fold(0.0, f64::max);
+        Self { points, spacing, tree, axis, centre, radius }
     }
 
     /// The samples.
@@ -90,10 +99,14 @@ impl ScalpIndex {
         }
     }
 
-    /// The nearest sample to `p` (m) and `p`'s distance to the scalp.
+    /// The nearest sample to `p` (m) and `p`'s distance to the scalp. For a point more than 2 cm
+    /// outside the samples' bounding sphere, the sample nearest to its radial projection onto
+    /// that sphere (the distance is then an upper bound, close for far points).
     pub fn nearest(&self, p: &Point3<f64>) -> Nearest {
         let mut best = (0usize, f64::INFINITY);
-        self.search(0, self.tree.len(), p, &mut best);
+        let r = p - self.centre;
+        let q = if r.norm() > self.radius + FAR { self.centre + r * (self.radius / r.norm()) } else { *p };
+        self.search(0, self.tree.len(), &q, &mut best);
         let best = best.0;
         let sample = self.points[best];
         let off: Vector3<f64> = p - sample.position;

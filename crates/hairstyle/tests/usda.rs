@@ -16,6 +16,29 @@ def BasisCurves "hair"
 }
 "#;
 
+/// What the writer gives for the fixture's curves: stage metadata (metres, z up, default prim) and
+/// the curves under `/hair/strands`.
+const WRITTEN: &str = r#"#usda 1.0
+(
+    defaultPrim = "hair"
+    metersPerUnit = 1
+    upAxis = "Z"
+)
+
+def Xform "hair"
+{
+    def BasisCurves "strands"
+    {
+        uniform token type = "linear"
+        int[] curveVertexCounts = [2, 3]
+        point3f[] points = [(0, 0, 0), (1, 2, 3), (0.5, -1, 2), (4, 5, 6), (-7, 8.25, 9)]
+        float[] widths = [0.1, 0.2, 0.3, 0.4, 0.5] (
+            interpolation = "vertex"
+        )
+    }
+}
+"#;
+
 fn fixture_curves() -> HairCurves {
     let mut c = HairCurves::from_strands(two_strands());
     c.thickness = Some(vec![0.1, 0.2, 0.3, 0.4, 0.5]);
@@ -26,9 +49,62 @@ fn fixture_curves() -> HairCurves {
 fn writer_matches_fixture_byte_for_byte_and_reader_parses_it() {
     assert_eq!(
         String::from_utf8(usda::write(&fixture_curves()).unwrap()).unwrap(),
-        FIXTURE
+        WRITTEN
     );
     assert_eq!(usda::read(FIXTURE.as_bytes()).unwrap(), fixture_curves());
+    let (c, meta) = usda::read_stage(WRITTEN.as_bytes()).unwrap();
+    assert_eq!(c, fixture_curves());
+    assert_eq!((meta.meters_per_unit, meta.up_axis), (Some(1.0), Some('Z')));
+    assert_eq!(usda::read_stage(FIXTURE.as_bytes()).unwrap().1, usda::StageMetadata::default());
+    // equal widths are written as one constant value
+    let mut same = fixture_curves();
+    same.thickness = Some(vec![7e-5; 5]);
+    let text = String::from_utf8(usda::write(&same).unwrap()).unwrap();
+    assert!(text.contains("float[] widths = [0.00007] (\n            interpolation = \"constant\""), "{text}");
+    assert_eq!(usda::read(text.as_bytes()).unwrap(), same);
+}
+
+/// Cubic curves (USD's fallback type) of each basis, evaluated to polylines: end points and
+/// interpolated points where the basis passes through control points, and the known values in
+/// between; widths per control point evaluated with the same basis.
+#[test]
+fn cubic_curves_of_every_basis() {
+    let stage = |body: &str| format!("#usda 1.0\n(\n    metersPerUnit = 0.01\n    upAxis = \"Y\"\n)\ndef Xform \"root\" {{\n def Xform \"group\" {{\n  def BasisCurves \"c\" {{\n{body}\n  }}\n }}\n}}\n");
+    // bezier (the fallback basis, type unauthored = cubic): 7 control points, 2 segments
+    let bez = stage("int[] curveVertexCounts = [7]\npoint3f[] points = [(0,0,0),(1,0,0),(2,0,0),(3,0,0),(3,1,0),(3,2,0),(3,3,0)]\nfloat[] widths = [1,1,1,1,3,3,3]");
+    let (c, meta) = usda::read_stage(bez.as_bytes()).unwrap();
+    assert_eq!((meta.meters_per_unit, meta.up_axis), (Some(0.01), Some('Y')));
+    let s = &c.strands[0];
+    assert_eq!(s.len(), 2 * usda::basis::SAMPLES_PER_SEGMENT + 1);
+    assert_eq!((s[0], s[4], s[8]), ([0.0, 0.0, 0.0], [3.0, 0.0, 0.0], [3.0, 3.0, 0.0]));
+    assert_eq!(s[2], [1.5, 0.0, 0.0]); // middle of a straight segment with evenly spaced control points
+    let w = c.thickness.unwrap();
+    assert_eq!((w[0], w[4], w[6], w[8]), (1.0, 1.0, 2.75, 3.0)); // (1 + 3 x 3 + 3 x 3 + 3) / 8 at t = 1/2
+    // bspline, nonperiodic: 5 points, 2 segments, starting at (P0 + 4 P1 + P2) / 6
+    let bs = stage("uniform token type = \"cubic\"\nuniform token basis = \"bspline\"\nint[] curveVertexCounts = [5]\npoint3f[] points = [(0,0,0),(6,0,0),(6,6,0),(0,6,0),(0,12,0)]");
+    let s = usda::read(bs.as_bytes()).unwrap().strands[0].clone();
+    assert_eq!((s.len(), s[0], s[8]), (9, [5.0, 1.0, 0.0], [1.0, 6.0, 0.0]));
+    // bspline, pinned: passes through both ends
+    let pinned = bs.replace("\"bspline\"", "\"bspline\"\nuniform token wrap = \"pinned\"");
+    let s = usda::read(pinned.as_bytes()).unwrap().strands[0].clone();
+    assert_eq!((s.len(), s[0], s[16]), (17, [0.0, 0.0, 0.0], [0.0, 12.0, 0.0]));
+    // catmullRom: passes through P1 .. Pn-2
+    let cr = bs.replace("bspline", "catmullRom");
+    let s = usda::read(cr.as_bytes()).unwrap().strands[0].clone();
+    assert_eq!((s[0], s[4], s[8]), ([6.0, 0.0, 0.0], [6.0, 6.0, 0.0], [0.0, 6.0, 0.0]));
+    // the control point count must suit the basis
+    let e = usda::read(bez.replace("[7]", "[6]").replace("(3,3,0)]", "]").as_bytes()).unwrap_err().to_string();
+    assert!(e.contains("curve 0: a nonperiodic bezier curve needs 4 + 3k control points, found 6"), "{e}");
+    let e = usda::read(bs.replace("bspline", "hermite").as_bytes()).unwrap_err().to_string();
+    assert!(e.contains("basis \"bezier\", \"bspline\" or \"catmullRom\""), "{e}");
+}
+
+#[test]
+fn binary_and_zipped_usd_are_refused_naming_the_workaround() {
+    let e = usda::read(b"PXR-USDC\0\0\0\0").unwrap_err().to_string();
+    assert!(e.contains("usdcat") && e.contains("rustc 1.96"), "{e}");
+    let e = hairstyle::formats::read_file("no/such/file.usdz").unwrap_err().to_string();
+    assert!(e.starts_with("no/such/file.usdz: binary (.usdc) and zipped (.usdz) USD cannot be read"), "{e}");
 }
 
 #[test]
@@ -117,16 +193,21 @@ fn malformed_files_name_the_line_and_expectation() {
         error("#usda 1.0\n"),
         ".usda file, line 1: a `def BasisCurves` prim, found none"
     );
-    let cubic = FIXTURE.replace("\"linear\"", "\"cubic\"");
-    assert!(
-        error(&cubic).starts_with(".usda file, line 5: type \"linear\""),
-        "{}",
-        error(&cubic)
+    let cubic = FIXTURE.replace("\"linear\"", "\"quintic\"");
+    assert_eq!(
+        error(&cubic),
+        ".usda file, line 5: type \"linear\" or \"cubic\", found \"quintic\""
     );
+    // an unauthored type is USD's fallback, cubic (bezier): 2 points are not a bezier curve
     let untyped = FIXTURE.replace("    uniform token type = \"linear\"\n", "");
     assert_eq!(
         error(&untyped),
-        ".usda file, line 3: a `type` attribute with a value in this BasisCurves prim"
+        ".usda file, line 5: curve 0: a nonperiodic bezier curve needs 4 + 3k control points, found 2"
+    );
+    let points = FIXTURE.replace("    point3f[] points", "    point3f[] other");
+    assert_eq!(
+        error(&points),
+        ".usda file, line 3: a `points` attribute with a value in this BasisCurves prim"
     );
     let counts = FIXTURE.replace("[2, 3]", "[2, 4]");
     assert_eq!(
@@ -142,11 +223,11 @@ fn malformed_files_name_the_line_and_expectation() {
     assert!(
         error(&unterminated).starts_with(".usda file, line 3: a closing quote on the same line")
     );
-    let two = format!("{FIXTURE}def BasisCurves \"more\" {{}}\n");
-    assert_eq!(
-        error(&two),
-        ".usda file, line 12: one BasisCurves prim only (the first is at line 3)"
-    );
+    // several BasisCurves prims: their curves one after the other
+    let two = format!("{FIXTURE}{}", &FIXTURE[FIXTURE.find("def").unwrap()..]);
+    let c = usda::read(two.as_bytes()).unwrap();
+    assert_eq!(c.strands.len(), 4);
+    assert_eq!(c.thickness.unwrap().len(), 10);
     let mut bytes = FIXTURE.as_bytes().to_vec();
     bytes[FIXTURE.find("uniform").unwrap()] = 0xff;
     assert!(usda::read(&bytes)

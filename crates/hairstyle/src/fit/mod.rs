@@ -350,11 +350,7 @@ impl Fitter<'_> {
             let k_trim = ((self.params.trim * n as f64).ceil() as usize).clamp(3.min(n), n);
             let within = order.iter().take_while(|&&i| near[i].distance <= self.params.inlier_distance).count();
             let best_k = within.max(k_trim);
-            let sum: f64 = order[..best_k].iter().map(|&i| near[i].distance.powi(2)).sum();
             kept = best_k as f64 / n as f64;
-            if std::env::var_os("COIFFURE_FIT_DEBUG2").is_some() {
-                eprintln!("  icp kept {kept:.3} rms {:.4} median {:.4} scale {:.4}", (sum / n as f64).sqrt(), near[order[n / 2]].distance, t.scale);
-            }
             let a: Vec<Point3<f64>> = order[..best_k].iter().map(|&i| roots[i]).collect();
             let b: Vec<Point3<f64>> = order[..best_k].iter().map(|&i| near[i].on_surface).collect();
             let Some(next) = Similarity::fit(&a, &b, range) else { break };
@@ -539,12 +535,6 @@ pub fn fit(
         })
         .collect();
     scored.sort_by(|a, b| a.0.total_cmp(&b.0));
-    if std::env::var_os("COIFFURE_FIT_DEBUG").is_some() {
-        for (s, (u, f), t) in &scored {
-            let sc = fitter.score_parts(t, &roots_c, &strands_c);
-            eprintln!("{} {} score {:.4} parts {:?} scale {:.4}", u.name(), f.name(), s, sc, t.scale);
-        }
-    }
     let (best_score, (up, front), start) = scored[0];
     let scores = (scored.len() > 1 && orientation_source == Source::Detected).then(|| (best_score, scored[1].0));
     let roots_f = strided(&all_roots, params.fit_roots);

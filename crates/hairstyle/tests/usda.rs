@@ -83,7 +83,7 @@ fn cubic_curves_of_every_basis() {
     // bspline, nonperiodic: 5 points, 2 segments, starting at (P0 + 4 P1 + P2) / 6
     let bs = stage("uniform token type = \"cubic\"\nuniform token basis = \"bspline\"\nint[] curveVertexCounts = [5]\npoint3f[] points = [(0,0,0),(6,0,0),(6,6,0),(0,6,0),(0,12,0)]");
     let s = usda::read(bs.as_bytes()).unwrap().strands[0].clone();
-    assert_eq!((s.len(), s[0], s[8]), (9, [5.0, 1.0, 0.0], [1.0, 6.0, 0.0]));
+    assert_eq!((s.len(), s[0], s[8]), (9, [5.0, 1.0, 0.0], [1.0, 7.0, 0.0])); // ends at (P2 + 4 P3 + P4) / 6
     // bspline, pinned: passes through both ends
     let pinned = bs.replace("\"bspline\"", "\"bspline\"\nuniform token wrap = \"pinned\"");
     let s = usda::read(pinned.as_bytes()).unwrap().strands[0].clone();

@@ -1,183 +1,176 @@
-// Hair strands: geometry with the rest positions and the guide binding, and a shader that does the
-// quadratic B-spline FFD on the GPU (lattice nodes in a float data texture), adds the local strands'
-// displacement (guide displacement texture), and shades with Kajiya-Kay, depth-based self-shadowing and
-// a wet look (darker, sharper highlight).
+// Hair strands: the geometry (rest positions, guide binding, clump centres), the lit material (Marschner
+// lobes, melanin colour, dual scattering with deep opacity map shadows, wet look, alpha-to-coverage from the
+// strand's width) and the two deep-opacity-map materials, all deforming the strands with the same shader code
+// (shaders/hairDeform.glsl.ts): FFD by the lattice and the local strands' displacement on the GPU.
 import * as THREE from 'three';
 import type { SceneMsg } from './protocol';
+import { hairDeformGLSL } from './shaders/hairDeform.glsl';
+import { marschnerGLSL } from './shaders/marschner.glsl';
+import { dualScatteringGLSL } from './shaders/dualScattering.glsl';
+import { domLookupGLSL } from './shaders/deepOpacity.glsl';
+import { displayGLSL } from './shaders/display.glsl';
+import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS, hairDiameter, sigmaFromMelanin, type Melanin } from './hairColor';
+import type { DeepOpacityMaps } from './deepOpacityMaps';
 
-const vertexShader = /* glsl */ `
-precision highp float;
-precision highp sampler2D;
-uniform sampler2D latticeNodes;   // node (i,j,k) at texel (i + nx*j, k): world position, m
-uniform vec3 latticeOrigin;       // rest position of node (0,0,0), m
-uniform float latticeCell;        // node spacing, m
-uniform vec3 latticeSize;         // nx, ny, nz (node counts, as floats)
-uniform sampler2D guideDisplacement; // texel (sample, guide): displacement of the guide from its reference, m
-uniform sampler2D guideState;     // texel (guide, 0): r wetness [0,1], g kept length fraction [0,1]
-uniform int guideSamples;
-uniform float curliness;          // [0,1]
-uniform float curlRadius;         // m at curliness 1
-attribute vec3 rest;              // rest position (head frame), m
-attribute vec3 restTangent;
-attribute vec3 guides;            // the strand's three guides (indices; weight 0 for unused slots)
-attribute vec3 weights;           // their weights, summing to 1
-attribute vec2 arc;               // x: fraction u of the guides' length at this vertex, y: curl phase
-varying vec3 vTangent;
-varying vec3 vPosition;
-varying float vWet;
-varying float vKeep;
-varying float vU;
-varying float vDepth;
+/** Parameters of the hair's look (one home; documented with meaning, unit and default). */
+export interface HairLookParams {
+  /** Cuticle scale tilt alpha, rad. Default 2.5 deg (Marschner et al.: R shifted by -5 deg). */
+  cuticleTilt: number;
+  /** Longitudinal width beta_R of the R lobe, rad. Default 7 deg (TT: half, TRT: twice). */
+  roughness: number;
+  /** Refractive index of keratin. Default 1.55. */
+  fibreIndex: number;
+  /** Width of the water film's Gaussian highlight, rad. Default 1.5 deg. */
+  waterRoughness: number;
+  /** Relative lengthening of the absorbing paths at wetness 1 (wet hair is darker). Default 0.6. */
+  wetAbsorption: number;
+  /** Fraction of the way a soaked strand's tip moves to its clump's centre. Default 0.8. */
+  clumpStrength: number;
+  /** Hairs on a human head (each render strand stands for hairsOnHead / strands of them). Default 100,000. */
+  hairsOnHead: number;
+  /** Dual scattering densities d_f and d_b (Zinke et al. 2008). Default 0.7 each. */
+  densityForward: number;
+  densityBack: number;
+}
 
-vec3 node(int i, int j, int k) {
-  return texelFetch(latticeNodes, ivec2(i + int(latticeSize.x + 0.5) * j, k), 0).xyz;
-}
-vec3 bspline(float t) {
-  float u = 1.0 - t;
-  return vec3(0.5 * u * u, 0.5 * (-2.0 * t * t + 2.0 * t + 1.0), 0.5 * t * t);
-}
-vec3 ffd(vec3 p) {
-  vec3 s = clamp((p - latticeOrigin) / latticeCell, vec3(0.5), latticeSize - 1.5);
-  ivec3 c = ivec3(floor(s + 0.5));
-  vec3 t = s - vec3(c) + 0.5;
-  vec3 bx = bspline(t.x), by = bspline(t.y), bz = bspline(t.z);
-  vec3 x = vec3(0.0);
-  for (int k = 0; k < 3; k++) {
-    for (int j = 0; j < 3; j++) {
-      float wjk = by[j] * bz[k];
-      x += wjk * (bx[0] * node(c.x - 1, c.y + j - 1, c.z + k - 1)
-                + bx[1] * node(c.x,     c.y + j - 1, c.z + k - 1)
-                + bx[2] * node(c.x + 1, c.y + j - 1, c.z + k - 1));
-    }
-  }
-  return x;
-}
-// Push-out (SCENE's appended metaballs, head frame = the viewer's world): a vertex inside the body
-// {F > T}, or within the skin of its surface, is moved along the outward normal -grad F/|grad F| onto the
-// surface offset by the skin (Newton steps on the first-order distance (T - F)/|grad F|), as
-// MetaballSet::push_out does on the CPU.
-#define MAX_METABALLS 16
-uniform vec4 metaballs[MAX_METABALLS]; // xyz centre, w radius R, m
-uniform int metaballCount;
-uniform float metaballThreshold;       // T, dimensionless
-uniform float pushOutSkin;             // m
-vec3 pushOut(vec3 p) {
-  for (int it = 0; it < 3; it++) {
-    float f = 0.0;
-    vec3 g = vec3(0.0);
-    for (int b = 0; b < MAX_METABALLS; b++) {
-      if (b >= metaballCount) break;
-      vec3 r = p - metaballs[b].xyz;
-      float r2inv = 1.0 / (metaballs[b].w * metaballs[b].w);
-      float q = 1.0 - dot(r, r) * r2inv;
-      if (q > 0.0) { f += q * q; g -= 4.0 * q * r2inv * r; }
-    }
-    float gn = length(g);
-    if (f <= 0.0 || gn < 1e-9) return p;
-    float d = (metaballThreshold - f) / gn;
-    if (d >= pushOutSkin * 0.999) return p;
-    p -= (pushOutSkin - d) * g / gn;
-  }
-  return p;
-}
-vec3 guideOffset(int g, float u) {
-  float x = u * float(guideSamples - 1);
-  int a = int(floor(x));
-  int b = min(a + 1, guideSamples - 1);
-  vec3 da = texelFetch(guideDisplacement, ivec2(a, g), 0).xyz;
-  vec3 db = texelFetch(guideDisplacement, ivec2(b, g), 0).xyz;
-  return mix(da, db, x - float(a));
-}
+export const DEFAULT_HAIR_LOOK: HairLookParams = {
+  cuticleTilt: 2.5 * Math.PI / 180, roughness: 7 * Math.PI / 180, fibreIndex: 1.55,
+  waterRoughness: 1.5 * Math.PI / 180, wetAbsorption: 0.6, clumpStrength: 0.8, hairsOnHead: 100000,
+  densityForward: 0.7, densityBack: 0.7,
+};
+
+// The lit pass shades per vertex (32 or so per strand; a strand is a pixel wide, so its shading varies
+// along it only): in software rendering a fragment shader with the full model cost about ten times more.
+const litVertex = /* glsl */ `
+${hairDeformGLSL}
+${marschnerGLSL}
+${dualScatteringGLSL}
+${domLookupGLSL}
+${displayGLSL}
+uniform vec3 lightDirection;  // unit, towards the key light
+uniform vec3 lightColor;      // key light irradiance (linear RGB)
+uniform vec3 skyColor;        // ambient irradiance from above
+uniform vec3 groundColor;     // ambient irradiance from below
+uniform vec3 cameraPos;
+uniform int debugView;        // 0 shaded; 1 direct transmittance exp(-n) from the deep opacity maps; 2 highlight only
+varying vec3 vColour;
+varying float vCut;
 void main() {
-  int g = int(guides.x + 0.5);
-  float u = arc.x;
-  vec3 p = ffd(rest) + weights.x * guideOffset(g, u) + weights.y * guideOffset(int(guides.y + 0.5), u)
-         + weights.z * guideOffset(int(guides.z + 0.5), u);
-  vec3 t = normalize(restTangent);
-  // Curliness: a helical offset about the strand, growing from the root.
-  vec3 side = normalize(cross(t, abs(t.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
-  vec3 side2 = cross(t, side);
-  float ang = u * 40.0 + arc.y;
-  p += curliness * curlRadius * sqrt(u) * (cos(ang) * side + sin(ang) * side2);
-  p = pushOut(p);
-  vec4 st = texelFetch(guideState, ivec2(g, 0), 0);
-  vWet = st.r;
-  vKeep = st.g;
-  vU = u;
-  vTangent = t;
-  vPosition = p;
-  vDepth = length(rest);
-  gl_Position = projectionMatrix * modelViewMatrix * vec4(p, 1.0);
+  HairVertex h = deformHair();
+  vCut = h.u - h.keep - 1e-4;
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(h.position, 1.0);
+  vec3 T = h.tangent;
+  vec3 L = normalize(lightDirection);
+  vec3 V = normalize(cameraPos - h.position);
+  HairAngles a = hairAngles(T, L, V);
+  float n = strandsTowardsLight(h.position);
+  vec3 highlight;
+  vec3 c = lightColor * hairRadiance(a, sigmaA, h.wetness, n, highlight);
+  // Ambient: sky and ground light scattered back by the fibre and its neighbours, less deep in the volume.
+  FibreAttenuation fa = fibreAttenuation(sigmaA * (1.0 + wetAbsorption * h.wetness));
+  vec3 albedo = fa.ab + densityBack * fa.Ab + 0.3 * fa.af;
+  float up = 0.5 + 0.5 * sqrt(max(0.0, 1.0 - T.z * T.z));
+  c += albedo * mix(groundColor, skyColor, up) * (0.3 + 0.7 * exp(-0.15 * n)) / PI;
+  vColour = debugView == 1 ? vec3(exp(-n)) : debugView == 2 ? toDisplay(lightColor * highlight * a.cosThetaI) : toDisplay(c);
 }
 `;
 
-const fragmentShader = /* glsl */ `
-precision highp float;
-uniform vec3 hairColor;
-uniform vec3 lightDirection;     // towards the light
-uniform vec3 cameraPos;
-uniform float headRadius;        // m
-varying vec3 vTangent;
-varying vec3 vPosition;
-varying float vWet;
-varying float vKeep;
-varying float vU;
-varying float vDepth;
+const shadowVertex = /* glsl */ `
+#define HAIR_NO_TANGENT
+${hairDeformGLSL}
+varying float vCut;
 void main() {
-  if (vU > vKeep + 1e-4) discard; // cut off by the scissors
-  vec3 T = normalize(vTangent);
-  vec3 L = normalize(lightDirection);
-  vec3 V = normalize(cameraPos - vPosition);
-  vec3 H = normalize(L + V);
-  float tl = dot(T, L), th = dot(T, H);
-  // Kajiya-Kay: diffuse ~ sin(T, L), specular ~ sin(T, H)^n.
-  float diffuse = sqrt(max(0.0, 1.0 - tl * tl));
-  float exponent = mix(40.0, 160.0, vWet);
-  float specular = pow(sqrt(max(0.0, 1.0 - th * th)), exponent) * mix(0.35, 0.8, vWet);
-  // Self-shadowing: hair near the scalp (deep in the volume) and on the side away from the light is darker.
-  float depth = smoothstep(headRadius, headRadius + 0.025, vDepth);
-  float facing = 0.55 + 0.45 * max(0.0, dot(normalize(vPosition), L));
-  float shadow = mix(0.35, 1.0, depth) * facing;
-  vec3 base = hairColor * mix(1.0, 0.45, vWet);
-  vec3 c = base * (0.25 + 0.75 * diffuse) * shadow + vec3(specular) * shadow;
-  gl_FragColor = vec4(c, 1.0);
+  HairVertex h = deformHair();
+  vCut = h.u - h.keep - 1e-4;
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(h.position, 1.0);
+}
+`;
+
+const litFragment = /* glsl */ `
+precision highp float;
+varying vec3 vColour;
+varying float vCut;
+void main() {
+  if (vCut > 0.0) discard; // cut off by the scissors
+  gl_FragColor = vec4(vColour, 1.0);
 }
 `;
 
 export class HairMaterial {
   readonly material: THREE.ShaderMaterial;
+  readonly depthMaterial: THREE.ShaderMaterial;
+  readonly opacityMaterial: THREE.ShaderMaterial;
   readonly latticeTexture: THREE.DataTexture;
   readonly displacementTexture: THREE.DataTexture;
   readonly stateTexture: THREE.DataTexture;
+  readonly clumpTexture: THREE.DataTexture;
+  readonly params: HairLookParams;
+  /** Hairs one render strand stands for (>= 1). */
+  readonly hairsPerStrand: number;
   private readonly samples: number;
+  private diameter = 80e-6;
 
-  constructor(scene: SceneMsg, headRadius: number) {
+  constructor(scene: SceneMsg, dom: DeepOpacityMaps, lighting: Record<string, THREE.IUniform>, params: Partial<HairLookParams> = {}) {
+    this.params = { ...DEFAULT_HAIR_LOOK, ...params };
+    const p = this.params;
     const [nx, ny, nz] = scene.latticeDims;
     this.samples = Math.max(2, scene.samples);
+    this.hairsPerStrand = Math.max(1, p.hairsOnHead / Math.max(1, scene.strands));
     this.latticeTexture = floatTexture(nx * ny, nz);
     this.displacementTexture = floatTexture(this.samples, Math.max(1, scene.guides));
     this.stateTexture = floatTexture(Math.max(1, scene.guides), 1);
+    this.clumpTexture = clumpCentres(scene);
     this.resetGuides();
+    const deform: Record<string, THREE.IUniform> = {
+      latticeNodes: { value: this.latticeTexture },
+      latticeOrigin: { value: new THREE.Vector3(...scene.latticeOrigin) },
+      latticeCell: { value: scene.latticeH },
+      latticeSize: { value: new THREE.Vector3(nx, ny, nz) },
+      guideDisplacement: { value: this.displacementTexture },
+      guideState: { value: this.stateTexture },
+      guideSamples: { value: this.samples },
+      curliness: { value: 0 },
+      curlRadius: { value: 0.006 },
+      clumpCentres: { value: this.clumpTexture },
+      verticesPerStrand: { value: scene.verticesPerStrand },
+      clumpStrength: { value: p.clumpStrength },
+      wetnessOverride: { value: -1 },
+      ...pushOutUniforms(scene),
+    };
     this.material = new THREE.ShaderMaterial({
-      vertexShader,
-      fragmentShader,
+      vertexShader: litVertex,
+      fragmentShader: litFragment,
       uniforms: {
-        latticeNodes: { value: this.latticeTexture },
-        latticeOrigin: { value: new THREE.Vector3(...scene.latticeOrigin) },
-        latticeCell: { value: scene.latticeH },
-        latticeSize: { value: new THREE.Vector3(nx, ny, nz) },
-        guideDisplacement: { value: this.displacementTexture },
-        guideState: { value: this.stateTexture },
-        guideSamples: { value: this.samples },
-        curliness: { value: 0 },
-        curlRadius: { value: 0.006 },
-        hairColor: { value: new THREE.Color(0.42, 0.27, 0.15) },
-        lightDirection: { value: new THREE.Vector3(0.4, -0.6, 0.7) },
-        cameraPos: { value: new THREE.Vector3() },
-        headRadius: { value: headRadius },
-        ...pushOutUniforms(scene),
+        ...deform,
+        ...dom.uniforms,
+        strandWidth: { value: 80e-6 },
+        sigmaA: { value: new THREE.Vector3() },
+        cuticleTilt: { value: p.cuticleTilt },
+        roughness: { value: p.roughness },
+        fibreIndex: { value: p.fibreIndex },
+        waterRoughness: { value: p.waterRoughness },
+        wetAbsorption: { value: p.wetAbsorption },
+        densityForward: { value: p.densityForward },
+        densityBack: { value: p.densityBack },
+        ...lighting,
+        debugView: { value: 0 },
       },
     });
+    [this.depthMaterial, this.opacityMaterial] = dom.materials(shadowVertex, deform);
+    this.setColour(HAIR_COLOURS[DEFAULT_HAIR_COLOUR]);
+    this.setHairType(scene.hairTypes[scene.hairType], dom);
+  }
+
+  /** Hair colour from melanin concentrations. */
+  setColour(m: Melanin): void {
+    this.material.uniforms.sigmaA.value.set(...sigmaFromMelanin(m));
+  }
+
+  /** The strand width (and the shadow maps' coverage) from the hair type's fibre diameter. */
+  setHairType(name: string | undefined, dom: DeepOpacityMaps): void {
+    this.diameter = hairDiameter(name);
+    this.material.uniforms.strandWidth.value = this.diameter * this.hairsPerStrand;
+    dom.setHair(this.hairsPerStrand, this.diameter);
   }
 
   /** Lattice node positions, 3 floats per node in flat order i + nx (j + ny k). */
@@ -247,6 +240,26 @@ function floatTexture(w: number, h: number): THREE.DataTexture {
   return t;
 }
 
+/** Clump centres for wet clumping: texel (i, g) is the mean rest position of vertex i over the strands whose
+ * primary guide is g (a strand of its own where the guide has none). */
+function clumpCentres(scene: SceneMsg): THREE.DataTexture {
+  const nv = scene.verticesPerStrand, ns = scene.strands, k = scene.guidesPerStrand, G = Math.max(1, scene.guides);
+  const t = floatTexture(nv, G);
+  const d = t.image.data as Float32Array;
+  const pos = scene.renderPositions;
+  for (let s = 0; s < ns; s++) {
+    const g = scene.renderGuide[s * k];
+    for (let i = 0; i < nv; i++) {
+      const o = 4 * (g * nv + i), v = 3 * (s * nv + i);
+      d[o] += pos[v]; d[o + 1] += pos[v + 1]; d[o + 2] += pos[v + 2]; d[o + 3] += 1;
+    }
+  }
+  for (let o = 0; o < d.length; o += 4) {
+    if (d[o + 3] > 0) { d[o] /= d[o + 3]; d[o + 1] /= d[o + 3]; d[o + 2] /= d[o + 3]; }
+  }
+  return t;
+}
+
 /** Line segments for every strand: rest positions, rest tangents and the guide binding per vertex. */
 export function hairGeometry(scene: SceneMsg): THREE.BufferGeometry {
   const nv = scene.verticesPerStrand, ns = scene.strands, k = scene.guidesPerStrand;
@@ -284,10 +297,19 @@ export function hairGeometry(scene: SceneMsg): THREE.BufferGeometry {
   return g;
 }
 
+/** The same strands for the deep opacity maps: shares the attributes, draws every `stride`-th strand. */
+export function shadowGeometry(g: THREE.BufferGeometry, stride: number, strands: number, nv: number): THREE.BufferGeometry {
+  const s = new THREE.BufferGeometry();
+  for (const name of ['position', 'rest', 'restTangent', 'guides', 'weights', 'arc']) s.setAttribute(name, g.getAttribute(name));
+  s.setIndex(new THREE.BufferAttribute(new Uint32Array(Math.ceil(strands / stride) * 2 * Math.max(1, nv - 1)), 1));
+  s.userData.stride = stride;
+  return s;
+}
+
 // --- scissors (issue 5) ---
 /** Draws only the kept part of every strand: segments (j, j + 1) with j + 1 < kept[s] (STRANDS message).
- * Returns the number of segments drawn. */
-export function setKept(g: THREE.BufferGeometry, nv: number, kept: Uint16Array): number {
+ * Returns the number of segments drawn. `shadow` (optional) gets every stride-th strand's kept segments. */
+export function setKept(g: THREE.BufferGeometry, nv: number, kept: Uint16Array, shadow?: THREE.BufferGeometry): number {
   const index = g.getIndex();
   if (!index) return 0;
   const a = index.array as Uint32Array;
@@ -298,5 +320,21 @@ export function setKept(g: THREE.BufferGeometry, nv: number, kept: Uint16Array):
   }
   g.setDrawRange(0, n);
   index.needsUpdate = true;
+  if (shadow) fillShadowIndex(shadow, nv, kept);
   return n / 2;
+}
+
+/** Every stride-th strand's segments (all of them when `kept` is absent). */
+export function fillShadowIndex(shadow: THREE.BufferGeometry, nv: number, kept: Uint16Array | null, strands = 0): void {
+  const stride = shadow.userData.stride as number;
+  const index = shadow.getIndex()!;
+  const a = index.array as Uint32Array;
+  const ns = kept ? kept.length : strands;
+  let n = 0;
+  for (let s = 0; s < ns; s += stride) {
+    const k = kept ? Math.min(nv, kept[s]) : nv;
+    for (let i = 0; i + 1 < k && n + 1 < a.length; i++) { a[n++] = s * nv + i; a[n++] = s * nv + i + 1; }
+  }
+  shadow.setDrawRange(0, n);
+  index.needsUpdate = true;
 }

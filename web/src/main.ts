@@ -4,6 +4,7 @@ import * as P from './protocol';
 import { View } from './scene';
 import { ForcePlot } from './plot';
 import { MouseDevice, TOOL_NAMES, toolModel, toolQuaternion } from './tools';
+import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS } from './hairColor';
 
 /** State exposed for the end-to-end tests and for curious users (window.coiffure). */
 interface Status {
@@ -27,6 +28,9 @@ interface Status {
   tool: number;
   errors: P.ErrorMsg[];
   frameTimes: number[];
+  gpuFrameMs: number | null; // GPU time of the last measured frame (EXT_disjoint_timer_query_webgl2), null if unavailable
+  gpuTimer: boolean; // the timer query extension exists
+  hairColour: string;
   strands: number;
   lastFile: { format: number; bytes: number } | null;
   send: (b: ArrayBuffer) => void;
@@ -42,6 +46,7 @@ const status: Status = {
   webgl2: view.renderer.getContext() instanceof WebGL2RenderingContext,
   connected: false, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
   lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], frameTimes: [], strands: 0,
+  gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairColour: DEFAULT_HAIR_COLOUR,
   lastFile: null,
   send: (b) => { if (ws.readyState === WebSocket.OPEN) ws.send(b); },
 };
@@ -95,6 +100,7 @@ ws.onmessage = (ev) => {
   }
 };
 
+let hairTypes: string[] = [];
 function onScene(msg: P.SceneMsg): void {
   view.load(msg);
   status.strands = msg.strands;
@@ -102,6 +108,8 @@ function onScene(msg: P.SceneMsg): void {
   const preset = document.getElementById('preset') as HTMLSelectElement;
   preset.innerHTML = msg.hairTypes.map((n, i) => `<option value="${i}">${n}</option>`).join('');
   preset.value = String(msg.hairType);
+  view.setHairType(msg.hairTypes[msg.hairType]);
+  hairTypes = msg.hairTypes;
   status.sceneLoaded = true;
 }
 
@@ -165,7 +173,17 @@ document.querySelectorAll<HTMLButtonElement>('#tools button').forEach((b) => b.a
 const presetEl = document.getElementById('preset') as HTMLSelectElement;
 const curlEl = document.getElementById('curliness') as HTMLInputElement;
 const easeEl = document.getElementById('ease') as HTMLInputElement;
+const colourEl = document.getElementById('colour') as HTMLSelectElement;
+function setColour(name: string): void {
+  const m = HAIR_COLOURS[name];
+  if (!m) return;
+  status.hairColour = name;
+  colourEl.value = name;
+  view.setColour(m);
+}
+colourEl.addEventListener('change', () => setColour(colourEl.value));
 function sendHair(): void {
+  view.setHairType(hairTypes[Number(presetEl.value) || 0] ?? '');
   const c = Number(curlEl.value);
   if (view.hair) view.hair.material.uniforms.curliness.value = c;
   status.send(P.encodeSetHair(Number(presetEl.value) || 0, c, Number(easeEl.value)));
@@ -202,9 +220,14 @@ function sendPose(): void {
   status.send(P.encodePose(device.target, q, device.pressed ? 1 : 0));
 }
 
+const perfEl = document.getElementById('perf') as HTMLSpanElement;
 let last = performance.now();
 function frame(now: number): void {
   status.frameTimes.push(now - last);
+  status.gpuFrameMs = view.gpuTimer.lastMs;
+  if (status.framesRendered % 15 === 0) {
+    perfEl.textContent = `frame ${(now - last).toFixed(1)} ms · GPU ${status.gpuFrameMs === null ? 'n/a' : `${status.gpuFrameMs.toFixed(2)} ms`}`;
+  }
   if (status.frameTimes.length > 600) status.frameTimes.shift();
   last = now;
   sendPose();
@@ -234,7 +257,7 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
       ctx.drawImage(canvas, 0, 0);
       return ctx.getImageData(0, 0, c.width, c.height).data;
     };
-    const hairObj = view.scene.children.find((o) => (o as THREE.LineSegments).isLineSegments && o !== arrow && o !== view.chains);
+    const hairObj = view.hairMesh;
     const withHair = read();
     if (hairObj) hairObj.visible = false;
     const without = read();
@@ -249,4 +272,44 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     }
     return { hairFraction: changed / n, nonBackground: nonBg / n, pixels: n };
   },
+  /** Renders the scene without the tool with a colour preset, every strand at `wetness`, the key light towards `light` and the
+   * debug view (0 shaded, 1 deep-opacity transmittance, 2 highlight only); returns the RGBA pixels (base64)
+   * and a PNG data URL. Restores the live state afterwards (no server message is handled in between). */
+  look(o: { colour?: string; wetness?: number; light?: [number, number, number]; view?: number; camera?: [number, number, number]; target?: [number, number, number]; hideHair?: boolean }) {
+    const hair = view.hair!;
+    const u = hair.material.uniforms;
+    const oldColour = status.hairColour;
+    const oldLight = view.lighting.lightDirection.value.clone();
+    const oldCam = view.camera.position.clone(), oldTarget = view.controls.target.clone();
+    if (o.colour) setColour(o.colour);
+    u.wetnessOverride.value = o.wetness ?? -1;
+    if (o.light) view.setLight(new THREE.Vector3(...o.light));
+    u.debugView.value = o.view ?? 0;
+    if (o.camera) view.camera.position.set(...o.camera);
+    if (o.target) view.controls.target.set(...o.target);
+    if (o.hideHair && view.hairMesh) view.hairMesh.visible = false;
+    const toolsShown = [toolGroup.visible, arrow.visible, ghost.visible];
+    toolGroup.visible = arrow.visible = ghost.visible = false;
+    const t0 = performance.now();
+    view.render();
+    const gl = view.renderer.getContext();
+    const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
+    const px = new Uint8Array(4 * w * h);
+    gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    const ms = performance.now() - t0;
+    const png = canvas.toDataURL('image/png');
+    if (view.hairMesh) view.hairMesh.visible = true;
+    [toolGroup.visible, arrow.visible, ghost.visible] = toolsShown;
+    u.wetnessOverride.value = -1;
+    u.debugView.value = 0;
+    view.setLight(oldLight);
+    setColour(oldColour);
+    view.camera.position.copy(oldCam);
+    view.controls.target.copy(oldTarget);
+    let bin = '';
+    for (let i = 0; i < px.length; i += 8192) bin += String.fromCharCode(...px.subarray(i, i + 8192));
+    return { width: w, height: h, pixels: btoa(bin), png, ms };
+  },
+  view,
+  personInfo: () => view.person && { maxOutset: view.person.info.maxOutset, maxProjectionError: view.person.info.maxProjectionError },
 };

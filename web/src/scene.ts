@@ -1,8 +1,17 @@
-// The three.js scene: renderer, camera with orbit controls (right drag), lights, the head mesh and the hair.
+// The three.js scene: renderer, camera with orbit controls (right drag), the key light and sky, the person
+// (body mesh sculpted into a face, shoulders and shirt) and the hair, with deep opacity maps from the key light.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import type { SceneMsg } from './protocol';
-import { HairMaterial, hairGeometry, setKept } from './hairMaterial';
+import { HairMaterial, fillShadowIndex, hairGeometry, setKept, shadowGeometry } from './hairMaterial';
+import { DeepOpacityMaps } from './deepOpacityMaps';
+import { Person } from './person';
+import { GpuTimer } from './gpuTimer';
+import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS, sigmaFromMelanin, type Melanin } from './hairColor';
+
+/** Default direction towards the key light (head frame: from behind, right and a little above, so that the
+ * default view shows the R highlight band). */
+export const DEFAULT_LIGHT = new THREE.Vector3(0.7, -0.55, 0.3).normalize();
 
 export class View {
   readonly renderer: THREE.WebGLRenderer;
@@ -10,17 +19,32 @@ export class View {
   readonly camera: THREE.PerspectiveCamera;
   readonly controls: OrbitControls;
   hair: HairMaterial | null = null;
-  private hairMesh: THREE.LineSegments | null = null;
+  hairMesh: THREE.LineSegments | null = null;
+  person: Person | null = null;
+  readonly dom = new DeepOpacityMaps();
+  readonly gpuTimer: GpuTimer;
+  /** Lighting shared by the hair and the skin (linear RGB irradiance). */
+  readonly lighting: Record<string, THREE.IUniform> = {
+    lightDirection: { value: DEFAULT_LIGHT.clone() },
+    lightColor: { value: new THREE.Vector3(3.2, 3.0, 2.8) },
+    skyColor: { value: new THREE.Vector3(0.8, 0.85, 1.0) },
+    groundColor: { value: new THREE.Vector3(0.2, 0.17, 0.15) },
+    cameraPos: { value: new THREE.Vector3() },
+    exposure: { value: 1.0 },
+  };
+  private shadowHair: THREE.BufferGeometry | null = null;
   private verticesPerStrand = 2;
+  private colour: Melanin = HAIR_COLOURS[DEFAULT_HAIR_COLOUR];
+  private readonly sun: THREE.DirectionalLight;
   /** Falling cut pieces (the clusters' chains), redrawn every frame. */
   readonly chains: THREE.LineSegments;
   private chainPositions = new Float32Array(3 * 4096);
-  private headMesh: THREE.Mesh | null = null;
 
   constructor(readonly canvas: HTMLCanvasElement) {
     this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
     this.renderer.setClearColor(0x1d1f24);
+    this.gpuTimer = new GpuTimer(this.renderer.getContext() as WebGL2RenderingContext);
     this.camera = new THREE.PerspectiveCamera(35, 1, 0.01, 10);
     this.camera.up.set(0, 0, 1); // z up, as in the simulation
     // Default view: from behind and a little above, where the hair hangs.
@@ -30,10 +54,11 @@ export class View {
     // Left button is the tool's; right button orbits; wheel zooms.
     this.controls.mouseButtons = { LEFT: null, MIDDLE: THREE.MOUSE.DOLLY, RIGHT: THREE.MOUSE.ROTATE };
     this.controls.update();
+    // Lights for the tools' standard materials (the hair and skin use `lighting`).
     this.scene.add(new THREE.HemisphereLight(0xdde4ff, 0x30261e, 1.2));
-    const sun = new THREE.DirectionalLight(0xffffff, 1.6);
-    sun.position.set(0.4, -0.6, 0.7);
-    this.scene.add(sun);
+    this.sun = new THREE.DirectionalLight(0xffffff, 1.6);
+    this.sun.position.copy(DEFAULT_LIGHT);
+    this.scene.add(this.sun);
     this.resize();
     window.addEventListener('resize', () => this.resize());
     const cg = new THREE.BufferGeometry();
@@ -47,7 +72,7 @@ export class View {
   /** Shortens the strands to their kept points (STRANDS message); returns the segments drawn. */
   setKept(kept: Uint16Array): number {
     if (!this.hairMesh) return 0;
-    return setKept(this.hairMesh.geometry, this.verticesPerStrand, kept);
+    return setKept(this.hairMesh.geometry, this.verticesPerStrand, kept, this.shadowHair ?? undefined);
   }
 
   /** The falling chains: `counts[c]` points each, 3 floats per point in `points` (world, m). */
@@ -78,29 +103,68 @@ export class View {
     this.camera.updateProjectionMatrix();
   }
 
-  /** Builds the head mesh and the hair from the SCENE message (replacing earlier ones). */
+  /** Hair colour from melanin (also the eyebrows' next time the person is built). */
+  setColour(m: Melanin): void {
+    this.colour = m;
+    this.hair?.setColour(m);
+  }
+
+  /** Direction towards the key light (any length). */
+  setLight(towards: THREE.Vector3): void {
+    this.lighting.lightDirection.value.copy(towards).normalize();
+    this.sun.position.copy(this.lighting.lightDirection.value);
+  }
+
+  /** Builds the person and the hair from the SCENE message (replacing earlier ones). */
   load(msg: SceneMsg): void {
     if (this.hairMesh) { this.scene.remove(this.hairMesh); this.hairMesh.geometry.dispose(); }
-    if (this.headMesh) { this.scene.remove(this.headMesh); this.headMesh.geometry.dispose(); }
-    const hg = new THREE.BufferGeometry();
-    hg.setAttribute('position', new THREE.BufferAttribute(msg.headPositions, 3));
-    hg.setIndex(new THREE.BufferAttribute(msg.headIndices, 1));
-    hg.computeVertexNormals();
-    this.headMesh = new THREE.Mesh(hg, new THREE.MeshStandardMaterial({ color: 0xd9b59a, roughness: 0.7 }));
-    this.scene.add(this.headMesh);
-    // Head radius: the highest point of the mesh above the head's centre (the crown).
-    let r = 0;
-    for (let i = 0; i < msg.headPositions.length; i += 3) r = Math.max(r, msg.headPositions[i + 2]);
-    this.hair = new HairMaterial(msg, r || 0.09);
-    this.hairMesh = new THREE.LineSegments(hairGeometry(msg), this.hair.material);
+    if (this.person) { this.scene.remove(this.person.group); this.person.dispose(); }
+    this.dom.depthScene.clear();
+    this.dom.opacityScene.clear();
+    // Light camera around the head and the hair (rest positions plus room to move).
+    const box = new THREE.Box3().setFromArray(msg.renderPositions).union(new THREE.Box3().setFromArray(msg.headPositions));
+    const sphere = box.getBoundingSphere(new THREE.Sphere());
+    this.dom.fit(sphere.center, sphere.radius + 0.05);
+    const sigma = sigmaFromMelanin(this.colour);
+    const brow = sigma.map((s) => 0.35 * Math.exp(-2 * s)) as [number, number, number];
+    this.person = new Person(msg, this.dom, this.lighting, brow);
+    this.scene.add(this.person.group);
+    this.dom.depthScene.add(this.person.depthBody);
+    this.dom.opacityScene.add(this.person.opacityBody);
+    this.hair = new HairMaterial(msg, this.dom, this.lighting);
+    this.hair.setColour(this.colour);
+    const g = hairGeometry(msg);
+    this.hairMesh = new THREE.LineSegments(g, this.hair.material);
     this.hairMesh.frustumCulled = false;
     this.verticesPerStrand = msg.verticesPerStrand;
     this.scene.add(this.hairMesh);
+    const stride = Math.max(1, Math.ceil(msg.strands / this.dom.params.maxStrands));
+    this.shadowHair = shadowGeometry(g, stride, msg.strands, msg.verticesPerStrand);
+    fillShadowIndex(this.shadowHair, msg.verticesPerStrand, null, msg.strands);
+    this.dom.setHair(this.hair.hairsPerStrand * stride, this.hair.material.uniforms.strandWidth.value / this.hair.hairsPerStrand);
+    for (const [m, s] of [[this.hair.depthMaterial, this.dom.depthScene], [this.hair.opacityMaterial, this.dom.opacityScene]] as const) {
+      const l = new THREE.LineSegments(this.shadowHair, m);
+      l.frustumCulled = false;
+      s.add(l);
+    }
+  }
+
+  /** Sets the hair type's strand width (by the type's name). */
+  setHairType(name: string): void {
+    if (!this.hair) return;
+    const stride = (this.shadowHair?.userData.stride as number) ?? 1;
+    this.hair.setHairType(name, this.dom);
+    this.dom.setHair(this.hair.hairsPerStrand * stride, this.hair.material.uniforms.strandWidth.value / this.hair.hairsPerStrand);
   }
 
   render(): void {
     this.controls.update();
-    if (this.hair) this.hair.material.uniforms.cameraPos.value.copy(this.camera.position);
+    this.lighting.cameraPos.value.copy(this.camera.position);
+    this.gpuTimer.begin();
+    if (this.hair) {
+      this.dom.update(this.renderer, this.lighting.lightDirection.value);
+    }
     this.renderer.render(this.scene, this.camera);
+    this.gpuTimer.end();
   }
 }

@@ -1,12 +1,34 @@
 //! # Coiffure engine
 //!
-//! Runs the simulation in time: headless scenarios ([`scenario`]), a scripted tool drawn through a patch of
-//! strands at haptic rate producing a force trace, and live local sessions ([`local_session`]) where a device
-//! drives the tool in the fixed-rate haptic loop thread. (The global layer and the coupled session come with
-//! later issues.) No file or network I/O here: the server reads and writes files.
+//! Runs the simulation in time. No file or network I/O here: the server reads and writes files.
+//!
+//! The live session, room by room:
+//! - [`scene`]: the immutable model (head, render hair, guides, lattice), built-in or from a file's curves;
+//! - [`tool`]: the toolbar's tools, what the global layer reads of the tool ([`tool::ToolInput`]);
+//! - [`command`]: viewer commands; [`params`]: the session's parameters; [`snapshot`]: what the threads
+//!   exchange;
+//! - [`global`]: the global layer's core (lattice, nozzles, cuts), [`haptic`]: the haptic layer's core
+//!   (coupling, active set, local strands, tool actions);
+//! - [`live`]: the two threads and their triple buffers; [`record`] and [`replay`]: deterministic replay.
+//!
+//! [`session`] gathers the live session's public names. Headless: [`scenario`] (scripted tools through a
+//! patch of strands or a generated hairstyle), with tool paths from [`path`].
 
+pub mod command;
+pub mod error;
+pub mod global;
+pub mod haptic;
+pub mod live;
 pub mod local_session;
+pub mod params;
 pub mod path;
-pub mod scenario;
 pub mod record;
+pub mod replay;
+pub mod scenario;
+pub mod scene;
 pub mod session;
+pub mod snapshot;
+pub mod tool;
+
+#[cfg(test)]
+pub(crate) mod testing;

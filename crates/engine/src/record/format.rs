@@ -1,74 +1,15 @@
-//! Records of live sessions: per haptic step, the device reading, the lattice version it used, the viewer
-//! commands applied before it and the force sent back; plus the global steps at which the lattice was reset.
-//! [`crate::session::replay`] reproduces the force trace from a record.
-//!
-//! File format (little-endian, f64 kept exactly): magic `CFREC1\0\0`, f64 haptic rate (Hz), u64 number of
-//! resets then each u64 global version, u64 number of steps, then per step: u8 has-reading; if 1: f64 time,
-//! 3 f64 position (m), 9 f64 rotation (column-major), u32 buttons; u64 lattice version; 3 f64 force (N);
-//! u8 number of commands, each: u8 kind (0 tool: u8 id; 1 hair: u8 type, f64 curliness, f64 ease; 2 reset).
-//!
-//! Version 2 (magic `CFREC2\0\0`, written now) adds the tool input of every global step right after the
-//! resets: u64 number of global steps, then per step: u8 tool id, u8 flags (bit 0 present, bit 1 primary
-//! button held), 3 f64 position (m), 9 f64 rotation (column-major), u64 scissors closes so far. The rest is
-//! as in version 1. Version-1 files still load (no global inputs: their global steps had no tool).
+//! The record file format (little-endian; see the module above).
 
-use crate::session::{Command, Tool, ToolInput};
+use super::{Record, RecordError, StepRecord};
+use crate::command::Command;
+use crate::tool::{Tool, ToolInput};
 use haptics::device::DeviceReading;
 use nalgebra::{Matrix3, Vector3};
 
 const MAGIC: &[u8; 8] = b"CFREC2\0\0";
 const MAGIC_V1: &[u8; 8] = b"CFREC1\0\0";
 
-/// One haptic step as recorded.
-#[derive(Debug, Clone, PartialEq)]
-pub struct StepRecord {
-    /// The device reading the step received (None: no input yet).
-    pub reading: Option<DeviceReading>,
-    /// Version of the lattice snapshot the step read.
-    pub lattice_version: u64,
-    /// Viewer commands applied just before the step.
-    pub commands: Vec<Command>,
-    /// Force sent to the device, N.
-    pub force: Vector3<f64>,
-}
-
-/// A recorded session.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct Record {
-    /// Haptic rate, Hz.
-    pub rate_hz: f64,
-    /// Global versions produced right after a lattice reset.
-    pub global_resets: Vec<u64>,
-    /// The tool input each global step read (entry v - 1 for the step producing version v).
-    pub global_inputs: Vec<ToolInput>,
-    /// Every haptic step, in order.
-    pub steps: Vec<StepRecord>,
-}
-
-/// Errors reading a record.
-#[derive(Debug, thiserror::Error, PartialEq)]
-pub enum RecordError {
-    /// The bytes end early or hold a bad value; names the byte offset.
-    #[error("bad session record at byte {offset}: {what}")]
-    Bad {
-        /// Byte offset.
-        offset: usize,
-        /// What is wrong.
-        what: String,
-    },
-}
-
 impl Record {
-    /// An empty record at `rate_hz`.
-    pub fn new(rate_hz: f64) -> Self {
-        Self { rate_hz, global_resets: Vec::new(), global_inputs: Vec::new(), steps: Vec::new() }
-    }
-
-    /// The forces in order, N.
-    pub fn forces(&self) -> Vec<Vector3<f64>> {
-        self.steps.iter().map(|s| s.force).collect()
-    }
-
     /// Serialises the record.
     pub fn to_bytes(&self) -> Vec<u8> {
         let mut b = Vec::with_capacity(64 + self.steps.len() * 130);
@@ -219,5 +160,32 @@ impl<'a> Reader<'a> {
     }
     fn f64(&mut self) -> Result<f64, RecordError> {
         Ok(f64::from_le_bytes(self.take(8)?.try_into().unwrap()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn damaged_records_are_refused_with_the_offset() {
+        let mut r = Record::new(1000.0);
+        r.steps.push(crate::record::StepRecord { reading: None, lattice_version: 3, commands: vec![Command::Reset], force: Vector3::new(1.0, 2.0, 3.0) });
+        let b = r.to_bytes();
+        assert_eq!(Record::from_bytes(&b).unwrap(), r);
+        for n in 0..b.len() {
+            assert!(Record::from_bytes(&b[..n]).is_err(), "prefix of {n} bytes");
+        }
+        // A version-1 file (no global inputs: magic CFREC1 and no count after the resets) still loads.
+        let mut v1 = b"CFREC1\0\0".to_vec();
+        v1.extend_from_slice(&b[8..24 + 8 * r.global_resets.len()]);
+        v1.extend_from_slice(&b[32 + 8 * r.global_resets.len()..]);
+        assert_eq!(Record::from_bytes(&v1).unwrap(), r);
+        r.global_inputs.push(ToolInput { tool: Tool::Scissors, present: true, pressed: true, cuts: 3, ..ToolInput::default() });
+        let b = r.to_bytes();
+        assert_eq!(Record::from_bytes(&b).unwrap(), r);
+        let mut bad = b.clone();
+        bad[0] = b'X';
+        assert!(matches!(Record::from_bytes(&bad), Err(crate::record::RecordError::Bad { offset: 0, .. })));
     }
 }

@@ -1,0 +1,131 @@
+//! What each tool does with the primary button on the local strands: the scissors cut the active guides,
+//! the clip pins the nearest strand point, the dryer blows on the strands near it.
+
+use super::HapticCore;
+use crate::tool::{Tool, ToolInput};
+use hairstyle::cut::cut_guide;
+use nalgebra::{Matrix3, Vector3};
+use strand::{PointForce, Strand};
+use tools::dryer::HairDryer;
+
+/// Pieces of each simulated strand the dryer's air drag is applied to (at their midpoints).
+const DRYER_PIECES: usize = 8;
+/// Distance the held scissors move between two cuts, m.
+pub const SNIP_DISTANCE: f64 = 0.02;
+
+impl HapticCore {
+    /// The tool's action this step with the primary button `pressed`, the tool at `proxy` (m) turned by
+    /// `rotation`.
+    pub(crate) fn act(&mut self, pressed: bool, proxy: &Vector3<f64>, rotation: &Matrix3<f64>) {
+        // Scissors: closing the blades (the button going down) cuts the active guides where the blades are,
+        // and again each time the held scissors have moved SNIP_DISTANCE (dragging cuts along the path); the
+        // global layer cuts the render strands when it sees the count go up (`ToolInput::cuts`).
+        let snip = self.tool == Tool::Scissors && pressed && (!self.was_pressed || self.last_cut_at.is_none_or(|p| (p - *proxy).norm() > SNIP_DISTANCE));
+        if !pressed {
+            self.last_cut_at = None;
+        }
+        if snip {
+            self.cuts += 1;
+            self.last_cut_at = Some(*proxy);
+            let blade = ToolInput { position: *proxy, rotation: *rotation, ..Default::default() }.blade();
+            for (slot, &g) in self.active.iter().enumerate() {
+                let s = &self.interaction.strands[slot];
+                if let Ok(Some((m, st, _piece))) = cut_guide(&s.model, &s.state, &blade, 4, g) {
+                    if let Ok(mut ns) = Strand::new(m, st.root.clone()) {
+                        ns.state = st;
+                        ns.integrator = s.integrator;
+                        self.interaction.strands[slot] = ns;
+                    }
+                }
+            }
+        }
+        self.was_pressed = pressed;
+        if self.tool == Tool::Clip {
+            if pressed && !self.clipped {
+                self.clipped = self.interaction.clip(0.01).is_some();
+            } else if !pressed && self.clipped {
+                self.interaction.release();
+                self.clipped = false;
+            }
+        }
+        // The dryer's jet blows on the simulated strands near the tool too: linear air drag on each of
+        // DRYER_PIECES pieces per strand (as `GlobalCore` blows on the lattice), held over the step.
+        if self.tool == Tool::Dryer && pressed {
+            let jet = HairDryer { cone: ToolInput { position: *proxy, rotation: *rotation, ..Default::default() }.cone(HairDryer::default().cone), ..HairDryer::default() };
+            for slot in 0..self.interaction.strands.len() {
+                let s = &self.interaction.strands[slot];
+                let piece = s.model.length / DRYER_PIECES as f64;
+                let line = strand::kinematics::centerline(&s.model, &s.state, DRYER_PIECES + 1);
+                let loads: Vec<PointForce> = line
+                    .windows(2)
+                    .map(|w| PointForce::new(0.5 * (w[0].0 + w[1].0), jet.force(&(0.5 * (w[0].1 + w[1].1)), s.model.air_drag * piece)))
+                    .filter(|f| f.force != Vector3::zeros())
+                    .collect();
+                for f in loads {
+                    self.interaction.add_load(slot, f);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::command::Command;
+    use crate::global::GlobalCore;
+    use crate::params::SessionParams;
+    use crate::snapshot::HapticSnapshot;
+    use crate::testing::{small_scene, test_rot};
+    use haptics::device::DeviceReading;
+
+    #[test]
+    fn the_dryer_blows_the_simulated_strands_along_its_jet() {
+        // The dryer held still 15 cm behind the hair at the back of the head (its jet along the tool's -z,
+        // here +y), blowing or not for 0.6 s. The jet's air drag (DEFAULT_AIR_DRAG x 10 m/s in the jet's
+        // core, about the weight of a hair per metre) pushes the simulated strands along the jet: their
+        // tips' mean displacement along +y against the still run is over 5 mm, and nothing goes non-finite.
+        let scene = small_scene();
+        let run = |blow: bool| {
+            let mut core = HapticCore::new(scene.clone(), SessionParams::default()).unwrap();
+            core.apply(&Command::SelectTool(Tool::Dryer));
+            let snap = GlobalCore::new(scene.clone(), &SessionParams::default()).snapshot();
+            for n in 0..600 {
+                let p = Vector3::new(0.0, -0.118, 0.0);
+                core.step(Some(DeviceReading { time: n as f64 * 1e-3, position: p, rotation: test_rot(), buttons: blow as u32 }), &snap, 1e-3);
+            }
+            let tips: Vec<Vector3<f64>> = core.interaction.strands.iter().map(|s| strand::kinematics::centerline(&s.model, &s.state, 2)[1].1).collect();
+            (core.active.clone(), tips)
+        };
+        let ((still_active, still), (blown_active, blown)) = (run(false), run(true));
+        assert_eq!(still_active, blown_active, "the same strands near the tool");
+        assert!(!still.is_empty());
+        let along: Vec<f64> = still.iter().zip(&blown).map(|(a, b)| (b - a).y).collect();
+        let mean = along.iter().sum::<f64>() / along.len() as f64;
+        eprintln!("dryer: tips moved along the jet by {along:?} m (mean {mean} m)");
+        assert!(blown.iter().all(|t| t.iter().all(|x| x.is_finite())));
+        assert!(mean > 5e-3, "mean tip displacement along the jet {mean} m");
+    }
+
+    #[test]
+    fn closing_the_scissors_cuts_the_active_guides_and_counts_the_cut() {
+        let scene = small_scene();
+        let mut core = HapticCore::new(scene.clone(), SessionParams::default()).unwrap();
+        core.apply(&Command::SelectTool(Tool::Scissors));
+        let snap = GlobalCore::new(scene.clone(), &SessionParams::default()).snapshot();
+        let p = Vector3::new(0.0, -0.118, -0.03);
+        for n in 0..200 {
+            let buttons = (n >= 100) as u32;
+            core.step(Some(DeviceReading { time: n as f64 * 1e-3, position: p, rotation: test_rot(), buttons }), &snap, 1e-3);
+        }
+        assert_eq!(core.tool_input().cuts, 1);
+        let lens = core.active_lengths();
+        let full = scene.guides[0].model.length;
+        eprintln!("active lengths after the cut {lens:?} (guides {full} m)");
+        assert!(!lens.is_empty() && lens.iter().any(|&l| l < full - 1e-3), "{lens:?}");
+        let mut hs = HapticSnapshot::default();
+        core.snapshot(&snap, 1e-3, &mut hs);
+        assert_eq!(hs.displacement.len(), hs.active.len() * scene.samples());
+        assert!(hs.displacement.iter().all(|d| d.norm() < 0.5));
+    }
+}

@@ -1,0 +1,66 @@
+//! The guides' strands of the haptic layer: built from the scene with a hair type and curliness, the
+//! contact law of the tool on them, and their centrelines.
+
+use super::HapticCore;
+use crate::error::SessionError;
+use crate::scene::Scene;
+use nalgebra::Vector3;
+use strand::{HairType, Strand};
+use tools::interaction::{ForceModel, LocalInteraction};
+
+/// `it` with the scene's body (head, neck, shoulders; the live head frame is the world frame) for its strands
+/// to rest on.
+pub(crate) fn resting_on(scene: &Scene, mut it: LocalInteraction) -> LocalInteraction {
+    it.body = Some((scene.head.clone(), scene.lattice.params.metaball.threshold));
+    it
+}
+
+impl HapticCore {
+    /// Every guide's strand in its groomed state, with the hair type's section and material and the
+    /// curliness (in [0, 1], [`hairstyle::Curl`]) added to the rest twist and bend.
+    pub(crate) fn build_strands(scene: &Scene, h: &HairType, curliness: f64) -> Result<Vec<Strand>, SessionError> {
+        let err = |e: strand::StrandError| SessionError::Scene(e.to_string());
+        let curl = hairstyle::Curl::from_curliness(curliness.clamp(0.0, 1.0)).map_err(|e| SessionError::Scene(e.to_string()))?;
+        scene.guides.iter().map(|g| {
+            let mut m = g.model.clone();
+            if *h != scene.hair_type {
+                m.section = h.section().map_err(err)?;
+                m.material = h.material().map_err(err)?;
+            }
+            if let Some(c) = curl.as_ref() {
+                let mut q = m.rest_coordinates();
+                for i in 0..m.segments {
+                    q[2 * i] += c.twist;
+                    q[2 * i + 1] += c.bend;
+                }
+                m.set_rest_coordinates(&q);
+            }
+            m.air_drag = m.air_drag.max(2e-5);
+            let mut s = Strand::new(m, g.state.root.clone()).map_err(err)?;
+            s.state.q.copy_from(&g.state.q);
+            Ok(s)
+        }).collect()
+    }
+
+    pub(crate) fn force_model(h: &HairType, ease: f64) -> ForceModel {
+        ForceModel::Constraint { friction: h.friction_coefficient() * (1.0 - 0.8 * ease.clamp(0.0, 1.0)), options: Default::default() }
+    }
+}
+
+/// `samples` centreline points of a strand evenly in arc length, root to tip, m.
+pub(crate) fn centreline(s: &Strand, samples: usize) -> Vec<Vector3<f64>> {
+    hairstyle::generate::sample_strand(&s.model, &s.state, samples).into_iter().map(|p| p.coords).collect()
+}
+
+/// `samples` centreline points of a strand at the arc lengths of its uncut guide (`length`, m, evenly from root
+/// to tip); past the end of a cut strand, its tip. Equal to [`centreline`] for an uncut strand.
+pub(crate) fn samples_along(s: &Strand, length: f64, samples: usize) -> Vec<Vector3<f64>> {
+    if s.model.length >= length - 1e-12 {
+        return centreline(s, samples);
+    }
+    let frames = strand::kinematics::segment_frames(&s.model, &s.state);
+    (0..samples).map(|k| {
+        let at = (k as f64 / (samples - 1).max(1) as f64 * length).min(s.model.length);
+        strand::kinematics::frame_at(&s.model, &s.state.q, &frames, at).position
+    }).collect()
+}

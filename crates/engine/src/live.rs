@@ -1,0 +1,317 @@
+//! The live session: both layers at their own rates on their own threads, coupled both ways.
+//!
+//! - **Global thread** (about 100 Hz, [`GlobalCore`]): steps the lattice particle system and publishes each
+//!   snapshot of its node positions, with a version number, through wait-free triple buffers (one to the
+//!   haptic thread, one to the viewer side). The viewer does the FFD of the render strands on the GPU.
+//!   Scissors cuts of the render strands run on a worker thread and are swapped in when done.
+//! - **Haptic thread** (1 kHz, [`HapticCore`] inside a [`HapticLoop`]): reads the browser's mouse through a
+//!   [`VirtualDevice`], runs the virtual coupling, and steps the *local strands*: the few guide strands
+//!   nearest the tool (Super-Helices). Their roots follow the lattice (FFD of the root's rest position, so
+//!   head and lattice motion move them); their displacement from their settled reference shape is published
+//!   for the viewer, which adds it to the render strands bound to each guide (so what the tool does is seen
+//!   on the whole hairstyle). Strand states persist when they leave the active set (styling persists).
+//! - Nothing on the haptic path takes a lock: lattice snapshots come in and haptic snapshots go out through
+//!   triple buffers, viewer commands through a non-blocking channel.
+//!
+//! Replay: the haptic step is a pure function of (its state, the device reading, the lattice snapshot it
+//! read, the commands applied before it). A [`Record`] keeps, per haptic step, the reading and the lattice
+//! version used; [`crate::replay::replay`] re-runs the global and haptic cores in lockstep on one thread and
+//! gives the same forces bit for bit.
+
+use crate::command::Command;
+use crate::error::SessionError;
+use crate::global::{CutResult, GlobalCore};
+use crate::haptic::HapticCore;
+use crate::params::SessionParams;
+use crate::record::{Record, StepRecord};
+use crate::scene::Scene;
+use crate::snapshot::{HapticSnapshot, LatticeSnapshot};
+use crate::tool::ToolInput;
+use haptics::backends::{virtual_device, VirtualDevice, VirtualHandle};
+use haptics::device::{DeviceCommand, DeviceReading};
+use haptics::haptic_loop::{HapticLoop, LoopStats};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{channel, Receiver, Sender};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+use triple_buffer::{triple_buffer, Output};
+
+/// The viewer side's handles: device input, commands, and the latest snapshots.
+pub struct SessionIo {
+    /// Push mouse readings here (the haptic thread reads the newest).
+    pub device: VirtualHandle,
+    /// Viewer commands, applied by the haptic thread before its next step.
+    pub commands: Sender<Command>,
+    /// Latest lattice snapshot.
+    pub lattice: Output<LatticeSnapshot>,
+    /// Latest haptic snapshot.
+    pub haptic: Output<HapticSnapshot>,
+}
+
+/// What a stopped session returns.
+#[derive(Debug)]
+pub struct SessionReport {
+    /// Haptic loop timing.
+    pub haptic: LoopStats,
+    /// Global steps done.
+    pub global_steps: u64,
+    /// Mean global step wall time, s.
+    pub global_step_mean: f64,
+    /// Times the lattice was found non-finite and reset.
+    pub global_recoveries: u64,
+    /// The record, if asked for.
+    pub record: Option<Record>,
+}
+
+/// A running session: a global thread and a haptic loop thread.
+pub struct Session {
+    scene: Arc<Scene>,
+    params: SessionParams,
+    stop: Arc<AtomicBool>,
+    reset_epoch: Arc<AtomicU64>,
+    global: Option<JoinHandle<GlobalRun>>,
+    haptic: Option<HapticLoop<VirtualDevice>>,
+    record: Arc<std::sync::Mutex<Option<Record>>>,
+}
+
+impl Session {
+    /// Starts both threads on `scene`.
+    pub fn start(scene: Arc<Scene>, params: SessionParams) -> Result<(Session, SessionIo), SessionError> {
+        params.validate()?;
+        let mut core = HapticCore::new(scene.clone(), params)?;
+        let mut global = GlobalCore::new(scene.clone(), &params);
+        let rest = global.snapshot();
+        let (mut tool_in, mut tool_out) = triple_buffer(&ToolInput::default());
+        let (mut lat_h_in, mut lat_h_out) = triple_buffer(&rest);
+        let (mut lat_v_in, lat_v_out) = triple_buffer(&rest);
+        let mut first = HapticSnapshot::default();
+        let dt = 1.0 / params.haptic_rate_hz;
+        core.snapshot(&rest, dt, &mut first);
+        let (mut hap_in, hap_out) = triple_buffer(&first);
+        let (cmd_tx, cmd_rx): (Sender<Command>, Receiver<Command>) = channel();
+        let (dev, handle) = virtual_device();
+        let stop = Arc::new(AtomicBool::new(false));
+        let reset_epoch = Arc::new(AtomicU64::new(0));
+
+        // Global thread.
+        let (stop_g, epoch_g) = (stop.clone(), reset_epoch.clone());
+        let period = Duration::from_secs_f64(1.0 / params.global_rate_hz);
+        let gdt = period.as_secs_f64();
+        let recording = params.record;
+        global.defer_cuts(true);
+        let global_thread = std::thread::Builder::new().name("coiffure-global".into()).spawn(move || {
+            let (mut steps, mut busy, mut recov) = (0u64, 0.0f64, 0u64);
+            // Scissors cuts run on a worker thread (one at a time) and are swapped in when done, so a cut of
+            // 100k strands does not stall the lattice. (The haptic forces do not depend on them.)
+            let mut cutting: Option<JoinHandle<CutResult>> = None;
+            let mut resets = Vec::new();
+            let mut inputs = Vec::new();
+            let mut seen_epoch = 0;
+            let start = Instant::now();
+            while !stop_g.load(Ordering::Relaxed) {
+                let e = epoch_g.load(Ordering::Acquire);
+                if e != seen_epoch {
+                    seen_epoch = e;
+                    global.reset();
+                    resets.push(global.version + 1);
+                }
+                let input = *tool_out.read();
+                if recording {
+                    inputs.push(input);
+                }
+                let (mut snap, bad) = global.step(gdt, &input);
+                if cutting.as_ref().is_some_and(|h| h.is_finished()) {
+                    if let Some(Ok(r)) = cutting.take().map(|h| h.join()) {
+                        if global.apply_cut(r).is_some() {
+                            let secs = snap.step_seconds;
+                            snap = global.snapshot();
+                            snap.step_seconds = secs;
+                        }
+                    }
+                }
+                if cutting.is_none() {
+                    if let Some(b) = global.take_pending_cut() {
+                        let job = global.cut_job(&b);
+                        cutting = std::thread::Builder::new().name("coiffure-cut".into()).spawn(move || job.run()).ok();
+                    }
+                }
+                busy += snap.step_seconds;
+                recov += bad as u64;
+                steps += 1;
+                lat_h_in.write(snap.clone());
+                lat_v_in.write(snap);
+                let next = start + period * steps as u32;
+                let now = Instant::now();
+                if next > now {
+                    std::thread::sleep(next - now);
+                }
+            }
+            GlobalRun { steps, mean: busy / steps.max(1) as f64, recoveries: recov, resets, inputs }
+        }).map_err(|e| SessionError::Start(e.to_string()))?;
+
+        // Haptic thread.
+        let record = Arc::new(std::sync::Mutex::new(params.record.then(|| Record::new(params.haptic_rate_hz))));
+        let mut recorder = params.record.then(|| Recorder { local: Vec::with_capacity(4096), shared: record.clone() });
+        let epoch_h = reset_epoch.clone();
+        let publish_every = params.publish_every;
+        let step = move |reading: Option<DeviceReading>, _t: f64, dt: f64| -> DeviceCommand {
+            let mut cmds = Vec::new();
+            while let Ok(c) = cmd_rx.try_recv() {
+                if c == Command::Reset {
+                    epoch_h.fetch_add(1, Ordering::Release);
+                }
+                core.apply(&c);
+                cmds.push(c);
+            }
+            let lattice = lat_h_out.read();
+            let cmd = core.step(reading, lattice, dt);
+            tool_in.write(core.tool_input());
+            if let Some(r) = recorder.as_mut() {
+                r.local.push(StepRecord { reading, lattice_version: lattice.version, commands: cmds, force: cmd.force });
+                if r.local.len() >= 1000 {
+                    r.flush(false);
+                }
+            }
+            if core.step % publish_every == 0 {
+                let mut out = hap_in.input_buffer_mut();
+                core.snapshot(lattice, dt, &mut out);
+                hap_in.publish();
+            }
+            cmd
+        };
+        let on_refused = |why: String| tracing::warn!("haptic thread: {why}");
+        let haptic = HapticLoop::spawn_with_priority(params.haptic_rate_hz, dev, step, None, params.haptic_priority, on_refused)
+            .map_err(SessionError::Start)?;
+        let session = Session { scene, params, stop, reset_epoch, global: Some(global_thread), haptic: Some(haptic), record };
+        Ok((session, SessionIo { device: handle, commands: cmd_tx, lattice: lat_v_out, haptic: hap_out }))
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &Arc<Scene> {
+        &self.scene
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &SessionParams {
+        &self.params
+    }
+
+    /// Stops both threads and returns timing and the record.
+    pub fn stop(mut self) -> SessionReport {
+        let _ = self.reset_epoch.load(Ordering::Relaxed);
+        let (haptic, _dev) = self.haptic.take().expect("running").stop();
+        self.stop.store(true, Ordering::Relaxed);
+        let g = self.global.take().expect("running").join().expect("the global thread panicked");
+        let mut record = self.record.lock().map(|mut g| g.take()).unwrap_or(None);
+        if let Some(r) = record.as_mut() {
+            r.global_resets = g.resets;
+            r.global_inputs = g.inputs;
+        }
+        SessionReport { haptic, global_steps: g.steps, global_step_mean: g.mean, global_recoveries: g.recoveries, record }
+    }
+}
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(h) = self.haptic.take() {
+            let _ = h.stop();
+        }
+        if let Some(g) = self.global.take() {
+            let _ = g.join();
+        }
+    }
+}
+
+/// What the global thread returns when it ends.
+struct GlobalRun {
+    steps: u64,
+    mean: f64,
+    recoveries: u64,
+    resets: Vec<u64>,
+    inputs: Vec<ToolInput>,
+}
+
+/// Collects step records on the haptic thread and hands them over in batches: the lock is only tried on
+/// the haptic path (never waited on); the last batch is handed over when the loop ends (on drop).
+struct Recorder {
+    local: Vec<StepRecord>,
+    shared: Arc<std::sync::Mutex<Option<Record>>>,
+}
+
+impl Recorder {
+    fn flush(&mut self, wait: bool) {
+        let guard = if wait { self.shared.lock().ok() } else { self.shared.try_lock().ok() };
+        if let Some(mut g) = guard {
+            if let Some(r) = g.as_mut() {
+                r.steps.append(&mut self.local);
+            }
+        }
+    }
+}
+
+impl Drop for Recorder {
+    fn drop(&mut self) {
+        self.flush(true);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::{small_scene, test_rot};
+    use crate::tool::Tool;
+    use nalgebra::Vector3;
+
+    /// Pushes one mouse reading every 5 ms for each k of `ks` (position in m and buttons from `at(k)`,
+    /// the tests' tool rotation, time 5 ms k) into a live session, waiting 5 ms between readings.
+    fn hold(io: &mut SessionIo, ks: std::ops::Range<usize>, at: impl Fn(usize) -> (Vector3<f64>, u32)) {
+        for k in ks {
+            let (position, buttons) = at(k);
+            io.device.push(DeviceReading { time: k as f64 * 0.005, position, rotation: test_rot(), buttons });
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    #[test]
+    fn after_a_scissors_drag_the_session_takes_the_next_tool() {
+        // The browser's sequence: the scissors closed and dragged across the back of the head (a cut every
+        // 2 cm, on the worker thread), released, then the sprayer selected and held. The haptic thread must
+        // still take commands: its snapshot reports the sprayer and the sprayer wets the guides.
+        let scene = small_scene();
+        let (session, mut io) = Session::start(scene.clone(), SessionParams::default()).unwrap();
+        io.commands.send(Command::SelectTool(Tool::Scissors)).unwrap();
+        hold(&mut io, 0..300, |k| (Vector3::new(0.05 - 0.1 * (k as f64 / 300.0), -0.1, -0.06), (k < 280) as u32));
+        let cuts = io.lattice.read().kept_version;
+        io.commands.send(Command::SelectTool(Tool::Sprayer)).unwrap();
+        hold(&mut io, 300..700, |_| (Vector3::new(0.0, -0.1, 0.0), 1));
+        let h = io.haptic.read().clone();
+        let l = io.lattice.read().clone();
+        let sum = l.wetness.iter().sum::<f32>();
+        eprintln!("kept version after the scissors {cuts}; tool {} step {} wetness summed over guides {sum}", h.tool, h.step);
+        let report = session.stop();
+        assert!(cuts > 0, "the scissors cut");
+        assert_eq!(h.tool, Tool::Sprayer as u8, "the haptic thread took the sprayer");
+        assert!(h.step > 3000, "the haptic loop kept running: {} steps", h.step);
+        assert!(sum > 0.1, "wetness summed over the guides {sum}");
+        assert!(report.haptic.steps > 3000);
+    }
+
+    #[test]
+    fn the_live_sprayer_wets_the_guides() {
+        // A live session: the sprayer held (button down) at the back of the head for 2 s wets the guides the
+        // lattice snapshot reports.
+        let scene = small_scene();
+        let (session, mut io) = Session::start(scene.clone(), SessionParams::default()).unwrap();
+        io.commands.send(Command::SelectTool(Tool::Sprayer)).unwrap();
+        hold(&mut io, 0..400, |_| (Vector3::new(0.0, -0.1, 0.0), 1));
+        let h = io.haptic.read().clone();
+        let l = io.lattice.read().clone();
+        let sum = l.wetness.iter().sum::<f32>();
+        eprintln!("tool {} step {} version {} wetness summed over guides {sum}", h.tool, h.step, l.version);
+        session.stop();
+        assert_eq!(h.tool, Tool::Sprayer as u8);
+        assert!(sum > 0.1, "wetness summed over the guides {sum}");
+    }
+}

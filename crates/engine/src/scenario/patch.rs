@@ -1,0 +1,366 @@
+//! A patch of strands and a scripted tool, stepped at haptic rate.
+//!
+//! Pipeline of [`Scenario::run`]: build the patch (roots on a rectangle, small random tilts so that teeth
+//! meet hair as in a real tress), settle it under gravity, then every step move the tool along its path,
+//! step the [`tools::interaction::LocalInteraction`] and record the force and torque on the tool, scaled by
+//! the number of real hairs each simulated strand stands for.
+
+use super::{default_dt, ScenarioError};
+use crate::path::{ToolPath, Waypoint};
+use nalgebra::Vector3;
+use serde::Deserialize;
+use strand::constraint::ConstraintOptions;
+use strand::{HairType, ModelKind, RootFrame, Strand, StrandError, StrandModel};
+use tools::interaction::{ForceModel, LocalInteraction};
+use tools::shape::ToolShape;
+
+
+/// A scenario file's contents (TOML; see docs/scenarios.md).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Name (default: the file's stem).
+    pub name: Option<String>,
+    /// Simulated time after settling, s (default: the path's last time + 0.05 s).
+    pub duration: Option<f64>,
+    /// Haptic time step, s (default 0.001).
+    #[serde(default = "default_dt")]
+    pub dt: f64,
+    /// Settling time before the tool moves, s (default 0.5).
+    #[serde(default = "default_settle")]
+    pub settle: f64,
+    /// The strands.
+    pub patch: PatchSpec,
+    /// The tool and its path.
+    pub tool: ToolSpec,
+}
+
+fn default_settle() -> f64 {
+    0.5
+}
+
+/// A patch (tress) of hanging strands.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PatchSpec {
+    /// Hair type preset (default "H1").
+    #[serde(default = "default_hair")]
+    pub hair_type: String,
+    /// "full" (default) or "reduced". Contact scenarios default to the full model: pushed sideways, the reduced
+    /// model can only escape by twisting, whose tiny rotary inertia makes the contact response violent
+    /// (see docs/physics.md, limits).
+    #[serde(default = "default_model")]
+    pub model: ModelKind,
+    /// Number of simulated strands (default 16).
+    #[serde(default = "default_strands")]
+    pub strands: usize,
+    /// Strand length, m (default 0.2).
+    #[serde(default = "default_length")]
+    pub length: f64,
+    /// Segments per strand (default 12).
+    #[serde(default = "default_segments")]
+    pub segments: usize,
+    /// Centre of the root rectangle, m (default [0, 0, 0.3]); strands hang down (-z).
+    #[serde(default = "default_root")]
+    pub root: [f64; 3],
+    /// Extent of the root rectangle along x and y, m (default [0.01, 0.004]).
+    #[serde(default = "default_extent")]
+    pub extent: [f64; 2],
+    /// Standard deviation of the random tilt of the root tangents, rad (default 0.05).
+    #[serde(default = "default_tilt")]
+    pub tilt: f64,
+    /// Seed of the random layout (default 1).
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Real hairs each simulated strand stands for: forces are multiplied by it (default 1).
+    #[serde(default = "default_represents")]
+    pub represents: f64,
+    /// Or: mass of the real tress, kg; sets `represents` to tress_mass / (strands x strand mass).
+    pub tress_mass: Option<f64>,
+}
+
+fn default_hair() -> String {
+    "H1".into()
+}
+fn default_model() -> ModelKind {
+    ModelKind::Full
+}
+fn default_strands() -> usize {
+    16
+}
+fn default_length() -> f64 {
+    0.2
+}
+fn default_segments() -> usize {
+    12
+}
+fn default_root() -> [f64; 3] {
+    [0.0, 0.0, 0.3]
+}
+fn default_extent() -> [f64; 2] {
+    [0.01, 0.004]
+}
+fn default_tilt() -> f64 {
+    0.05
+}
+fn default_seed() -> u64 {
+    1
+}
+fn default_represents() -> f64 {
+    1.0
+}
+
+/// The tool of a scenario.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolSpec {
+    /// Built-in shape name ("comb", "brush", "finger", "clip") or a shape file path relative to the scenario.
+    pub shape: String,
+    /// "constraint" (default) or "paper".
+    #[serde(default = "default_force_model")]
+    pub force_model: String,
+    /// Gain of the paper's force model, m s (default 1).
+    #[serde(default = "default_gain")]
+    pub gain: f64,
+    /// Friction coefficient (default: the hair type's).
+    pub friction: Option<f64>,
+    /// Waypoints (time from the end of settling, s).
+    #[serde(default)]
+    pub path: Vec<Waypoint>,
+    /// Or a CSV file `t,x,y,z[,rx,ry,rz]` relative to the scenario.
+    pub path_file: Option<String>,
+}
+
+fn default_force_model() -> String {
+    "constraint".into()
+}
+fn default_gain() -> f64 {
+    1.0
+}
+
+/// One row of the force trace.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TraceRow {
+    /// Time since the tool started, s.
+    pub t: f64,
+    /// Force on the tool, N (scaled by `represents`).
+    pub force: Vector3<f64>,
+    /// Torque on the tool about its origin, N m (scaled).
+    pub torque: Vector3<f64>,
+    /// Contacts this step.
+    pub contacts: usize,
+    /// Tool position, m.
+    pub tool: Vector3<f64>,
+}
+
+/// Summary of a run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Summary {
+    /// Largest force magnitude, N.
+    pub peak_force: f64,
+    /// Mean force magnitude over the steps with contact, N.
+    pub mean_force: f64,
+    /// Work done by the hand against the hair, `-sum F . dx`, J.
+    pub work: f64,
+    /// Steps with at least one contact.
+    pub contact_steps: usize,
+    /// Steps.
+    pub steps: usize,
+    /// Mass of the real tress represented, kg.
+    pub tress_mass: f64,
+    /// Real hairs per simulated strand (the force scale).
+    pub represents: f64,
+    /// Steps in which some strand's velocities were scaled down by the safety net.
+    pub clamped_steps: u64,
+}
+
+/// splitmix64: a small deterministic generator for the patch layout.
+fn splitmix(state: &mut u64) -> f64 {
+    *state = state.wrapping_add(0x9E3779B97F4A7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+    ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+}
+
+impl Scenario {
+    /// Checks the values, naming the first bad key.
+    pub fn validate(&self) -> Result<HairType, ScenarioError> {
+        let bad = |m: String| Err(ScenarioError::Invalid(m));
+        if !(self.dt.is_finite() && self.dt > 0.0 && self.dt <= 0.01) {
+            return bad(format!("dt must be in (0, 0.01] s, got {}", self.dt));
+        }
+        if !(self.settle.is_finite() && self.settle >= 0.0) {
+            return bad(format!("settle must be >= 0 s, got {}", self.settle));
+        }
+        if let Some(d) = self.duration {
+            if !(d.is_finite() && d > 0.0 && d < 3600.0) {
+                return bad(format!("duration must be in (0, 3600) s, got {d}"));
+            }
+        }
+        let p = &self.patch;
+        let hair = HairType::by_name(&p.hair_type).ok_or_else(|| ScenarioError::Invalid(format!("patch.hair_type: unknown {:?}", p.hair_type)))?;
+        if p.strands == 0 || p.strands > 4096 {
+            return bad(format!("patch.strands must be 1..4096, got {}", p.strands));
+        }
+        if !(p.tilt.is_finite() && p.tilt >= 0.0 && p.tilt < 1.0) {
+            return bad(format!("patch.tilt must be in [0, 1) rad, got {}", p.tilt));
+        }
+        if !(p.represents.is_finite() && p.represents > 0.0) {
+            return bad(format!("patch.represents must be > 0, got {}", p.represents));
+        }
+        if let Some(m) = p.tress_mass {
+            if !(m.is_finite() && m > 0.0) {
+                return bad(format!("patch.tress_mass must be > 0 kg, got {m}"));
+            }
+            if p.represents != 1.0 {
+                return bad("give patch.represents or patch.tress_mass, not both".into());
+            }
+        }
+        if !p.root.iter().chain(p.extent.iter()).all(|x| x.is_finite()) || p.extent.iter().any(|x| *x < 0.0) {
+            return bad("patch.root and patch.extent must be finite (extent >= 0)".into());
+        }
+        match self.tool.force_model.as_str() {
+            "constraint" | "paper" => {}
+            other => return bad(format!("tool.force_model must be \"constraint\" or \"paper\", got {other:?}")),
+        }
+        if !(self.tool.gain.is_finite() && self.tool.gain >= 0.0) {
+            return bad(format!("tool.gain must be >= 0, got {}", self.tool.gain));
+        }
+        if let Some(mu) = self.tool.friction {
+            if !(mu.is_finite() && mu >= 0.0) {
+                return bad(format!("tool.friction must be >= 0, got {mu}"));
+            }
+        }
+        Ok(hair)
+    }
+
+    /// The strands of the patch, at rest.
+    pub fn build_patch(&self) -> Result<Vec<Strand>, ScenarioError> {
+        let hair = self.validate()?;
+        let p = &self.patch;
+        let inv = |e: StrandError| ScenarioError::Invalid(format!("patch: {e}"));
+        let (tw, bd) = hair.rest_curvature();
+        let model = StrandModel::new(p.model, p.length, p.segments, hair.section().map_err(inv)?, hair.material().map_err(inv)?)
+            .map_err(inv)?
+            .with_uniform_rest(tw, bd, 0.0);
+        let mut rng = p.seed;
+        (0..p.strands)
+            .map(|_| {
+                let x = p.root[0] + (splitmix(&mut rng) - 0.5) * p.extent[0];
+                let y = p.root[1] + (splitmix(&mut rng) - 0.5) * p.extent[1];
+                let ang = 2.0 * std::f64::consts::PI * splitmix(&mut rng);
+                let tilt = p.tilt * (-2.0 * splitmix(&mut rng).max(1e-300).ln()).sqrt() * 0.5f64.sqrt();
+                let tangent = Vector3::new(tilt * ang.cos(), tilt * ang.sin(), -1.0);
+                let root = RootFrame::new(Vector3::new(x, y, p.root[2]), tangent, Vector3::x()).map_err(inv)?;
+                Strand::new(model.clone(), root).map_err(inv)
+            })
+            .collect()
+    }
+
+    /// Runs the scenario with the tool's shape and path (loaded by the caller). Deterministic.
+    pub fn run(&self, shape: ToolShape, path: &ToolPath) -> Result<(Vec<TraceRow>, Summary), ScenarioError> {
+        let hair = self.validate()?;
+        let mut strands = self.build_patch()?;
+        let settle_steps = (self.settle / self.dt).round() as usize;
+        for s in strands.iter_mut() {
+            for n in 0..settle_steps {
+                s.step(self.dt, &[]).map_err(|e| ScenarioError::Simulation { time: -self.settle + n as f64 * self.dt, source: e })?;
+            }
+        }
+        let model = match self.tool.force_model.as_str() {
+            "paper" => ForceModel::Paper { gain: self.tool.gain },
+            _ => ForceModel::Constraint { friction: self.tool.friction.unwrap_or(hair.friction_coefficient()), options: ConstraintOptions::default() },
+        };
+        let simulated_mass = strands.iter().map(|s| s.model.mass()).sum::<f64>();
+        let k = match self.patch.tress_mass {
+            Some(m) => m / simulated_mass,
+            None => self.patch.represents,
+        };
+        let tress_mass = simulated_mass * k;
+        let mut it = LocalInteraction::new(strands, shape, path.pose(0.0), model);
+        let duration = self.duration.unwrap_or(path.end_time() + 0.05);
+        let steps = (duration / self.dt).round() as usize;
+        let mut rows = Vec::with_capacity(steps);
+        let (mut peak, mut sum, mut work, mut contact_steps) = (0.0f64, 0.0, 0.0, 0usize);
+        let mut last = path.pose(0.0).position;
+        for n in 1..=steps {
+            let t = n as f64 * self.dt;
+            let pose = path.pose(t);
+            let r = it.step(self.dt, pose).map_err(|e| ScenarioError::Simulation { time: t, source: e })?;
+            let force = r.force * k;
+            peak = peak.max(force.norm());
+            if !r.contacts.is_empty() {
+                contact_steps += 1;
+                sum += force.norm();
+            }
+            work -= force.dot(&(pose.position - last));
+            last = pose.position;
+            rows.push(TraceRow { t, force, torque: r.torque * k, contacts: r.contacts.len(), tool: pose.position });
+        }
+        let summary = Summary {
+            peak_force: peak,
+            mean_force: if contact_steps > 0 { sum / contact_steps as f64 } else { 0.0 },
+            work,
+            contact_steps,
+            steps,
+            tress_mass,
+            represents: k,
+            clamped_steps: it.strands.iter().map(|s| s.clamped_steps).sum(),
+        };
+        Ok((rows, summary))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SCENARIO: &str = r#"
+        dt = 0.001
+        settle = 0.1
+        [patch]
+        hair_type = "GC3"
+        strands = 6
+        length = 0.1
+        segments = 8
+        [tool]
+        shape = "comb"
+        path = [ { t = 0.0, position = [0.0, -0.012, 0.29], rotation = [1.5707963, 0.0, 0.0] },
+                 { t = 0.2, position = [0.0, -0.012, 0.24], rotation = [1.5707963, 0.0, 0.0] } ]
+    "#;
+
+    fn parse(text: &str) -> (Scenario, ToolPath) {
+        let s: Scenario = toml_from_str(text);
+        let p = ToolPath::new(s.tool.path.clone()).unwrap();
+        (s, p)
+    }
+
+    fn toml_from_str(text: &str) -> Scenario {
+        toml::from_str(text).unwrap()
+    }
+
+    #[test]
+    fn a_scripted_stroke_is_deterministic() {
+        let (s, p) = parse(SCENARIO);
+        let a = s.run(ToolShape::builtin("comb").unwrap(), &p).unwrap();
+        let b = s.run(ToolShape::builtin("comb").unwrap(), &p).unwrap();
+        assert_eq!(a.0, b.0, "same trace twice, to the bit");
+        assert!(a.1.contact_steps > 0, "the comb met the hair");
+        assert!(a.1.peak_force > 0.0);
+        assert_eq!(a.1.steps, 250);
+    }
+
+    #[test]
+    fn bad_values_are_named() {
+        let (mut s, _) = parse(SCENARIO);
+        s.patch.hair_type = "yeti".into();
+        assert!(s.validate().unwrap_err().to_string().contains("patch.hair_type"));
+        let (mut s, _) = parse(SCENARIO);
+        s.tool.force_model = "magic".into();
+        assert!(s.validate().unwrap_err().to_string().contains("tool.force_model"));
+        let (mut s, _) = parse(SCENARIO);
+        s.dt = f64::NAN;
+        assert!(s.validate().unwrap_err().to_string().contains("dt"));
+    }
+}

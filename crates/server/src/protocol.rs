@@ -469,6 +469,39 @@ mod tests {
     }
 
     #[test]
+    fn load_with_fit_options_and_the_fit_message() {
+        use hairstyle::fit::{Axis, FitOptions};
+        assert_eq!(parse_client(&[client::LOAD, VERSION, 2, 9, 9]).unwrap(), ClientMessage::Load(2, FitOptions::default(), vec![9, 9]));
+        let mut m = vec![client::LOAD, VERSION, 0x80 | 3, 3, 6, 1, 0];
+        m.extend_from_slice(&0.01f32.to_le_bytes());
+        m.push(7);
+        let opts = FitOptions { units: Some(0.01f32 as f64), up: Some(Axis::PosY), front: Some(Axis::NegZ), fit: false };
+        assert_eq!(parse_client(&m).unwrap(), ClientMessage::Load(3, opts, vec![7]));
+        let mut bad = m.clone();
+        bad[3] = 7;
+        assert!(parse_client(&bad).unwrap_err().message.contains("up axis 7 unknown"));
+        assert!(parse_client(&m[..8]).unwrap_err().message.contains("8 option bytes"));
+        assert!(parse_client(&[client::LOAD, VERSION, 4]).is_err());
+        let r = hairstyle::fit::FitReport {
+            meters_per_unit: 0.01,
+            units_source: hairstyle::fit::Source::Detected,
+            up: Axis::PosY,
+            front: Axis::PosZ,
+            orientation_source: hairstyle::fit::Source::Option,
+            transform: hairstyle::fit::Similarity::identity(),
+            inliers: 0.5,
+            root_distance: hairstyle::fit::Distances { median: 0.001, p95: 0.002, max: 0.003 },
+            pushed_out: 42,
+            scores: None,
+        };
+        let b = encode_fit(&r);
+        assert_eq!((b[0], b.len()), (server::FIT, 2 + 4 * 14 + 4 + 4 * 4 + 4));
+        assert_eq!(&b[2..6], &1f32.to_le_bytes());
+        assert_eq!(&b[58..62], &[3, 5, 2, 0]); // up +y, front +z, units detected, orientation option
+        assert_eq!(&b[78..82], &42u32.to_le_bytes());
+    }
+
+    #[test]
     fn error_message_layout() {
         let b = encode_error(&WireError { code: 2, message: "abc".into() });
         assert_eq!(b, vec![server::ERROR, VERSION, 2, 0, 3, 0, b'a', b'b', b'c']);

@@ -474,5 +474,8 @@ fn save(app: &App, format: usize) -> Result<Vec<u8>, String> {
         .filter(|s: &Vec<[f32; 3]>| s.len() >= 2)
         .collect();
     let f = hairstyle::formats::Format::from_path(Path::new(&format!("x.{}", protocol::FORMATS[format]))).expect("known extension");
-    f.write(&hairstyle::HairCurves::from_strands(strands)).map_err(|e| format!("cannot write {}: {e}", protocol::FORMATS[format]))
+    // thickness (USD `widths`) from the scene's hair type
+    let mut curves = hairstyle::HairCurves::from_strands(strands);
+    curves.thickness = Some(vec![scene.hair_type.major_diameter as f32; curves.num_points()]);
+    f.write(&curves).map_err(|e| format!("cannot write {}: {e}", protocol::FORMATS[format]))
 }

@@ -206,6 +206,12 @@ export class HairMaterial {
     this.stateTexture.needsUpdate = true;
   }
 
+  /** Frees the textures and the materials' programs (a new SCENE replaces them). */
+  dispose(): void {
+    for (const t of [this.latticeTexture, this.displacementTexture, this.stateTexture, this.clumpTexture]) t.dispose();
+    for (const m of [this.material, this.depthMaterial, this.opacityMaterial]) m.dispose();
+  }
+
   resetGuides(): void {
     (this.displacementTexture.image.data as Float32Array).fill(0);
     const st = this.stateTexture.image.data as Float32Array;

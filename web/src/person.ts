@@ -87,12 +87,14 @@ const SKIN: V3 = [0.68, 0.42, 0.32];
 const LIPS: V3 = [0.5, 0.2, 0.18];
 const SHIRT: V3 = [0.05, 0.075, 0.12];
 
-function paint(x: number, y: number, z: number, brow: V3): [V3, number] {
+/** Albedo, surface kind (0 skin, 1 cloth) and eyebrow weight (the brows take the hair's colour in the shader). */
+function paint(x: number, y: number, z: number): [V3, number, number] {
   // A crew-neck shirt: below the shoulders' top, and on the shoulders away from the neck.
   const fromNeck = Math.hypot(x, (y + 0.009) * (y > -0.009 ? 0.8 : 1.1));
   const neckline = -0.165 - (y > 0 ? 0.012 * Math.exp(-((x / 0.04) ** 2)) : 0);
-  if (z < neckline || (z < -0.125 && fromNeck > 0.062)) return [SHIRT, 1];
+  if (z < neckline || (z < -0.125 && fromNeck > 0.062)) return [SHIRT, 1, 0];
   let c: V3 = [...SKIN];
+  let brow = 0;
   const mix = (t: V3, k: number) => { for (let i = 0; i < 3; i++) c[i] += (t[i] - c[i]) * k; };
   if (y > 0.02) {
     const lips = Math.exp(-((x / 0.019) ** 2) - (((z + 0.0625) / 0.0095) ** 2)) * (y > 0.07 ? 1 : 0);
@@ -100,7 +102,7 @@ function paint(x: number, y: number, z: number, brow: V3): [V3, number] {
     const cheek = Math.exp(-(((Math.abs(x) - 0.045) / 0.02) ** 2) - (((z + 0.035) / 0.018) ** 2));
     mix([0.7, 0.33, 0.27], 0.25 * cheek);
     const b = Math.exp(-(((Math.abs(x) - 0.031) / 0.017) ** 4) - (((z - 0.0125 + 0.004 * ((Math.abs(x) - 0.031) / 0.017) ** 2) / 0.0032) ** 2));
-    mix(brow, 0.85 * b * (y > 0.06 ? 1 : 0));
+    brow = 0.85 * b * (y > 0.06 ? 1 : 0);
     const nostril = Math.exp(-(((Math.abs(x) - 0.0065) / 0.003) ** 2) - (((z + 0.0425) / 0.0022) ** 2));
     mix([0.12, 0.05, 0.04], 0.9 * nostril);
   }
@@ -108,7 +110,7 @@ function paint(x: number, y: number, z: number, brow: V3): [V3, number] {
     const v = (y - EAR.y) / EAR.halfWidth, w = (z - EAR.z) / EAR.halfHeight;
     if (Math.hypot(v, w) < 1.1) mix([0.66, 0.33, 0.27], 0.35);
   }
-  return [c, 0];
+  return [c, 0, brow];
 }
 
 /** Splits every triangle into four (shared edge midpoints). */
@@ -160,14 +162,14 @@ export interface PersonGeometry {
   maxProjectionError: number;
 }
 
-/** The body mesh refined, projected and sculpted; `brow` is the eyebrows' colour. */
-export function personGeometry(msg: SceneMsg, brow: V3, levels = 2): PersonGeometry {
+/** The body mesh refined (`levels` times split in four), projected and sculpted. */
+export function personGeometry(msg: SceneMsg, levels = 2): PersonGeometry {
   let pos = Array.from(msg.headPositions);
   let idx = Array.from(msg.headIndices);
   for (let l = 0; l < levels; l++) [pos, idx] = subdivide(pos, idx);
   const balls = msg.metaballs, T = msg.metaballThreshold;
   const n = pos.length / 3;
-  const albedo = new Float32Array(3 * n), surface = new Float32Array(n);
+  const albedo = new Float32Array(3 * n), surface = new Float32Array(n), brows = new Float32Array(n);
   let maxOutset = 0, maxProjectionError = 0;
   const haveBalls = balls.length >= 4;
   for (let i = 0; i < n; i++) {
@@ -181,14 +183,16 @@ export function personGeometry(msg: SceneMsg, brow: V3, levels = 2): PersonGeome
     const d = haveBalls ? sculpt(x, y, z) : 0;
     maxOutset = Math.max(maxOutset, d);
     pos[3 * i] += d * nrm[0]; pos[3 * i + 1] += d * nrm[1]; pos[3 * i + 2] += d * nrm[2];
-    const [c, s] = paint(x, y, z, brow);
+    const [c, s, b] = paint(x, y, z);
     albedo.set(c, 3 * i);
     surface[i] = s;
+    brows[i] = b;
   }
   const g = new THREE.BufferGeometry();
   g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(pos), 3));
   g.setAttribute('albedo', new THREE.BufferAttribute(albedo, 3));
   g.setAttribute('surface', new THREE.BufferAttribute(surface, 1));
+  g.setAttribute('brow', new THREE.BufferAttribute(brows, 1));
   g.setIndex(new THREE.BufferAttribute(new Uint32Array(idx), 1));
   g.computeVertexNormals();
   return { geometry: g, maxOutset, maxProjectionError };
@@ -208,6 +212,7 @@ function eyeGeometry(radius: number): THREE.BufferGeometry {
   }
   g.setAttribute('albedo', new THREE.BufferAttribute(albedo, 3));
   g.setAttribute('surface', new THREE.BufferAttribute(surface, 1));
+  g.setAttribute('brow', new THREE.BufferAttribute(new Float32Array(p.count), 1));
   return g;
 }
 
@@ -226,12 +231,12 @@ export class Person {
   readonly opacityBody: THREE.Mesh;
   readonly depthBody: THREE.Mesh;
 
-  constructor(msg: SceneMsg, dom: DeepOpacityMaps, shared: Record<string, THREE.IUniform>, brow: V3) {
-    this.info = personGeometry(msg, brow);
+  constructor(msg: SceneMsg, dom: DeepOpacityMaps, shared: Record<string, THREE.IUniform>) {
+    this.info = personGeometry(msg);
     this.material = new THREE.ShaderMaterial({
       vertexShader: skinVertex,
       fragmentShader: `precision highp float;\n${domLookupGLSL}\n${displayGLSL}\n${skinFragmentBody}`,
-      uniforms: { ...dom.uniforms, ...shared, scatterWrap: { value: new THREE.Vector3(0.45, 0.2, 0.12) } },
+      uniforms: { ...dom.uniforms, ...shared, scatterWrap: { value: new THREE.Vector3(0.45, 0.2, 0.12) }, browColour: { value: new THREE.Vector3(0.1, 0.05, 0.03) } },
     });
     this.body = new THREE.Mesh(this.info.geometry, this.material);
     this.group.add(this.body);
@@ -257,8 +262,16 @@ export class Person {
     }));
   }
 
+  /** Eyebrows in the hair's colour: a rough albedo from the absorption (sigma_a, per unit radius). */
+  setBrows(sigma: [number, number, number]): void {
+    this.material.uniforms.browColour.value.set(...sigma.map((s) => 0.35 * Math.exp(-2 * s)));
+  }
+
   dispose(): void {
     this.info.geometry.dispose();
+    this.material.dispose();
+    (this.opacityBody.material as THREE.Material).dispose();
+    (this.depthBody.material as THREE.Material).dispose();
     this.group.traverse((o) => { if ((o as THREE.Mesh).isMesh && (o as THREE.Mesh).geometry !== this.info.geometry) (o as THREE.Mesh).geometry.dispose(); });
   }
 }

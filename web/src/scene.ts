@@ -103,10 +103,11 @@ export class View {
     this.camera.updateProjectionMatrix();
   }
 
-  /** Hair colour from melanin (also the eyebrows' next time the person is built). */
+  /** Hair colour from melanin (and the eyebrows'). */
   setColour(m: Melanin): void {
     this.colour = m;
     this.hair?.setColour(m);
+    this.person?.setBrows(sigmaFromMelanin(m));
   }
 
   /** Direction towards the key light (any length). */
@@ -118,6 +119,8 @@ export class View {
   /** Builds the person and the hair from the SCENE message (replacing earlier ones). */
   load(msg: SceneMsg): void {
     if (this.hairMesh) { this.scene.remove(this.hairMesh); this.hairMesh.geometry.dispose(); }
+    this.shadowHair?.dispose(); // shares the hair's attributes (disposed with them just above)
+    this.hair?.dispose();
     if (this.person) { this.scene.remove(this.person.group); this.person.dispose(); }
     this.dom.depthScene.clear();
     this.dom.opacityScene.clear();
@@ -125,9 +128,8 @@ export class View {
     const box = new THREE.Box3().setFromArray(msg.renderPositions).union(new THREE.Box3().setFromArray(msg.headPositions));
     const sphere = box.getBoundingSphere(new THREE.Sphere());
     this.dom.fit(sphere.center, sphere.radius + 0.05);
-    const sigma = sigmaFromMelanin(this.colour);
-    const brow = sigma.map((s) => 0.35 * Math.exp(-2 * s)) as [number, number, number];
-    this.person = new Person(msg, this.dom, this.lighting, brow);
+    this.person = new Person(msg, this.dom, this.lighting);
+    this.person.setBrows(sigmaFromMelanin(this.colour));
     this.scene.add(this.person.group);
     this.dom.depthScene.add(this.person.depthBody);
     this.dom.opacityScene.add(this.person.opacityBody);

@@ -6,6 +6,8 @@
 export const skinVertex = /* glsl */ `
 attribute vec3 albedo;    // linear RGB
 attribute float surface;  // 0 skin, 1 cloth, 2 eye
+attribute float brow;     // eyebrow weight [0,1]
+uniform vec3 browColour;  // the hair's rough albedo, linear RGB
 varying vec3 vNormal;
 varying vec3 vPosition;
 varying vec3 vAlbedo;
@@ -14,7 +16,7 @@ void main() {
   vec4 w = modelMatrix * vec4(position, 1.0);
   vPosition = w.xyz;
   vNormal = normalize(mat3(modelMatrix) * normal);
-  vAlbedo = albedo;
+  vAlbedo = mix(albedo, browColour, brow);
   vSurface = surface;
   gl_Position = projectionMatrix * viewMatrix * w;
 }

@@ -9,17 +9,20 @@
 //!   exchange;
 //! - [`global`]: the global layer's core (lattice, nozzles, cuts), [`haptic`]: the haptic layer's core
 //!   (coupling, active set, local strands, tool actions);
-//! - [`live`]: the two threads and their triple buffers; [`record`] and [`replay`]: deterministic replay.
+//! - [`live`]: the two threads and their triple buffers; [`record`] and [`replay`]: deterministic replay;
+//!   [`lockstep`]: both cores on one thread (replay and `[live]` scenarios).
 //!
-//! [`session`] gathers the live session's public names. Headless: [`scenario`] (scripted tools through a
-//! patch of strands or a generated hairstyle), with tool paths from [`path`].
+//! [`session`] gathers the live session's public names. Headless: [`scenario`]: a tool scripted through a
+//! patch of strands; the live [`global::GlobalCore`] driven by a script of tool inputs (`[[action]]`); the
+//! live cores driven by device inputs in lockstep (`[live]`); with tool paths from [`path`]. One engine:
+//! the headless doors run the live session's own cores (tests check them against the live ones to the bit).
 
 pub mod command;
 pub mod error;
 pub mod global;
 pub mod haptic;
 pub mod live;
-pub mod local_session;
+pub mod lockstep;
 pub mod params;
 pub mod path;
 pub mod record;

@@ -1,7 +1,10 @@
-//! Parameters of a live session.
+//! Parameters of a live session: [`SessionParams`] (rates, active set, device, tools' rates) with the
+//! constants of the haptic step ([`HapticParams`]) and of the global step ([`GlobalParams`]); every field
+//! with its meaning, unit and default.
 
 use crate::error::SessionError;
 use haptics::device::DeviceProfile;
+use haptics::target::TargetParams;
 
 /// Parameters of a live session. Defaults: the README's `coiffure serve`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -17,9 +20,11 @@ pub struct SessionParams {
     pub activation_radius: f64,
     /// Device limits. Default: a Phantom Omni (3.3 N, 300 N/s), also for the mouse, whose force is shown.
     pub profile: DeviceProfile,
-    /// Largest speed at which the device point follows the mouse target, m/s (the mouse jumps between events;
-    /// the device moves there smoothly). Default 1.0.
-    pub follow_speed: f64,
+    /// How the device point follows a pointer's target (the mouse reports at 60-125 Hz): interpolated at the
+    /// haptic rate between events (`haptics::target::TargetParams`: event-interval bounds 0.004-0.05 s,
+    /// running-mean weight 0.2, largest speed 1.5 m/s). A real device's reading passes through it unchanged
+    /// when it reports every step.
+    pub pointer: TargetParams,
     /// Haptic steps between two snapshots published for the viewer. Default 5 (200 Hz).
     pub publish_every: u64,
     /// Keep a record of the device input for replay. Default false.
@@ -28,18 +33,24 @@ pub struct SessionParams {
     pub wetting_rate: f64,
     /// Dryer drying rate k0 at the nozzle (`tools::dryer::HairDryer`), 1/s. Default 0.05.
     pub drying_rate: f64,
-    /// Hairs each simulated guide stands for in the force on the tool (a wisp): the local strands' reaction
-    /// is multiplied by it. Dimensionless, >= 1. Default 20.
-    pub wisp: f64,
+    /// Real hairs each render strand stands for, dimensionless, > 0. Default 1 (the built-in hairstyle draws
+    /// 100 000 render strands, about the number of hairs on a head). Each simulated guide stands for the real
+    /// hairs bound to it, `render strands x hairs_per_render_strand / guides` (500 in the built-in scene), and
+    /// the local strands' reaction on the tool (force and damping) is multiplied by that number.
+    pub hairs_per_render_strand: f64,
     /// Real-time (`SCHED_FIFO`) priority asked for the haptic thread, 1..=99 (`haptics::realtime`), or None
     /// for normal priority. A refusal (no permission) is logged and the loop runs at normal priority.
     /// Default None (`coiffure serve` asks for 10).
     pub haptic_priority: Option<i32>,
+    /// Constants of the haptic step. Default [`HapticParams::default`].
+    pub haptic: HapticParams,
+    /// Constants of the global step. Default [`GlobalParams::default`].
+    pub global: GlobalParams,
 }
 
 impl Default for SessionParams {
     fn default() -> Self {
-        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_active: 12, activation_radius: 0.05, profile: DeviceProfile::PHANTOM_OMNI, follow_speed: 1.0, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, wisp: 20.0, haptic_priority: None }
+        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_active: 12, activation_radius: 0.05, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5 }, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default() }
     }
 }
 
@@ -56,17 +67,143 @@ impl SessionParams {
         if self.max_active == 0 {
             return p("max_active must be > 0".into());
         }
-        if !(self.activation_radius > 0.0 && self.follow_speed > 0.0 && self.wetting_rate >= 0.0 && self.drying_rate >= 0.0 && self.wetting_rate.is_finite() && self.drying_rate.is_finite()) {
-            return p(format!("activation_radius, follow_speed must be > 0 and wetting_rate, drying_rate finite and >= 0: {self:?}"));
+        if !(self.activation_radius > 0.0 && self.wetting_rate >= 0.0 && self.drying_rate >= 0.0 && self.wetting_rate.is_finite() && self.drying_rate.is_finite()) {
+            return p(format!("activation_radius must be > 0 and wetting_rate, drying_rate finite and >= 0: {self:?}"));
         }
-        if !(self.wisp >= 1.0 && self.wisp.is_finite()) {
-            return p(format!("wisp must be >= 1, got {}", self.wisp));
+        let t = &self.pointer;
+        if !(t.min_interval > 0.0 && t.max_interval >= t.min_interval && t.max_interval.is_finite() && t.smoothing > 0.0 && t.smoothing <= 1.0 && t.max_speed > 0.0 && t.max_speed.is_finite()) {
+            return p(format!("pointer: need 0 < min_interval <= max_interval (finite), smoothing in (0, 1], max_speed > 0 finite, got {t:?}"));
+        }
+        if !(self.hairs_per_render_strand > 0.0 && self.hairs_per_render_strand.is_finite()) {
+            return p(format!("hairs_per_render_strand must be finite and > 0, got {}", self.hairs_per_render_strand));
         }
         if self.publish_every == 0 {
             return p("publish_every must be > 0".into());
         }
         if let Some(prio) = self.haptic_priority.filter(|x| !haptics::realtime::PRIORITY_RANGE.contains(x)) {
             return p(format!("haptic_priority must be in 1..=99, got {prio}"));
+        }
+        self.haptic.validate()?;
+        self.global.validate()
+    }
+}
+
+/// Constants of the haptic layer's step (`crate::haptic`), each with its meaning, unit and default.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HapticParams {
+    /// The active set is chosen again when the tool has moved this far since the last choice, m.
+    /// Default 0.01.
+    pub reselect_distance: f64,
+    /// The clip pins the strand point nearest its jaws if it is within this distance, m. Default 0.01.
+    pub clip_reach: f64,
+    /// Displacements of the local strands from their references larger than this are not sent to the
+    /// viewer (zero instead: a misbehaving strand must not throw the hairstyle across the scene), m.
+    /// Default 0.5.
+    pub max_displacement: f64,
+    /// Air drag per unit length of the simulated strands (and of the hair the lattice carries), N s/m^2;
+    /// the strands' own value is raised to it. Default 2e-5, twice `strand::DEFAULT_AIR_DRAG`: the local
+    /// strands stand for wisps whose hairs shield each other less than they drag together, and the extra
+    /// drag damps the strands the tool throws about.
+    pub min_air_drag: f64,
+    /// How much the combing-ease slider lowers the friction: friction = mu (1 - reduction x ease),
+    /// ease in [0, 1] ([`combing_friction`]). Dimensionless in [0, 1). Default 0.8.
+    pub combing_ease_reduction: f64,
+    /// Pieces of each simulated strand the dryer's air drag is applied to (at their midpoints). Default 8.
+    pub dryer_pieces: usize,
+    /// The held scissors cut again each time they have moved this far, m. Default 0.02.
+    pub snip_distance: f64,
+    /// Collision pieces of a guide cut by the scissors (`hairstyle::cut::cut_guide`). Default 4.
+    pub cut_pieces: usize,
+    /// Where the tool waits before the first device reading (head frame), m. Default (0, -0.25, 0).
+    pub start: [f64; 3],
+    /// Share of the rest shape a wet set holds once dry (`strand::styling::SetModel::hydrogen_share`),
+    /// dimensionless in [0, 1]. Default 0.8.
+    pub hydrogen_share: f64,
+}
+
+impl Default for HapticParams {
+    fn default() -> Self {
+        Self { reselect_distance: 0.01, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], hydrogen_share: 0.8 }
+    }
+}
+
+impl HapticParams {
+    /// Checks every field; the error names the bad one.
+    pub fn validate(&self) -> Result<(), SessionError> {
+        let p = |m: String| Err(SessionError::Param(m));
+        for (k, v) in [("reselect_distance", self.reselect_distance), ("clip_reach", self.clip_reach), ("max_displacement", self.max_displacement), ("snip_distance", self.snip_distance)] {
+            if !(v > 0.0 && v.is_finite()) {
+                return p(format!("haptic.{k} must be > 0 m, got {v}"));
+            }
+        }
+        if !(self.min_air_drag >= 0.0 && self.min_air_drag.is_finite()) {
+            return p(format!("haptic.min_air_drag must be >= 0 N s/m^2, got {}", self.min_air_drag));
+        }
+        if !(0.0..1.0).contains(&self.combing_ease_reduction) {
+            return p(format!("haptic.combing_ease_reduction must be in [0, 1), got {}", self.combing_ease_reduction));
+        }
+        if self.dryer_pieces == 0 || self.cut_pieces == 0 {
+            return p("haptic.dryer_pieces and haptic.cut_pieces must be > 0".into());
+        }
+        if !(0.0..=1.0).contains(&self.hydrogen_share) {
+            return p(format!("haptic.hydrogen_share must be in [0, 1], got {}", self.hydrogen_share));
+        }
+        if !self.start.iter().all(|x| x.is_finite()) {
+            return p(format!("haptic.start must be finite, got {:?}", self.start));
+        }
+        Ok(())
+    }
+
+    /// The tool's friction coefficient on hair of friction `mu` at combing ease `ease` (clamped to [0, 1];
+    /// NaN counts as 0): mu (1 - `combing_ease_reduction` ease). The one combing-ease law.
+    pub fn combing_friction(&self, mu: f64, ease: f64) -> f64 {
+        let e = if ease.is_finite() { ease.clamp(0.0, 1.0) } else { 0.0 };
+        mu * (1.0 - self.combing_ease_reduction * e)
+    }
+}
+
+/// Constants of the global layer's step (`crate::global`) and of the tools as the global layer sees them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GlobalParams {
+    /// Distance from the tool point back to the dryer's or sprayer's nozzle, m (the viewer puts the tool
+    /// where the mouse points on the hair: the nozzle aims there from a hand's distance). Default 0.15.
+    pub nozzle_standoff: f64,
+    /// Radius of the disk the scissors' blades sweep when they close, m (about the blades' length).
+    /// Default 0.04.
+    pub blade_radius: f64,
+    /// Most falling pieces made of one cut: more are sampled evenly, their masses scaled to keep the total.
+    /// Default 256.
+    pub max_pieces_per_cut: usize,
+    /// Most cuts whose clusters fall at once (the oldest is dropped). Default 8.
+    pub max_cluster_sets: usize,
+    /// The tool as a lattice obstacle: its metaballs' iso-surface lies this far outside each capsule, m
+    /// (so that the lattice, 5 cm cells, feels it). Default 0.02.
+    pub obstacle_margin: f64,
+    /// Metaballs along each capsule are spaced at this fraction of their radius. Default 0.5.
+    pub obstacle_spacing: f64,
+    /// Most metaballs along one capsule, minus one. Default 64.
+    pub obstacle_max_balls: usize,
+    /// Newton steps of the push-out of lattice nodes from the body per global step. Default 4.
+    pub push_out_iterations: usize,
+}
+
+impl Default for GlobalParams {
+    fn default() -> Self {
+        Self { nozzle_standoff: 0.15, blade_radius: 0.04, max_pieces_per_cut: 256, max_cluster_sets: 8, obstacle_margin: 0.02, obstacle_spacing: 0.5, obstacle_max_balls: 64, push_out_iterations: 4 }
+    }
+}
+
+impl GlobalParams {
+    /// Checks every field; the error names the bad one.
+    pub fn validate(&self) -> Result<(), SessionError> {
+        let p = |m: String| Err(SessionError::Param(m));
+        for (k, v) in [("nozzle_standoff", self.nozzle_standoff), ("blade_radius", self.blade_radius), ("obstacle_margin", self.obstacle_margin), ("obstacle_spacing", self.obstacle_spacing)] {
+            if !(v > 0.0 && v.is_finite()) {
+                return p(format!("global.{k} must be > 0, got {v}"));
+            }
+        }
+        if self.max_pieces_per_cut == 0 || self.max_cluster_sets == 0 || self.obstacle_max_balls == 0 {
+            return p("global.max_pieces_per_cut, max_cluster_sets and obstacle_max_balls must be > 0".into());
         }
         Ok(())
     }

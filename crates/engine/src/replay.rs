@@ -1,41 +1,25 @@
 //! Replay of a recorded live session, headless and deterministic.
 
 use crate::error::SessionError;
-use crate::global::GlobalCore;
-use crate::haptic::HapticCore;
+use crate::lockstep::Lockstep;
 use crate::params::SessionParams;
 use crate::record::Record;
 use crate::scene::Scene;
 use nalgebra::Vector3;
 use std::sync::Arc;
-use std::time::Duration;
 
-/// Re-runs a recorded session in lockstep on this thread: the global core is stepped up to the lattice
+/// Re-runs a recorded session in lockstep on this thread ([`Lockstep::replay`]): the global core is stepped up to the lattice
 /// version each haptic step used (applying the recorded lattice resets), the recorded commands are applied,
 /// the global steps read the recorded tool inputs (dryer jet, sprayer and dryer wetness, scissors cuts, the tool
 /// pushing the lattice), and the haptic core steps with the recorded reading. Returns the force of every step.
 pub fn replay(scene: Arc<Scene>, params: SessionParams, record: &Record) -> Result<Vec<Vector3<f64>>, SessionError> {
-    let mut core = HapticCore::new(scene.clone(), params)?;
-    let mut global = GlobalCore::new(scene, &params);
-    let mut snap = global.snapshot();
-    // The same step lengths as the live threads (which go through Duration).
-    let gdt = Duration::from_secs_f64(1.0 / params.global_rate_hz).as_secs_f64();
-    let dt = Duration::from_secs_f64(1.0 / record.rate_hz).as_secs_f64();
+    let mut ls = Lockstep::new(scene, params, record.rate_hz)?;
     let mut out = Vec::with_capacity(record.steps.len());
-    for s in &record.steps {
-        while snap.version < s.lattice_version {
-            if record.global_resets.contains(&(global.version + 1)) {
-                global.reset();
-            }
-            // The tool input that global step read (none in a version-1 record).
-            let input = record.global_inputs.get(global.version as usize).copied().unwrap_or_default();
-            snap = global.step(gdt, &input).0;
+    ls.replay(record, |_, cmd| {
+        if let Some(c) = cmd {
+            out.push(c.force);
         }
-        for c in &s.commands {
-            core.apply(c);
-        }
-        out.push(core.step(s.reading, &snap, dt).force);
-    }
+    });
     Ok(out)
 }
 
@@ -46,6 +30,7 @@ mod tests {
     use crate::live::Session;
     use crate::testing::{small_scene, test_rot};
     use crate::tool::Tool;
+    use std::time::Duration;
     use haptics::device::DeviceReading;
 
     #[test]
@@ -104,5 +89,50 @@ mod tests {
         let worst = forces.iter().zip(&rec.steps).map(|(f, s)| (f - s.force).norm()).fold(0.0, f64::max);
         eprintln!("replayed {} steps, peak {peak} N, largest difference {worst} N", forces.len());
         assert!(worst <= 1e-9, "largest force difference {worst} N");
+    }
+
+    #[test]
+    fn a_live_session_fed_a_live_scenarios_device_inputs_gives_its_trace_to_the_bit() {
+        // Issue 11's acceptance for [live] scenarios. The threaded live session (`coiffure serve`'s code) is
+        // fed the device readings of a [live] scenario's path (`LiveScenario::reading`, as `coiffure run`
+        // feeds its lockstep cores). Its record replayed through the scenarios' door for records
+        // (`scenario::live::replay_record`, what `coiffure replay` writes to force.csv) gives every force the
+        // live session sent to the device, to the bit; and the scenario run's own record replays to its
+        // trace to the bit (`a_live_scenario_replays_through_the_live_sessions_replay_to_the_bit`). The live
+        // threads' schedule (which lattice version each haptic step reads) is the machine's, so the two
+        // traces are compared through their records, not with each other.
+        let scene = small_scene();
+        let text = r#"
+            settle = 0.0
+            duration = 0.8
+            [live]
+            render_strands = 2000
+            guides = 60
+            [tool]
+            shape = "comb"
+            path = [ { t = 0.0, position = [0.0, -0.118, 0.05], rotation = [0.0, 2.2214415, -2.2214415] },
+                     { t = 0.7, position = [0.0, -0.118, -0.02], rotation = [0.0, 2.2214415, -2.2214415], pressed = true } ]
+        "#;
+        let s: crate::scenario::LiveScenario = toml::from_str(text).unwrap();
+        let params = SessionParams { record: true, ..SessionParams::default() };
+        let (session, mut io) = Session::start(scene.clone(), params).unwrap();
+        loop {
+            let step = io.haptic.read().step;
+            if step >= 800 {
+                break;
+            }
+            io.device.push(s.reading(step as f64 * 1e-3));
+            std::thread::sleep(Duration::from_micros(300));
+        }
+        let rec = session.stop().record.expect("recorded");
+        let rec = Record::from_bytes(&rec.to_bytes()).unwrap();
+        let (trace, summary) = crate::scenario::live::replay_record(scene, params, &rec).unwrap();
+        assert_eq!(trace.len(), rec.steps.len());
+        for (i, st) in rec.steps.iter().enumerate() {
+            let f = trace.force(i);
+            assert!(f.iter().zip(st.force.iter()).all(|(a, b)| a.to_bits() == b.to_bits()), "step {i}: {f:?} vs {:?}", st.force);
+        }
+        eprintln!("{} steps, {summary:?}", trace.len());
+        assert!(summary.peak_force_n > 1e-4 && summary.contact_steps > 0, "the comb met the hair: {summary:?}");
     }
 }

@@ -4,12 +4,11 @@
 
 pub use crate::command::Command;
 pub use crate::error::SessionError;
-pub use crate::global::{CutJob, CutReport, CutResult, GlobalCore, MAX_PIECES_PER_CUT};
-pub use crate::haptic::actions::SNIP_DISTANCE;
+pub use crate::global::{CutJob, CutReport, CutResult, GlobalCore};
 pub use crate::haptic::HapticCore;
 pub use crate::live::{Session, SessionIo, SessionReport};
-pub use crate::params::SessionParams;
+pub use crate::params::{GlobalParams, HapticParams, SessionParams};
 pub use crate::replay::replay;
 pub use crate::scene::{ffd_map, Guide, Mesh, RenderHair, Scene, SceneOptions};
 pub use crate::snapshot::{HapticSnapshot, LatticeSnapshot};
-pub use crate::tool::{tool_metaballs, Tool, ToolInput, BLADE_RADIUS, NOZZLE_STANDOFF};
+pub use crate::tool::{tool_metaballs, Tool, ToolInput};

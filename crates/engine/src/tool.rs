@@ -2,6 +2,7 @@
 //! step ([`ToolInput`]: the scissors' blade, the nozzles' cone), and the tool as a metaball obstacle for the
 //! lattice.
 
+use crate::params::GlobalParams;
 use hairstyle::cut::Blade;
 use lattice::metaball::{Metaball, MetaballSet};
 use nalgebra::{Matrix3, Point3, Vector3};
@@ -29,6 +30,10 @@ pub enum Tool {
 impl Tool {
     /// All tools in wire order.
     pub const ALL: [Tool; 6] = [Tool::Comb, Tool::Brush, Tool::Scissors, Tool::Dryer, Tool::Sprayer, Tool::Clip];
+    /// The tool's name: "comb", "brush", "scissors", "dryer", "sprayer", "clip".
+    pub fn name(self) -> &'static str {
+        ["comb", "brush", "scissors", "dryer", "sprayer", "clip"][self as usize]
+    }
     /// The tool with wire id `id`, if any.
     pub fn from_id(id: u8) -> Option<Tool> {
         Self::ALL.get(id as usize).copied()
@@ -78,37 +83,34 @@ impl Default for ToolInput {
     }
 }
 
-/// Distance from the tool point back to the dryer's or sprayer's nozzle, m.
-pub const NOZZLE_STANDOFF: f64 = 0.15;
-/// Radius of the disk the scissors' blades sweep when they close, m (about the blades' length).
-pub const BLADE_RADIUS: f64 = 0.04;
 
 impl ToolInput {
     /// The scissors' cutting disk: centred on the proxy, in the plane normal to the tool's y axis (the
-    /// stroke direction), radius [`BLADE_RADIUS`].
-    pub fn blade(&self) -> Blade {
+    /// stroke direction), radius `radius` (m; `GlobalParams::blade_radius`).
+    pub fn blade(&self, radius: f64) -> Blade {
         let n = self.rotation.column(1).into_owned();
-        Blade { point: self.position.into(), normal: n.into(), radius: BLADE_RADIUS }
+        Blade { point: self.position.into(), normal: n.into(), radius }
     }
-    /// The nozzle's cone (dryer, sprayer): axis along the tool's -z, apex [`NOZZLE_STANDOFF`] back from the
+    /// The nozzle's cone (dryer, sprayer): axis along the tool's -z, apex `standoff` (m;
+    /// `GlobalParams::nozzle_standoff`) back from the
     /// proxy along +z (the viewer puts the tool where the mouse points on the hair: the nozzle aims there
     /// from a hand's distance, as a dryer or a sprayer is held).
-    pub fn cone(&self, mut cone: Cone) -> Cone {
-        cone.apex = self.position + self.rotation.column(2).into_owned() * NOZZLE_STANDOFF;
+    pub fn cone(&self, mut cone: Cone, standoff: f64) -> Cone {
+        cone.apex = self.position + self.rotation.column(2).into_owned() * standoff;
         cone.axis = -self.rotation.column(2).into_owned();
         cone
     }
 }
 
-/// The tool as a metaball set (world frame): balls along each capsule, spaced at half their radius, whose
-/// iso-surface (at the default threshold, 0.707 R for a lone ball) lies 2 cm outside the capsule, so the
-/// 5 cm lattice feels it.
-pub fn tool_metaballs(shape: &ToolShape, position: &Vector3<f64>, rotation: &Matrix3<f64>) -> MetaballSet {
+/// The tool as a metaball set (world frame): balls along each capsule, spaced at `obstacle_spacing` of
+/// their radius, whose iso-surface (at the default threshold, 0.707 R for a lone ball) lies
+/// `obstacle_margin` outside the capsule, so the lattice feels it.
+pub fn tool_metaballs(shape: &ToolShape, position: &Vector3<f64>, rotation: &Matrix3<f64>, params: &GlobalParams) -> MetaballSet {
     let mut balls = Vec::new();
     for c in &shape.capsules {
-        let r = (c.radius + 0.02) / 0.707;
+        let r = (c.radius + params.obstacle_margin) / 0.707;
         let (a, b) = (rotation * Vector3::from(c.a) + position, rotation * Vector3::from(c.b) + position);
-        let n = (((b - a).norm() / (0.5 * r)).ceil() as usize).clamp(1, 64);
+        let n = (((b - a).norm() / (params.obstacle_spacing * r)).ceil() as usize).clamp(1, params.obstacle_max_balls);
         for k in 0..=n {
             let p = a + (b - a) * (k as f64 / n as f64);
             balls.push(Metaball::new(Point3::from(p), r));

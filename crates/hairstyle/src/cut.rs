@@ -216,6 +216,25 @@ pub fn cut_curves(curves: &mut HairCurves, linear_density: f64, blade: &Blade) -
     Ok(pieces)
 }
 
+/// Cuts a simulated strand ([`cut_guide`] on its model and state) and rebuilds it: the strand that stays on
+/// the head keeps its root, time, integrator and safety-net count. None if the blade misses it. The one guide
+/// cut of the project (the live session's scissors on its local strands, `engine::haptic`).
+pub fn cut_strand(
+    s: &strand::Strand,
+    blade: &Blade,
+    samples_per_segment: usize,
+    source: usize,
+) -> Result<Option<(strand::Strand, Piece)>, CutError> {
+    let Some((m, st, piece)) = cut_guide(&s.model, &s.state, blade, samples_per_segment, source)? else {
+        return Ok(None);
+    };
+    let mut kept = strand::Strand::new(m, st.root.clone()).map_err(|e| invalid("strand", e.to_string()))?;
+    kept.state = st;
+    kept.integrator = s.integrator;
+    kept.clamped_steps = s.clamped_steps;
+    Ok(Some((kept, piece)))
+}
+
 /// Position of a strand's centreline at arc length `s`, m.
 fn position_at(model: &StrandModel, q: &DVector<f64>, frames: &[strand::kinematics::Frame], s: f64) -> Vector3<f64> {
     frame_at(model, q, frames, s).position

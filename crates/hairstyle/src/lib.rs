@@ -5,7 +5,7 @@
 //! Positions in files are kept in the file's own units (see [`formats::HairCurves`]).
 //!
 //! The built-in head, neck and shoulders with its scalp ([`head`]) and hairstyle generation
-//! ([`generate`]): guide Super-Helices and render strands bound to them, in SI units (m) in the
+//! ([`generate`]): guide Super-Helices and render strands bound to them ([`render`]), in SI units (m) in the
 //! head frame (origin at the head's centre, z up, y forward); the lattice that carries a
 //! hairstyle ([`global`]). Hairstyles from other tools are placed on the head by [`fit`].
 
@@ -17,6 +17,7 @@ pub mod formats;
 pub mod generate;
 pub mod global;
 pub mod head;
+pub mod render;
 
 pub use formats::{info, read_file, write_file, FormatError, HairCurves};
 pub use generate::{Curl, GenerateError, Guide, Hairstyle, HairstyleParams, RenderStrands};

@@ -93,9 +93,10 @@ fn head_shake_moves_hair_with_inertia_and_it_settles_back() {
     let still = Isometry3::identity();
     let body = body_in_world(&h.head.body, &still);
     let mut s = m.rest_state(&still);
+    let mut w = lattice::lattice::LatticeWorkspace::default();
     assert!(min_render_distance(&h, &hl, &s.positions, &still, &mut out).0 > -1e-6);
     for _ in 0..200 {
-        m.step(&mut s, dt, &still, Some(&body));
+        m.step(&mut s, &mut w, dt, &still, Some(&body));
     }
     let vmax = s.velocities.iter().map(|v| v.norm()).fold(0.0, f64::max);
     assert!(vmax < 1e-3, "not settled: {vmax} m/s");
@@ -116,7 +117,7 @@ fn head_shake_moves_hair_with_inertia_and_it_settles_back() {
         };
         let head = Isometry3::from_parts(Translation3::new(0.0, y, 0.0), UnitQuaternion::identity());
         let body = body_in_world(&h.head.body, &head);
-        m.step(&mut s, dt, &head, Some(&body));
+        m.step(&mut s, &mut w, dt, &head, Some(&body));
         if t <= 1.0 {
             let lag = free
                 .iter()
@@ -192,8 +193,9 @@ fn dryer_run(params: LatticeParams) -> DryerRun {
     let still = Isometry3::identity();
     let dt = 0.01;
     let mut s = m.rest_state(&still);
+    let mut w = lattice::lattice::LatticeWorkspace::default();
     for _ in 0..200 {
-        m.step(&mut s, dt, &still, None);
+        m.step(&mut s, &mut w, dt, &still, None);
     }
     let x0 = s.positions.clone();
     let sag = x0.iter().zip(&m.rest).map(|(x, r)| (x - r).norm()).fold(0.0, f64::max);
@@ -207,7 +209,7 @@ fn dryer_run(params: LatticeParams) -> DryerRun {
         .collect();
     let total: Vector3<f64> = forces.iter().sum();
     for _ in 0..300 {
-        m.step_with_forces(&mut s, dt, &still, None, &forces).unwrap();
+        m.step_with_forces(&mut s, &mut w, dt, &still, None, &forces).unwrap();
     }
     let disp: Vec<Vector3<f64>> = s.positions.iter().zip(&x0).map(|(x, y)| x - y).collect();
     let along: f64 = forces.iter().zip(&disp).map(|(f, d)| f.dot(d)).sum::<f64>() / total.norm();
@@ -218,7 +220,7 @@ fn dryer_run(params: LatticeParams) -> DryerRun {
         .map(|(d, a)| a * params.attachment_stiffness * d)
         .sum();
     for _ in 0..300 {
-        m.step_with_forces(&mut s, dt, &still, None, &[]).unwrap();
+        m.step_with_forces(&mut s, &mut w, dt, &still, None, &[]).unwrap();
     }
     let back = s
         .positions

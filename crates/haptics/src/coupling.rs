@@ -5,14 +5,20 @@
 //! 1. check the reading: non-finite values or a jump faster than the profile's `max_speed` are rejected
 //!    (zero force, an [`InputError`] returned, the last good pose kept);
 //! 2. the proxy (a light rigid body of mass `proxy_mass`) is pulled towards the device by a spring-damper
-//!    (stiffness `stiffness`, below the device's limit) and pushed by the hair's reaction; semi-implicit Euler;
+//!    (stiffness `stiffness`, below the device's limit) and pushed by the hair's reaction. Everything is
+//!    implicit in the proxy's new velocity: the spring and damper, and the hair's reaction through its
+//!    linearisation [`HairReaction`] (the force `f0` the hair gave at the proxy's last velocity `v0`, and its
+//!    damping matrix `D = -dF/dv`, from the contacts' compliant response), so that
+//!    `m (v - v_old) = (k (x_rel - h v) + b (v_dev - v) + f0 - D (v - v0)) h`. A reaction stiff enough to
+//!    throw an explicitly pushed proxy (`|D| h > m`) then only slows it: the proxy takes part in the contact
+//!    solve as a body with its mass;
 //! 3. the device force is minus the coupling force, its rate of change clamped to the profile; then the
 //!    passivity controller adds just enough damping to keep the energy the device port has absorbed from the
 //!    user non-negative (stability first: this damping may exceed the rate limit); then the magnitude is
 //!    clamped to the profile (scaling a force down keeps the step passive).
 
 use crate::device::{DeviceProfile, DeviceReading};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use thiserror::Error;
 
 /// Why a device reading was rejected.
@@ -34,6 +40,47 @@ pub enum InputError {
         /// The profile's limit, m/s.
         max_speed: f64,
     },
+}
+
+/// The hair's reaction on the tool proxy over one step, linearised in the proxy's velocity.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HairReaction {
+    /// Force on the proxy at the velocity `velocity`, N.
+    pub force: Vector3<f64>,
+    /// Effective damping `D = -dF/dv`, N s/m (symmetric, positive semi-definite): how much more the hair
+    /// pushes back per m/s the proxy moves faster than `velocity`.
+    pub damping: Matrix3<f64>,
+    /// Proxy velocity at which `force` was computed, m/s.
+    pub velocity: Vector3<f64>,
+}
+
+impl HairReaction {
+    /// No contact.
+    pub fn none() -> Self {
+        Self { force: Vector3::zeros(), damping: Matrix3::zeros(), velocity: Vector3::zeros() }
+    }
+
+    /// A force with no velocity dependence (an explicit push).
+    pub fn explicit(force: Vector3<f64>) -> Self {
+        Self { force, ..Self::none() }
+    }
+
+    /// Non-finite parts replaced by none; the damping symmetrised and its negative eigenvalues dropped (a
+    /// damping matrix may only take energy out).
+    fn sanitized(&self) -> Self {
+        let ok = |v: &Vector3<f64>| v.iter().all(|x| x.is_finite());
+        let force = if ok(&self.force) { self.force } else { Vector3::zeros() };
+        let velocity = if ok(&self.velocity) { self.velocity } else { Vector3::zeros() };
+        let damping = if self.damping.iter().all(|x| x.is_finite()) {
+            let sym = (self.damping + self.damping.transpose()) * 0.5;
+            let e = sym.symmetric_eigen();
+            let vals = e.eigenvalues.map(|x| x.max(0.0));
+            e.eigenvectors * Matrix3::from_diagonal(&vals) * e.eigenvectors.transpose()
+        } else {
+            Matrix3::zeros()
+        };
+        Self { force, damping, velocity }
+    }
 }
 
 /// Parameters of the coupling. Defaults suit a 1 kHz loop.
@@ -104,6 +151,13 @@ impl Coupling {
     /// (`hair_force`, N). Returns the force to send to the device (N), or an error (and zero force) for a bad
     /// reading; the proxy then holds still.
     pub fn update(&mut self, reading: &DeviceReading, dt: f64, hair_force: &Vector3<f64>) -> Result<Vector3<f64>, InputError> {
+        self.update_implicit(reading, dt, &HairReaction::explicit(*hair_force))
+    }
+
+    /// As [`Coupling::update`], with the hair's reaction linearised in the proxy's velocity ([`HairReaction`]),
+    /// taken implicitly. Non-finite parts of the reaction are ignored, the damping is made symmetric positive
+    /// semi-definite.
+    pub fn update_implicit(&mut self, reading: &DeviceReading, dt: f64, hair: &HairReaction) -> Result<Vector3<f64>, InputError> {
         let finite = reading.time.is_finite() && reading.position.iter().all(|x| x.is_finite()) && reading.rotation.iter().all(|x| x.is_finite());
         if !finite || !dt.is_finite() || dt <= 0.0 {
             self.reject();
@@ -117,13 +171,17 @@ impl Coupling {
         self.device_velocity = if self.last_time.is_some() { (reading.position - self.device) / dt } else { Vector3::zeros() };
         self.device = reading.position;
         self.last_time = Some(reading.time);
-        let hair = if hair_force.iter().all(|x| x.is_finite()) { *hair_force } else { Vector3::zeros() };
+        let hair = hair.sanitized();
 
-        // Proxy dynamics (semi-implicit: the coupling spring and damper are taken at the new proxy state).
+        // Proxy dynamics, implicit in the new velocity (the coupling spring and damper at the new proxy state,
+        // the hair's reaction linearised about the velocity it was computed at).
         let (k, b, m) = (self.params.stiffness, self.params.damping, self.params.proxy_mass);
         let x_rel = self.device - self.proxy;
-        // m dv = (k (x_rel - dt v_new) + b (v_dev - v_new) + hair) dt, solved for v_new.
-        let v_new = (self.proxy_velocity * m + (x_rel * k + self.device_velocity * b + hair) * dt) / (m + b * dt + k * dt * dt);
+        // (m + b h + k h^2) v + D h v = m v_old + (k x_rel + b v_dev + f0 + D v0) h, solved for v.
+        let a = Matrix3::identity() * (m + b * dt + k * dt * dt) + hair.damping * dt;
+        let rhs = self.proxy_velocity * m + (x_rel * k + self.device_velocity * b + hair.force + hair.damping * hair.velocity) * dt;
+        // `a` is symmetric positive definite (m > 0, D >= 0): Cholesky never fails for finite input.
+        let v_new = a.cholesky().map_or(rhs / (m + b * dt + k * dt * dt), |c| c.solve(&rhs));
         self.proxy_velocity = v_new;
         self.proxy += v_new * dt;
         let coupling = (self.device - self.proxy) * k + (self.device_velocity - self.proxy_velocity) * b;
@@ -265,6 +323,91 @@ mod tests {
                 assert!((c.proxy - c.device).norm() < 1e-3);
                 assert!(f.norm() < 0.1, "{}", f.norm());
             }
+        }
+    }
+
+    /// A dense patch of hair as seen by the proxy inside the slab 2 cm <= y <= 15 cm: a stiff viscous drag
+    /// `D = 2000 N s/m` (each of many light strands answers within a step) that saturates at 1.5 N (they slide
+    /// off), reached 1 cm inside the patch (the hair thins out over its edges). Returns the reaction at proxy
+    /// velocity `v`, linearised (D where not saturated, the secant `cap / |v|` where it is).
+    fn dense_patch(proxy: &Vector3<f64>, v: &Vector3<f64>) -> HairReaction {
+        let d = 2000.0;
+        let cap = 1.5 * ((proxy.y - 0.02) / 0.01).min((0.15 - proxy.y) / 0.01).clamp(0.0, 1.0);
+        if !(0.02..=0.15).contains(&proxy.y) {
+            return HairReaction { velocity: *v, ..HairReaction::none() };
+        }
+        let f = -v * d;
+        if f.norm() > cap {
+            // Saturated: its secant (the drag that gives the cap at this speed), which stays right as the
+            // proxy slows down.
+            HairReaction { force: f * (cap / f.norm()), damping: Matrix3::identity() * (cap / v.norm()), velocity: *v }
+        } else {
+            HairReaction { force: f, damping: Matrix3::identity() * d, velocity: *v }
+        }
+    }
+
+    #[test]
+    fn an_implicit_proxy_is_not_thrown_by_a_stiff_dense_patch() {
+        // Omni profile, the device drawn 10 cm through the dense patch (a minimum-jerk stroke at a mean 0.1,
+        // 0.2 and 0.3 m/s, the stroke speeds) and held there 0.2 s. Explicitly (`D h / m = 40`), once
+        // the proxy slows down the reaction flips sign every step: the proxy chatters and the device force
+        // jumps at the rate clamp (0.3 N per step). Taken implicitly the proxy stays within 1.5 N / k + 1 mm
+        // of the device (never more than 0.5 mm ahead of it: it is not thrown forward), the device force never
+        // changes by more than 0.1 N in one step and no clamp acts.
+        let p = DeviceProfile::PHANTOM_OMNI;
+        let run = |speed: f64, implicit: bool| {
+            let mut c = Coupling::new(p, CouplingParams::for_profile(&p), Vector3::zeros());
+            let mut hair = HairReaction::none();
+            let (mut gap, mut jump, mut ahead, mut peak) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+            let mut last = Vector3::zeros();
+            let duration = 0.1 / speed;
+            for n in 0..(duration / 1e-3) as usize + 200 {
+                let t = n as f64 * 1e-3;
+                // A hand's stroke of 10 cm (minimum jerk, mean speed `speed`), then rest.
+                let u = (t / duration).min(1.0);
+                let x = Vector3::new(0.0, 0.1 * (10.0 * u.powi(3) - 15.0 * u.powi(4) + 6.0 * u.powi(5)), 0.0);
+                let r = if implicit { hair } else { HairReaction::explicit(hair.force) };
+                let f = c.update_implicit(&reading(t, x), 1e-3, &r).unwrap();
+                gap = gap.max((c.proxy - c.device).norm());
+                ahead = ahead.max(c.proxy.y - c.device.y);
+                jump = jump.max((f - last).norm());
+                peak = peak.max(f.norm());
+                last = f;
+                hair = dense_patch(&c.proxy, &c.proxy_velocity);
+            }
+            (gap, jump, ahead, peak, c.clamp_activations)
+        };
+        let k = CouplingParams::for_profile(&p).stiffness;
+        for speed in [0.1, 0.2, 0.3] {
+            let (gap, jump, ahead, peak, clamps) = run(speed, true);
+            println!("implicit {speed} m/s: gap {gap:.2e} m, ahead {ahead:.2e} m, largest step change {jump:.3} N, peak {peak:.3} N, clamps {clamps}");
+            assert!(gap <= 1.5 / k + 1e-3, "{speed} m/s: proxy {gap} m from the device");
+            assert!(ahead <= 5e-4, "{speed} m/s: proxy {ahead} m ahead of the device");
+            assert!(jump <= 0.1, "{speed} m/s: force jumped {jump} N in one step");
+            assert!(peak < p.max_force && clamps == 0, "{speed} m/s: clamped ({peak} N, {clamps} steps)");
+            let (_, jump, _, _, clamps) = run(speed, false);
+            println!("explicit {speed} m/s: largest step change {jump:.3} N, clamps {clamps}");
+            assert!(jump > 0.25 && clamps > 0, "{speed} m/s: the explicit proxy should chatter (jump {jump} N, {clamps} clamps)");
+        }
+    }
+
+    #[test]
+    fn a_reaction_damping_with_bad_parts_is_made_safe() {
+        // A non-symmetric, indefinite or NaN damping matrix never makes the proxy move faster than the device
+        // (the sanitised damping only takes energy out): the proxy stays finite and within 1 cm.
+        let p = DeviceProfile::PHANTOM_OMNI;
+        let mut c = Coupling::new(p, CouplingParams::for_profile(&p), Vector3::zeros());
+        let bad = [
+            Matrix3::new(-1e4, 0.0, 0.0, 0.0, 10.0, 5e3, 0.0, -5e3, 10.0),
+            Matrix3::from_element(f64::NAN),
+            Matrix3::identity() * 1e12,
+        ];
+        for n in 0..600 {
+            let t = n as f64 * 1e-3;
+            let r = HairReaction { force: Vector3::zeros(), damping: bad[n % 3], velocity: c.proxy_velocity };
+            c.update_implicit(&reading(t, Vector3::new(0.05 * t, 0.0, 0.0)), 1e-3, &r).unwrap();
+            assert!(c.proxy.iter().all(|x| x.is_finite()));
+            assert!((c.proxy - c.device).norm() < 0.01, "step {n}: {}", (c.proxy - c.device).norm());
         }
     }
 }

@@ -10,4 +10,5 @@ pub mod coupling;
 pub mod device;
 pub mod haptic_loop;
 pub mod realtime;
+pub mod target;
 pub mod udp;

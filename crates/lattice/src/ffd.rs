@@ -231,11 +231,24 @@ impl FfdLattice {
     pub fn deform(&self, p: &Point3<f64>, nodes: &[Point3<f64>]) -> Result<Vector3<f64>, FfdError> {
         self.check_nodes(nodes)?;
         let (idx, w) = self.weights(p)?;
+        Ok(Self::combine(&idx, &w, nodes))
+    }
+
+    /// As [`FfdLattice::deform`], with `p` clamped to the embedded volume first (a point just outside
+    /// follows the nearest cells; [`FfdLattice::weights_clamped`]), m.
+    pub fn deform_clamped(&self, p: &Point3<f64>, nodes: &[Point3<f64>]) -> Result<Vector3<f64>, FfdError> {
+        self.check_nodes(nodes)?;
+        let (idx, w) = self.weights_clamped(p)?;
+        Ok(Self::combine(&idx, &w, nodes))
+    }
+
+    /// The weighted sum of the stencil's nodes, m.
+    fn combine(idx: &[usize; 27], w: &[f64; 27], nodes: &[Point3<f64>]) -> Vector3<f64> {
         let mut x = Vector3::zeros();
         for m in 0..27 {
             x += w[m] * nodes[idx[m]].coords;
         }
-        Ok(x)
+        x
     }
 
     /// Jacobian d(deformed)/d(rest) (dimensionless, 3x3) at rest point `p` (m): column a is the

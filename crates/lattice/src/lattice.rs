@@ -22,7 +22,7 @@
 //! k_s (u u^T + max(0, 1 - L/|d|)(I - u u^T)) and c_s u u^T, and the attachment a_i k_a I,
 //! a_i c_a I. A is then one scalar sparse matrix shared by the three axes, constant in time and
 //! independent of the head pose, factorised once (sparse Cholesky, `faer`) per model and step size
-//! and kept in [`LatticeState::cache`]; a step costs one force pass and one triangular solve
+//! and kept in the step's [`LatticeWorkspace`] (not in the state); a step costs one force pass and one triangular solve
 //! of three right-hand sides.
 //!
 //! This is a Rosenbrock-W (linearly implicit) method: it is first-order accurate whatever the
@@ -46,6 +46,8 @@
 
 use crate::ffd::FfdLattice;
 use crate::metaball::{MetaballParams, MetaballSet};
+use crate::solver::{pcg_contacts, Contact, NO_MID};
+pub use crate::workspace::LatticeWorkspace;
 use nalgebra::{Isometry3, Point3, Vector3};
 use thiserror::Error;
 
@@ -199,6 +201,10 @@ pub struct CarryParams {
     /// Mass given to every node besides the hair it carries, kg (keeps empty nodes' equations
     /// well posed). Default 1e-6 kg.
     pub empty_node_mass: f64,
+    /// Least attachment weight of any node, dimensionless in [0, 1]: nodes far from the body keep
+    /// this share of the attachment spring (0: they hang on the stiffeners alone). Default 0 (the
+    /// live scene uses 0.35: the hair's own stiffness holds its far ends to the head).
+    pub min_attachment: f64,
 }
 
 impl Default for CarryParams {
@@ -208,6 +214,7 @@ impl Default for CarryParams {
             attach_distance: 0.01,
             attach_falloff: 0.02,
             empty_node_mass: 1e-6,
+            min_attachment: 0.0,
         }
     }
 }
@@ -228,6 +235,9 @@ impl CarryParams {
         }
         if !(self.empty_node_mass > 0.0 && self.empty_node_mass.is_finite()) {
             return bad("empty_node_mass (kg, > 0)", self.empty_node_mass);
+        }
+        if !(0.0..=1.0).contains(&self.min_attachment) {
+            return bad("min_attachment (in [0, 1])", self.min_attachment);
         }
         Ok(())
     }
@@ -280,10 +290,6 @@ pub struct LatticeState {
     /// Steps rejected so far because they would have made the state non-finite (the state was
     /// kept and its velocities zeroed) or were given a bad step size.
     pub rejected_steps: usize,
-    /// The factorised system matrix, kept between steps (rebuilt when `dt` or the model changes).
-    pub cache: StepCache,
-    /// Scratch buffers of the step.
-    pub work: StepWork,
 }
 
 impl LatticeModel {
@@ -388,11 +394,7 @@ impl LatticeModel {
     }
 
     /// A lattice of cell size `carry.cell` (m) enclosing the points `points` (m, head frame; e.g.
-    /// hair vertices) whose node masses are the points' masses `masses` (kg, one per point)
-    /// spread with the quadratic B-spline weights of the FFD (so each node carries the hair
-    /// around it and the total is conserved), plus `carry.empty_node_mass` per node. Nodes inside
-    /// `body` (head frame) or within `carry.attach_distance` of its surface are fully attached to
-    /// the head; the weight falls linearly to 0 over `carry.attach_falloff` beyond.
+    /// hair vertices) carrying their masses `masses` ([`LatticeModel::carrying_in`]).
     pub fn carrying(
         points: &[Point3<f64>],
         masses: &[f64],
@@ -401,28 +403,35 @@ impl LatticeModel {
         params: LatticeParams,
     ) -> Result<Self, LatticeError> {
         carry.validate()?;
-        if points.is_empty() || points.len() != masses.len() {
-            return Err(LatticeError::NodeCount {
-                expected: points.len().max(1),
-                got: masses.len(),
-            });
-        }
-        let mut lo = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
-        let mut hi = -lo;
-        for (i, p) in points.iter().enumerate() {
-            if !p.iter().all(|x| x.is_finite()) || !(masses[i] >= 0.0 && masses[i].is_finite()) {
-                return Err(LatticeError::InvalidMass(i, masses[i]));
-            }
-            for a in 0..3 {
-                lo[a] = lo[a].min(p[a]);
-                hi[a] = hi[a].max(p[a]);
-            }
-        }
+        let (lo, hi) = Self::check_points(points, masses)?;
         let ffd = FfdLattice::enclosing(lo, hi, carry.cell)?;
+        Self::carrying_in(ffd, points.iter().copied().zip(masses.iter().copied()), body, carry, params)
+    }
+
+    /// The lattice `ffd` carrying `points`, pairs of a point (m, head frame; e.g. a hair vertex) and
+    /// its mass (kg, finite, >= 0): each point's mass spread on the nodes with the quadratic
+    /// B-spline weights of the FFD (so each node carries the hair around it and the total is
+    /// conserved; points outside are clamped onto it), plus `carry.empty_node_mass` per node. Nodes
+    /// inside `body` (head frame) or within `carry.attach_distance` of its surface are fully
+    /// attached to the head; the weight falls linearly over `carry.attach_falloff` beyond, to
+    /// `carry.min_attachment`. The one law of a lattice around hair: the live scene
+    /// (`engine::scene`) and generated hairstyles (`hairstyle::Hairstyle::lattice`) both use it.
+    /// (`carry.cell` is `ffd`'s.)
+    pub fn carrying_in(
+        ffd: FfdLattice,
+        points: impl IntoIterator<Item = (Point3<f64>, f64)>,
+        body: &MetaballSet,
+        carry: &CarryParams,
+        params: LatticeParams,
+    ) -> Result<Self, LatticeError> {
+        carry.validate()?;
         let n = ffd.node_count();
         let mut node_mass = vec![carry.empty_node_mass; n];
-        for (p, m) in points.iter().zip(masses) {
-            let (idx, w) = ffd.weights_clamped(p)?;
+        for (k, (p, m)) in points.into_iter().enumerate() {
+            if !p.iter().all(|x| x.is_finite()) || !(m >= 0.0 && m.is_finite()) {
+                return Err(LatticeError::InvalidMass(k, m));
+            }
+            let (idx, w) = ffd.weights_clamped(&p)?;
             for (i, w) in idx.iter().zip(&w) {
                 node_mass[*i] += w * m;
             }
@@ -442,10 +451,32 @@ impl LatticeModel {
                 } else {
                     f64::INFINITY
                 };
-                (1.0 - (d - carry.attach_distance) / carry.attach_falloff).clamp(0.0, 1.0)
+                (1.0 - (d - carry.attach_distance) / carry.attach_falloff).clamp(carry.min_attachment, 1.0)
             })
             .collect();
         Self::new(ffd, node_mass, attachment, params)
+    }
+
+    /// Checks points (finite) and masses (one per point, finite, >= 0); their bounding box, m.
+    fn check_points(points: &[Point3<f64>], masses: &[f64]) -> Result<(Point3<f64>, Point3<f64>), LatticeError> {
+        if points.is_empty() || points.len() != masses.len() {
+            return Err(LatticeError::NodeCount {
+                expected: points.len().max(1),
+                got: masses.len(),
+            });
+        }
+        let mut lo = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        let mut hi = -lo;
+        for (i, p) in points.iter().enumerate() {
+            if !p.iter().all(|x| x.is_finite()) || !(masses[i] >= 0.0 && masses[i].is_finite()) {
+                return Err(LatticeError::InvalidMass(i, masses[i]));
+            }
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        Ok((lo, hi))
     }
 
     /// Total mass of the nodes, kg.
@@ -466,8 +497,6 @@ impl LatticeModel {
             velocities: vec![Vector3::zeros(); self.node_count()],
             last_cg_iterations: 0,
             rejected_steps: 0,
-            cache: StepCache::default(),
-            work: StepWork::default(),
         }
     }
 
@@ -494,18 +523,19 @@ impl LatticeModel {
     /// `head` (head frame to world) and optional metaball `obstacles` in the world frame.
     ///
     /// The system matrix is the constant one of the module docs (factorised once per `dt` and
-    /// model, kept in `state`); with obstacles in contact, the contacts' normal blocks are added
+    /// model, kept in `workspace`); with obstacles in contact, the contacts' normal blocks are added
     /// and the system is solved by conjugate gradients preconditioned with that factorisation.
     /// A step that would give a non-finite state is rejected: the state is kept, its velocities
     /// zeroed, and [`LatticeState::rejected_steps`] counts it.
     pub fn step(
         &self,
         state: &mut LatticeState,
+        workspace: &mut LatticeWorkspace,
         dt: f64,
         head: &Isometry3<f64>,
         obstacles: Option<&MetaballSet>,
     ) {
-        self.step_inner(state, dt, head, obstacles, &[]);
+        self.step_inner(state, workspace, dt, head, obstacles, &[]);
     }
 
     /// [`step`](Self::step) with external forces `forces` (N, world frame, one per node; e.g. a
@@ -517,6 +547,7 @@ impl LatticeModel {
     pub fn step_with_forces(
         &self,
         state: &mut LatticeState,
+        workspace: &mut LatticeWorkspace,
         dt: f64,
         head: &Isometry3<f64>,
         obstacles: Option<&MetaballSet>,
@@ -538,13 +569,14 @@ impl LatticeModel {
                 "external force on node {i} is not finite: {f:?} N"
             )));
         }
-        self.step_inner(state, dt, head, obstacles, forces);
+        self.step_inner(state, workspace, dt, head, obstacles, forces);
         Ok(())
     }
 
     fn step_inner(
         &self,
         state: &mut LatticeState,
+        workspace: &mut LatticeWorkspace,
         dt: f64,
         head: &Isometry3<f64>,
         obstacles: Option<&MetaballSet>,
@@ -558,9 +590,9 @@ impl LatticeModel {
             state.rejected_steps += 1;
             return;
         }
-        let factor = state.cache.factor(self, dt);
+        let factor = workspace.cache.factor(self, dt);
         let p = &self.params;
-        let ws = &mut state.work;
+        let ws = &mut workspace.work;
         ws.resize(n);
         // forces
         {
@@ -670,64 +702,6 @@ impl LatticeModel {
     }
 }
 
-/// A symmetric scalar sparse matrix in compressed rows (node by node), applied to the three
-/// columns x, y, z at once.
-#[derive(Debug, Clone, PartialEq, Default)]
-struct ScalarCsr {
-    n: usize,
-    row: Vec<u32>,
-    col: Vec<u32>,
-    val: Vec<f64>,
-}
-
-impl ScalarCsr {
-    /// Sum of duplicate (row, col, value) entries.
-    fn from_entries(n: usize, mut e: Vec<(u32, u32, f64)>) -> Self {
-        e.sort_unstable_by_key(|&(r, c, _)| (r, c));
-        let mut m = ScalarCsr {
-            n,
-            row: vec![0; n + 1],
-            col: Vec::with_capacity(e.len()),
-            val: Vec::with_capacity(e.len()),
-        };
-        let mut last = (u32::MAX, u32::MAX);
-        for (r, c, v) in e {
-            if (r, c) == last {
-                *m.val.last_mut().unwrap() += v;
-            } else {
-                m.col.push(c);
-                m.val.push(v);
-                m.row[r as usize + 1] = m.col.len() as u32;
-                last = (r, c);
-            }
-        }
-        for i in 0..n {
-            m.row[i + 1] = m.row[i + 1].max(m.row[i]);
-        }
-        m
-    }
-
-    /// out = self * x for each of the three columns (column-major n x 3).
-    fn mul_cols(&self, x: &[f64], out: &mut [f64]) {
-        let n = self.n;
-        let (x0, rest) = x.split_at(n);
-        let (x1, x2) = rest.split_at(n);
-        for i in 0..n {
-            let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
-            for k in self.row[i] as usize..self.row[i + 1] as usize {
-                let j = self.col[k] as usize;
-                let w = self.val[k];
-                a += w * x0[j];
-                b += w * x1[j];
-                c += w * x2[j];
-            }
-            out[i] = a;
-            out[n + i] = b;
-            out[2 * n + i] = c;
-        }
-    }
-}
-
 /// Fill-reducing ordering of the sparse Cholesky factorisation of the system matrix
 /// ([`LatticeParams::fill_ordering`]). It changes the cost of a step, never its result beyond
 /// round-off.
@@ -745,485 +719,10 @@ pub enum FillOrdering {
     NestedDissection,
 }
 
-/// Nested-dissection ordering of an `nx` x `ny` x `nz` grid (node (i, j, k) at flat index
-/// i + nx (j + ny k)) whose couplings reach `reach` nodes along an axis: `order[new] = old`.
-fn grid_nested_dissection(nx: usize, ny: usize, nz: usize, reach: usize) -> Vec<usize> {
-    fn rec(lo: [usize; 3], hi: [usize; 3], dims: [usize; 3], reach: usize, out: &mut Vec<usize>) {
-        let ext = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
-        if ext.iter().any(|&e| e == 0) {
-            return;
-        }
-        let axis = (0..3).max_by_key(|&a| ext[a]).expect("three axes");
-        if ext[axis] < 2 * reach + 2 || ext[0] * ext[1] * ext[2] <= 16 {
-            for k in lo[2]..hi[2] {
-                for j in lo[1]..hi[1] {
-                    for i in lo[0]..hi[0] {
-                        out.push(i + dims[0] * (j + dims[1] * k));
-                    }
-                }
-            }
-            return;
-        }
-        let mid = lo[axis] + (ext[axis] - reach) / 2;
-        let (mut left_hi, mut sep_lo, mut sep_hi, mut right_lo) = (hi, lo, hi, lo);
-        left_hi[axis] = mid;
-        sep_lo[axis] = mid;
-        sep_hi[axis] = mid + reach;
-        right_lo[axis] = mid + reach;
-        rec(lo, left_hi, dims, reach, out);
-        rec(right_lo, hi, dims, reach, out);
-        rec_flat(sep_lo, sep_hi, dims, out);
-    }
-    fn rec_flat(lo: [usize; 3], hi: [usize; 3], dims: [usize; 3], out: &mut Vec<usize>) {
-        for k in lo[2]..hi[2] {
-            for j in lo[1]..hi[1] {
-                for i in lo[0]..hi[0] {
-                    out.push(i + dims[0] * (j + dims[1] * k));
-                }
-            }
-        }
-    }
-    let mut out = Vec::with_capacity(nx * ny * nz);
-    rec([0, 0, 0], [nx, ny, nz], [nx, ny, nz], reach.max(1), &mut out);
-    out
-}
-
-/// The constant part of the implicit system for one model and step: A = M + dt C' +
-/// dt^2 K' (scalar, shared by the three axes), and A's sparse Cholesky factorisation
-/// (symbolic part and values of L, faer's low-level API so the solve's scratch can be kept).
-struct Factor {
-    a: ScalarCsr,
-    symbolic: faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
-    l_values: LValues,
-    /// Per stiffener: the middle node of a bending stiffener (two cells along an axis), else
-    /// `u32::MAX`. Used with the bending Jacobian bounds.
-    mid: Vec<u32>,
-    /// The bending Jacobian the matrix was built with.
-    bending: BendingJacobian,
-}
-
-/// The stored values of the Cholesky factor, in the chosen precision.
-enum LValues {
-    F64(Vec<f64>),
-    F32(Vec<f32>),
-}
-
-/// No middle node (not a bending stiffener).
-const NO_MID: u32 = u32::MAX;
-
-impl Factor {
-    fn new(model: &LatticeModel, dt: f64) -> Self {
-        use faer::sparse::linalg::cholesky as chol;
-        let n = model.node_count();
-        let p = &model.params;
-        let mut ae = Vec::with_capacity(2 * model.stiffeners.len() + n);
-        for i in 0..n {
-            let a = model.attachment[i];
-            let kd = a * p.attachment_stiffness;
-            ae.push((
-                i as u32,
-                i as u32,
-                model.masses[i] + dt * a * p.attachment_damping + dt * dt * kd,
-            ));
-        }
-        let f = &model.ffd;
-        let (nx, nxy) = (f.nx, f.nx * f.ny);
-        let ijk = |q: usize| [(q % nx) as i64, ((q % nxy) / nx) as i64, (q / nxy) as i64];
-        let mid: Vec<u32> = model
-            .stiffeners
-            .iter()
-            .map(|s| {
-                let (a, b) = (ijk(s.i), ijk(s.j));
-                let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-                let axial = d.iter().filter(|&&x| x != 0).count() == 1
-                    && d.iter().any(|&x| x.abs() == 2);
-                if axial {
-                    ((s.i + s.j) / 2) as u32
-                } else {
-                    NO_MID
-                }
-            })
-            .collect();
-        let bending = p.bending_jacobian;
-        let pair = |ae: &mut Vec<(u32, u32, f64)>, i: u32, j: u32, sa: f64| {
-            for (r, c, sign) in [(i, i, 1.0), (j, j, 1.0), (i, j, -1.0), (j, i, -1.0)] {
-                ae.push((r, c, sign * sa));
-            }
-        };
-        for (s, &m) in model.stiffeners.iter().zip(&mid) {
-            let (i, j) = (s.i as u32, s.j as u32);
-            let sa = dt * s.damping + dt * dt * s.stiffness;
-            match (m, bending) {
-                (NO_MID, _) | (_, BendingJacobian::Laplacian) => pair(&mut ae, i, j, sa),
-                (_, BendingJacobian::DiagonalBound) => {
-                    ae.push((i, i, 2.0 * sa));
-                    ae.push((j, j, 2.0 * sa));
-                }
-                (m, BendingJacobian::PathBound) => {
-                    pair(&mut ae, i, m, 2.0 * sa);
-                    pair(&mut ae, m, j, 2.0 * sa);
-                }
-            }
-        }
-        let a = ScalarCsr::from_entries(n, ae);
-        let mut trip = Vec::with_capacity(a.val.len());
-        for r in 0..n {
-            for q in a.row[r] as usize..a.row[r + 1] as usize {
-                trip.push(faer::sparse::Triplet::new(r, a.col[q] as usize, a.val[q]));
-            }
-        }
-        let mat = faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip)
-            .expect("valid sparse pattern");
-        // the longest axial reach of an off-diagonal entry of A, in nodes (2 with bending
-        // stiffeners in the Laplacian form)
-        let mut reach = 1;
-        for r in 0..n {
-            for q in a.row[r] as usize..a.row[r + 1] as usize {
-                let (x, y) = (ijk(r), ijk(a.col[q] as usize));
-                for c in 0..3 {
-                    reach = reach.max((x[c] - y[c]).unsigned_abs() as usize);
-                }
-            }
-        }
-        let symbolic_with = |ord: chol::SymmetricOrdering<'_, usize>| {
-            chol::factorize_symbolic_cholesky(
-                mat.symbolic(),
-                faer::Side::Lower,
-                ord,
-                Default::default(),
-            )
-            .expect("symbolic Cholesky of the lattice matrix")
-        };
-        let nd = || {
-            let fwd = grid_nested_dissection(f.nx, f.ny, f.nz, reach);
-            let mut inv = vec![0usize; n];
-            for (new, &old) in fwd.iter().enumerate() {
-                inv[old] = new;
-            }
-            let perm = faer::perm::Perm::new_checked(fwd.into_boxed_slice(), inv.into_boxed_slice(), n);
-            symbolic_with(chol::SymmetricOrdering::Custom(perm.as_ref()))
-        };
-        let symbolic = match p.fill_ordering {
-            FillOrdering::Amd => symbolic_with(chol::SymmetricOrdering::Amd),
-            FillOrdering::NestedDissection => nd(),
-            FillOrdering::Auto => {
-                let (amd, nd) = (symbolic_with(chol::SymmetricOrdering::Amd), nd());
-                if nd.len_val() <= amd.len_val() {
-                    nd
-                } else {
-                    amd
-                }
-            }
-        };
-        let par = faer::Par::Seq;
-        let mut l_values = vec![0.0; symbolic.len_val()];
-        let mut mem = faer::dyn_stack::MemBuffer::new(
-            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-        );
-        symbolic
-            .factorize_numeric_llt(
-                &mut l_values,
-                mat.as_ref(),
-                faer::Side::Lower,
-                Default::default(),
-                par,
-                faer::dyn_stack::MemStack::new(&mut mem),
-                Default::default(),
-            )
-            .expect("M + dt C' + dt^2 K' is symmetric positive definite (masses > 0)");
-        let l_values = match p.factor_precision {
-            FactorPrecision::F64 => LValues::F64(l_values),
-            FactorPrecision::F32 => LValues::F32(l_values.iter().map(|&x| x as f32).collect()),
-        };
-        Factor {
-            a,
-            symbolic,
-            l_values,
-            mid,
-            bending,
-        }
-    }
-
-    /// Number of stored values of the Cholesky factor L (its fill).
-    fn factor_len(&self) -> usize {
-        match &self.l_values {
-            LValues::F64(v) => v.len(),
-            LValues::F32(v) => v.len(),
-        }
-    }
-
-    /// Bytes of the stored Cholesky factor values.
-    fn factor_bytes(&self) -> usize {
-        match &self.l_values {
-            LValues::F64(v) => 8 * v.len(),
-            LValues::F32(v) => 4 * v.len(),
-        }
-    }
-
-    /// x <- A^-1 x for the three columns of x (column-major n x 3), with the solve's scratch
-    /// taken from (and kept in) `scratch`.
-    fn solve_in_place(&self, x: &mut [f64], scratch: &mut SolveScratch) {
-        let n = self.a.n;
-        let par = faer::Par::Seq;
-        let key = self as *const Factor as usize;
-        if scratch.0.as_ref().map(|(k, _)| *k) != Some(key) {
-            let req = match self.l_values {
-                LValues::F64(_) => self.symbolic.solve_in_place_scratch::<f64>(3, par),
-                LValues::F32(_) => self.symbolic.solve_in_place_scratch::<f32>(3, par),
-            };
-            scratch.0 = Some((key, faer::dyn_stack::MemBuffer::new(req)));
-        }
-        let mem = &mut scratch.0.as_mut().expect("just set").1;
-        match &self.l_values {
-            LValues::F64(l) => {
-                let m = faer::MatMut::from_column_major_slice_mut(x, n, 3);
-                faer::sparse::linalg::cholesky::LltRef::new(&self.symbolic, l)
-                    .solve_in_place_with_conj(
-                        faer::Conj::No,
-                        m,
-                        par,
-                        faer::dyn_stack::MemStack::new(mem),
-                    );
-            }
-            LValues::F32(l) => {
-                let y = &mut scratch.1;
-                y.clear();
-                y.extend(x.iter().map(|&v| v as f32));
-                let m = faer::MatMut::from_column_major_slice_mut(&mut y[..], n, 3);
-                faer::sparse::linalg::cholesky::LltRef::new(&self.symbolic, l)
-                    .solve_in_place_with_conj(
-                        faer::Conj::No,
-                        m,
-                        par,
-                        faer::dyn_stack::MemStack::new(mem),
-                    );
-                for (o, &v) in x.iter_mut().zip(y.iter()) {
-                    *o = v as f64;
-                }
-            }
-        }
-    }
-}
-
-/// Scratch memory of the triangular solves, kept between steps (sized for the cached factor,
-/// which it is tagged with).
-#[derive(Default)]
-pub struct SolveScratch(Option<(usize, faer::dyn_stack::MemBuffer)>, Vec<f32>);
-
-impl Clone for SolveScratch {
-    fn clone(&self) -> Self {
-        SolveScratch(None, Vec::new())
-    }
-}
-
-impl std::fmt::Debug for SolveScratch {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("SolveScratch")
-    }
-}
-
-/// Scratch never makes two states differ.
-impl PartialEq for SolveScratch {
-    fn eq(&self, _: &Self) -> bool {
-        true
-    }
-}
-
-/// One node in contact with an obstacle: its implicit block k n n^T (in K) and s n n^T (in A).
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Contact {
-    node: usize,
-    normal: Vector3<f64>,
-    k: f64,
-    s: f64,
-}
-
-/// Scratch buffers of the step (no allocation per step once sized).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct StepWork {
-    force: Vec<Vector3<f64>>,
-    b: Vec<f64>,
-    x: Vec<f64>,
-    r: Vec<f64>,
-    z: Vec<f64>,
-    d: Vec<f64>,
-    ad: Vec<f64>,
-    contacts: Vec<Contact>,
-    scratch: SolveScratch,
-}
-
-impl StepWork {
-    fn resize(&mut self, n: usize) {
-        if self.force.len() != n {
-            self.force = vec![Vector3::zeros(); n];
-            for v in [
-                &mut self.b,
-                &mut self.x,
-                &mut self.r,
-                &mut self.z,
-                &mut self.d,
-                &mut self.ad,
-            ] {
-                *v = vec![0.0; 3 * n];
-            }
-        }
-    }
-}
-
-/// The factorisation kept between steps, rebuilt when the step size or the model changes.
-#[derive(Default, Clone)]
-pub struct StepCache {
-    key: Option<(u64, u64)>,
-    factor: Option<std::sync::Arc<Factor>>,
-}
-
-impl std::fmt::Debug for StepCache {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("StepCache")
-            .field("factorised", &self.factor.is_some())
-            .finish()
-    }
-}
-
-/// Caches never make two states differ.
-impl PartialEq for StepCache {
-    fn eq(&self, _: &Self) -> bool {
-        true
-    }
-}
-
-impl StepCache {
-    /// Stored values of the cached Cholesky factor L (its fill), if factorised yet.
-    pub fn factor_nonzeros(&self) -> Option<usize> {
-        self.factor.as_ref().map(|f| f.factor_len())
-    }
-
-    /// Bytes of the cached Cholesky factor's values (4 or 8 per value, by
-    /// [`LatticeParams::factor_precision`]), if factorised yet.
-    pub fn factor_bytes(&self) -> Option<usize> {
-        self.factor.as_ref().map(|f| f.factor_bytes())
-    }
-
-    fn factor(&mut self, model: &LatticeModel, dt: f64) -> std::sync::Arc<Factor> {
-        let key = (dt.to_bits(), model.fingerprint());
-        if self.key != Some(key) || self.factor.is_none() {
-            self.factor = Some(std::sync::Arc::new(Factor::new(model, dt)));
-            self.key = Some(key);
-        }
-        self.factor.clone().expect("just built")
-    }
-}
-
-impl LatticeModel {
-    /// A hash of everything the implicit matrix depends on (masses, attachment, stiffeners,
-    /// parameters), to know when a cached factorisation is stale.
-    fn fingerprint(&self) -> u64 {
-        // a multiply-xor hash (FxHash's mixing step) in four independent lanes: this runs every
-        // step over every stiffener, where SipHash took a noticeable part of the step
-        let step = |h: u64, x: u64| (h.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
-        let mut lanes = [1u64, 2, 3, 4];
-        for (q, m) in self.masses.iter().chain(&self.attachment).enumerate() {
-            lanes[q % 4] = step(lanes[q % 4], m.to_bits());
-        }
-        for s in &self.stiffeners {
-            lanes[0] = step(lanes[0], s.i as u64);
-            lanes[1] = step(lanes[1], s.j as u64);
-            lanes[2] = step(lanes[2], s.stiffness.to_bits());
-            lanes[3] = step(lanes[3], s.damping.to_bits());
-        }
-        let mut h = step(self.masses.len() as u64, self.stiffeners.len() as u64);
-        h = step(h, p_bits(&self.params));
-        for l in lanes {
-            h = step(h, l);
-        }
-        let mut mix = |x: u64| h = step(h, x);
-        let p = &self.params;
-        for x in [p.attachment_stiffness, p.attachment_damping] {
-            mix(x.to_bits());
-        }
-        mix(match p.fill_ordering {
-            FillOrdering::Auto => 0,
-            FillOrdering::Amd => 1,
-            FillOrdering::NestedDissection => 2,
-        });
-        h
-    }
-}
-
-/// The matrix-shaping enum parameters as bits for the fingerprint.
-fn p_bits(p: &LatticeParams) -> u64 {
-    let b = match p.bending_jacobian {
-        BendingJacobian::Laplacian => 0,
-        BendingJacobian::DiagonalBound => 1,
-        BendingJacobian::PathBound => 2,
-    };
-    let f = match p.factor_precision {
-        FactorPrecision::F64 => 0,
-        FactorPrecision::F32 => 1,
-    };
-    b | (f << 4)
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// (A + D) y with D the contacts' blocks s n n^T.
-fn apply_with_contacts(f: &Factor, contacts: &[Contact], n: usize, y: &[f64], out: &mut [f64]) {
-    f.a.mul_cols(y, out);
-    for c in contacts {
-        let i = c.node;
-        let yn = c.normal.x * y[i] + c.normal.y * y[n + i] + c.normal.z * y[2 * n + i];
-        for k in 0..3 {
-            out[k * n + i] += c.s * yn * c.normal[k];
-        }
-    }
-}
-
-/// Conjugate gradients on (A + D) x = b preconditioned by A^-1 (the factorisation), starting from
-/// `ws.x`; stops when |r| <= tol |b|. Returns the iterations used.
-fn pcg_contacts(f: &Factor, ws: &mut StepWork, n: usize, tol: f64, max_iter: usize) -> usize {
-    let b_norm = dot(&ws.b, &ws.b).sqrt();
-    if b_norm == 0.0 {
-        ws.x.iter_mut().for_each(|x| *x = 0.0);
-        return 0;
-    }
-    apply_with_contacts(f, &ws.contacts, n, &ws.x, &mut ws.ad);
-    for i in 0..3 * n {
-        ws.r[i] = ws.b[i] - ws.ad[i];
-    }
-    if dot(&ws.r, &ws.r).sqrt() <= tol * b_norm {
-        return 0;
-    }
-    ws.z.copy_from_slice(&ws.r);
-    f.solve_in_place(&mut ws.z, &mut ws.scratch);
-    ws.d.copy_from_slice(&ws.z);
-    let mut rz = dot(&ws.r, &ws.z);
-    for it in 0..max_iter {
-        apply_with_contacts(f, &ws.contacts, n, &ws.d, &mut ws.ad);
-        let alpha = rz / dot(&ws.d, &ws.ad);
-        for i in 0..3 * n {
-            ws.x[i] += alpha * ws.d[i];
-            ws.r[i] -= alpha * ws.ad[i];
-        }
-        if dot(&ws.r, &ws.r).sqrt() <= tol * b_norm {
-            return it + 1;
-        }
-        ws.z.copy_from_slice(&ws.r);
-        f.solve_in_place(&mut ws.z, &mut ws.scratch);
-        let rz_new = dot(&ws.r, &ws.z);
-        let beta = rz_new / rz;
-        rz = rz_new;
-        for i in 0..3 * n {
-            ws.d[i] = ws.z[i] + beta * ws.d[i];
-        }
-    }
-    max_iter
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solver::grid_nested_dissection;
     use crate::metaball::Metaball;
 
     /// Default parameters without gravity.
@@ -1275,9 +774,10 @@ mod tests {
         let head = Isometry3::translation(0.3, -0.2, 1.5)
             * Isometry3::rotation(Vector3::new(0.2, -0.1, 0.7));
         let mut s = m.rest_state(&head);
+        let mut w = LatticeWorkspace::default();
         let start = s.clone();
         for _ in 0..100 {
-            m.step(&mut s, 0.01, &head, None);
+            m.step(&mut s, &mut w, 0.01, &head, None);
         }
         for (x, x0) in s.positions.iter().zip(&start.positions) {
             assert!((x - x0).norm() < 1e-12);
@@ -1291,6 +791,7 @@ mod tests {
         let m = model(params);
         let head = Isometry3::identity();
         let mut s = m.rest_state(&head);
+        let mut w = LatticeWorkspace::default();
         for (q, x) in s.positions.iter_mut().enumerate() {
             let f = q as f64;
             *x += 0.01 * Vector3::new((1.7 * f).sin(), (0.9 * f).cos(), (2.3 * f + 0.5).sin());
@@ -1306,7 +807,7 @@ mod tests {
         let mut e = m.energy(&s, &head);
         let e0 = e;
         for _ in 0..300 {
-            m.step(&mut s, 0.01, &head, None);
+            m.step(&mut s, &mut w, 0.01, &head, None);
             let e1 = m.energy(&s, &head);
             assert!(e1 <= e * (1.0 + 1e-12) + 1e-24, "energy rose {e} -> {e1}");
             e = e1;
@@ -1327,8 +828,9 @@ mod tests {
         let m = model(params);
         let head = Isometry3::identity();
         let mut s = m.rest_state(&head);
+        let mut w = LatticeWorkspace::default();
         for _ in 0..2000 {
-            m.step(&mut s, 0.01, &head, None);
+            m.step(&mut s, &mut w, 0.01, &head, None);
         }
         let sag = m.masses[0] * params.gravity / params.attachment_stiffness;
         for (x, r) in s.positions.iter().zip(&m.rest) {
@@ -1346,6 +848,7 @@ mod tests {
         let m = model(params);
         let head = Isometry3::identity();
         let mut s = m.rest_state(&head);
+        let mut w = LatticeWorkspace::default();
         let ball = MetaballSet::new(vec![Metaball::new(Point3::new(0.025, 0.025, 0.075), 0.08)]);
         let t = params.metaball.threshold;
         let inside0: Vec<usize> = (0..m.node_count())
@@ -1366,7 +869,7 @@ mod tests {
         };
         let d0 = depth(&s);
         for _ in 0..300 {
-            m.step(&mut s, 0.01, &head, Some(&ball));
+            m.step(&mut s, &mut w, 0.01, &head, Some(&ball));
         }
         // the node's stiffeners, bending stiffeners and attachment (~173 + 10 + 5 N/m along an
         // axis) hold it back against
@@ -1402,6 +905,7 @@ mod tests {
         let m = model(params);
         let head = Isometry3::identity();
         let mut s = m.rest_state(&head);
+        let mut w = LatticeWorkspace::default();
         let big = 1.0;
         let r_surf = big * (1.0 - params.metaball.threshold.sqrt()).sqrt();
         let bottom = m.ffd.origin.z;
@@ -1410,7 +914,7 @@ mod tests {
             big,
         )]);
         for _ in 0..3000 {
-            m.step(&mut s, 0.01, &head, Some(&floor));
+            m.step(&mut s, &mut w, 0.01, &head, Some(&floor));
         }
         let vmax = s.velocities.iter().map(|v| v.norm()).fold(0.0, f64::max);
         assert!(vmax < 1e-6, "still moving: {vmax} m/s");
@@ -1453,8 +957,9 @@ mod tests {
             let m = LatticeModel::uniform(ffd.clone(), 1e-4, params).unwrap();
             let head = Isometry3::rotation(Vector3::new(0.1, 0.0, 0.0));
             let mut s = m.rest_state(&Isometry3::identity());
+            let mut w = LatticeWorkspace::default();
             for _ in 0..20 {
-                m.step(&mut s, 0.01, &head, None);
+                m.step(&mut s, &mut w, 0.01, &head, None);
             }
             let moved = s
                 .positions
@@ -1463,7 +968,7 @@ mod tests {
                 .map(|(x, r)| (x - r).norm())
                 .fold(0.0, f64::max);
             assert!(moved > 1e-3, "moved only {moved} m");
-            (s.positions, s.cache.factor_nonzeros().unwrap())
+            (s.positions, w.factor_nonzeros().unwrap())
         };
         let (xa, fa) = run(FillOrdering::Amd);
         let (xn, fnd) = run(FillOrdering::NestedDissection);
@@ -1496,13 +1001,14 @@ mod tests {
             };
             let m = LatticeModel::uniform(ffd.clone(), 1e-4, params).unwrap();
             let mut s = m.rest_state(&Isometry3::identity());
+            let mut w = LatticeWorkspace::default();
             let mut traj = Vec::new();
             let mut e_prev = f64::INFINITY;
             for k in 0..350 {
                 let t = (k + 1) as f64 * 0.01;
                 let ang = if t <= 0.5 { 0.2 * (6.0 * std::f64::consts::PI * t).sin() } else { 0.0 };
                 let head = Isometry3::rotation(Vector3::new(ang, 0.0, 0.0));
-                m.step(&mut s, 0.01, &head, None);
+                m.step(&mut s, &mut w, 0.01, &head, None);
                 if t > 0.5 {
                     let e = m.energy(&s, &head);
                     assert!(
@@ -1516,7 +1022,7 @@ mod tests {
             assert_eq!(s.rejected_steps, 0);
             let vmax = s.velocities.iter().map(|v| v.norm()).fold(0.0, f64::max);
             assert!(vmax < 1e-4, "{bending:?}/{prec:?}: still moving at {vmax} m/s");
-            (traj, s.cache.factor_nonzeros().unwrap())
+            (traj, w.factor_nonzeros().unwrap())
         };
         let (exact, fill_exact) = run(BendingJacobian::Laplacian, FactorPrecision::F64);
         let scale = exact
@@ -1566,29 +1072,30 @@ mod tests {
         let m = model(params);
         let head = Isometry3::identity();
         let mut s = m.rest_state(&head);
+        let mut w = LatticeWorkspace::default();
         let f = Vector3::new(3e-3, -1e-3, 2e-3);
         let forces = vec![f; m.node_count()];
         for _ in 0..2000 {
-            m.step_with_forces(&mut s, 0.01, &head, None, &forces).unwrap();
+            m.step_with_forces(&mut s, &mut w, 0.01, &head, None, &forces).unwrap();
         }
         let shift = f / params.attachment_stiffness;
         for (x, r) in s.positions.iter().zip(&m.rest) {
             assert!(((x - r) - shift).norm() < 1e-6 * shift.norm(), "{} vs {shift}", x - r);
         }
         for _ in 0..2000 {
-            m.step_with_forces(&mut s, 0.01, &head, None, &[]).unwrap();
+            m.step_with_forces(&mut s, &mut w, 0.01, &head, None, &[]).unwrap();
         }
         for (x, r) in s.positions.iter().zip(&m.rest) {
             assert!((x - r).norm() < 1e-6);
         }
         let before = s.clone();
         assert!(matches!(
-            m.step_with_forces(&mut s, 0.01, &head, None, &forces[1..]),
+            m.step_with_forces(&mut s, &mut w, 0.01, &head, None, &forces[1..]),
             Err(LatticeError::NodeCount { .. })
         ));
         let mut bad = forces.clone();
         bad[3].y = f64::NAN;
-        let e = m.step_with_forces(&mut s, 0.01, &head, None, &bad).unwrap_err();
+        let e = m.step_with_forces(&mut s, &mut w, 0.01, &head, None, &bad).unwrap_err();
         assert!(e.to_string().contains("node 3"), "{e}");
         assert_eq!(s.positions, before.positions);
     }

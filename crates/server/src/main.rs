@@ -27,8 +27,10 @@ enum Command {
     Demo(demo::DemoArgs),
     /// Simulate or solve the statics of one strand described by a TOML spec file.
     Strand(strand_cmd::StrandArgs),
-    /// Run a scripted tool session (scenario TOML) headless: force trace and summary.
+    /// Run a scenario (TOML: a patch, global tools, or the live session headless): trace and summary.
     Run(run_cmd::RunArgs),
+    /// Replay a `coiffure serve --record` file headless into the outputs of a live scenario.
+    Replay(run_cmd::ReplayArgs),
     /// Convert a hair file between formats (.hair, .data, .tfx, .usda), chosen by extension.
     Convert(files_cmd::ConvertArgs),
     /// Print a hair file's strand and point counts and bounds.
@@ -50,6 +52,7 @@ fn main() -> ExitCode {
         Command::Demo(args) => demo::run(&args),
         Command::Strand(args) => strand_cmd::run(&args),
         Command::Run(args) => run_cmd::run(&args),
+        Command::Replay(args) => run_cmd::replay(&args),
         Command::Convert(args) => files_cmd::convert(&args),
         Command::Info(args) => files_cmd::show_info(&args),
         Command::Fit(args) => fit_cmd::run(&args),

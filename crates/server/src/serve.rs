@@ -435,47 +435,17 @@ fn load(app: &App, curves: &hairstyle::HairCurves) -> Result<(), String> {
     Ok(())
 }
 
-/// The current hairstyle (render strands through the latest lattice, cut strands shortened) as file bytes.
+/// The current hairstyle (render strands through the latest lattice, following the active guides, cut
+/// strands shortened: `Scene::render_curves`, the law the viewer's shader draws) as file bytes.
 fn save(app: &App, format: usize) -> Result<Vec<u8>, String> {
     let scene = app.scene.lock().unwrap().clone();
     let nodes: Vec<nalgebra::Point3<f64>> = app.latest_lattice.lock().unwrap().iter().map(|p| nalgebra::Point3::new(p[0] as f64, p[1] as f64, p[2] as f64)).collect();
-    let nodes = if nodes.len() == scene.lattice.node_count() { nodes } else { scene.lattice.rest.clone() };
-    let nv = scene.render.vertices_per_strand;
     let (kept, active, disp, samples) = app.latest_guides.lock().unwrap().clone();
-    let k = scene.render.guides_per_strand;
-    let strands: Vec<Vec<[f32; 3]>> = scene
-        .render
-        .positions
-        .chunks(nv)
-        .enumerate()
-        .map(|(i, s)| {
-            let keep = kept.get(i).map_or(nv, |&k| k as usize);
-            s.iter()
-                .enumerate()
-                .filter(|(j, _)| *j < keep)
-                .map(|(j, p)| {
-                    let mut q = engine::session::ffd_map(&scene.lattice.ffd, &nodes, &nalgebra::Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64));
-                    // Active guides' displacement, as the viewer adds it.
-                    let u = scene.render.span[i] as f64 * j as f64 / (nv - 1) as f64;
-                    for m in 0..k {
-                        let g = scene.render.guide[i * k + m];
-                        if let Some(a) = active.iter().position(|&x| x == g) {
-                            let x = u * (samples - 1) as f64;
-                            let lo = (x.floor() as usize).min(samples - 1);
-                            let hi = (lo + 1).min(samples - 1);
-                            let d = disp[a * samples + lo] * (1.0 - (x - lo as f64)) + disp[a * samples + hi] * (x - lo as f64);
-                            q += d * scene.render.weight[i * k + m] as f64;
-                        }
-                    }
-                    [q.x as f32, q.y as f32, q.z as f32]
-                })
-                .collect()
-        })
-        .filter(|s: &Vec<[f32; 3]>| s.len() >= 2)
-        .collect();
+    let guides = engine::scene::GuideDisplacements { active: &active, displacement: &disp, samples };
+    let curves = scene.render_curves(&nodes, &engine::scene::Scene::kept_lengths_of_points(&kept), &guides);
     let f = hairstyle::formats::Format::from_path(Path::new(&format!("x.{}", protocol::FORMATS[format]))).expect("known extension");
     // thickness (USD `widths`) from the scene's hair type
-    let mut curves = hairstyle::HairCurves::from_strands(strands);
+    let mut curves = curves;
     curves.thickness = Some(vec![scene.hair_type.major_diameter as f32; curves.num_points()]);
     f.write(&curves).map_err(|e| format!("cannot write {}: {e}", protocol::FORMATS[format]))
 }

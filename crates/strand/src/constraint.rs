@@ -1,16 +1,35 @@
 //! Point constraints solved inside the linearly implicit step: unilateral contacts with Coulomb friction
-//! (a tool's surface touching the strand) and bilateral pins (a clip holding a point of the strand).
+//! (a tool's surface, the body or another strand touching the strand) and bilateral pins (a clip holding a
+//! point of the strand).
 //!
 //! The step solves `A qdot+ = b + J^T p` with `A = M + hD + h^2 K` (solved in O(N) per right-hand side by the
 //! articulated-body recursion of the step), `J` the Jacobians
 //! of the constrained points and `p` their impulses (N s, over the step). With `Y = A^-1 J^T` the point
-//! velocities after the step are `u = u_free + W p`, `W = J Y` (the Delassus operator). Impulses come from
-//! projected Gauss-Seidel sweeps: for a contact the normal impulse is >= 0 and brings the normal velocity to
-//! `stabilization * depth / h` (or more), the tangential impulse is clamped to the Coulomb cone
-//! `|p_t| <= mu p_n`; a pin's impulse brings the point to its target velocity plus
-//! `stabilization * error / h`, and after the step the positions are projected back onto the pins
-//! (post-stabilization), so a pinned point does not drift. The force on the strand is `p / h`; the obstacle
-//! receives `-p / h`.
+//! velocities after the step are `u = u_free + W p`, `W = J Y` (the Delassus operator).
+//!
+//! **Soft, bounded constraints** (after MuJoCo's `solref`, and the "soft step" of Catto's solvers). Every
+//! constraint row solves, by projected Gauss-Seidel sweeps,
+//!
+//! `u - v_obstacle + R p = min(beta e, v_max)` (along the error's direction)
+//!
+//! - `e` is the position error (a contact's penetration depth, a pin's offset to its target), m;
+//! - `beta = omega / (2 zeta + h omega)`, `omega = 1 / (tau zeta)`: the error-reduction rate (1/s) of an
+//!   implicit spring-damper with time constant `tau` and damping ratio `zeta` ([`ConstraintOptions`]);
+//! - `v_max` caps the speed at which an error is corrected: depenetration never asks a point for more than
+//!   `v_max` (m/s) on top of the obstacle's own velocity;
+//! - `R = 1 / (h^2 k_max)` is the constraint-force mixing (m/s per N s): each constraint is at most as stiff as
+//!   a spring of `k_max` (N/m) acting on the distance the point would have to cover in one step. It makes the
+//!   regularized problem `(W + R) p = ...` strictly positive definite, so
+//!   - no impulse is unbounded: `|p| <= h^2 k_max (v_max + |u_free - v_obstacle|)` for one constraint, even
+//!     where the point can hardly move (next to a clamped root, along a taut strand);
+//!   - contradictory constraints (a tooth pressing a strand into the scalp, a kinematic root inside the body)
+//!     resolve to a finite compromise instead of an impulse race.
+//!   Where the point moves freely (mobility `W >> R`) the constraint is as rigid as before.
+//!
+//! For a contact the normal impulse is >= 0, the tangential impulse is clamped to the Coulomb cone
+//! `|p_t| <= mu p_n`; a pin's impulse follows its target's velocity. After the step the positions are projected
+//! back onto the pins (post-stabilization, Cline and Pai 2003), by at most `v_max h` per step, so a pinned point
+//! does not drift. The force on the strand is `p / h`; the obstacle receives `-p / h`.
 
 use crate::error::{Result, StrandError};
 use crate::integrator::{Integrator, Strand};
@@ -48,18 +67,71 @@ pub struct PointConstraint {
     pub velocity: Vector3<f64>,
 }
 
-/// Options of the constraint solver.
+/// Options of the constraint solver: the compliance of every constraint (tool, body, hair-hair contacts and
+/// pins) and the solver's effort. See the module documentation for the law.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ConstraintOptions {
-    /// Fraction of the position error (penetration, pin offset) corrected per step (0..1). Default 0.5.
-    pub stabilization: f64,
+    /// Time constant `tau` of the constraint's error correction (MuJoCo's `solref[0]`), s: a penetration or pin
+    /// offset decays like a spring-damper of natural frequency `1 / (tau zeta)`. Default 0.004 (4 haptic steps;
+    /// MuJoCo advises at least two steps).
+    pub time_constant: f64,
+    /// Damping ratio `zeta` of that spring-damper (MuJoCo's `solref[1]`), dimensionless. Default 1 (critical).
+    pub damping_ratio: f64,
+    /// Largest speed at which a position error is corrected, m/s (on top of the obstacle's velocity). Default
+    /// 0.05: a strand pushed out of the scalp or a tooth comes out at 5 cm/s at most.
+    pub max_correction_speed: f64,
+    /// Largest stiffness of one constraint, N/m: sets the constraint-force mixing `R = 1 / (h^2 k_max)`, so one
+    /// constraint's impulse over a step is at most `h^2 k_max` times the velocity change it asks for (force at
+    /// most `k_max` times the distance it would make the point cover in one step). Default 100 N/m: near the
+    /// root of an H1 fibre the bending stiffness `3 EI / s^3` reaches it at s = 0.6 mm, so only points that
+    /// can hardly move are softened. `f64::INFINITY` gives rigid constraints.
+    pub max_stiffness: f64,
     /// Projected Gauss-Seidel sweeps. Default 30.
     pub iterations: usize,
 }
 
 impl Default for ConstraintOptions {
     fn default() -> Self {
-        Self { stabilization: 0.5, iterations: 30 }
+        Self { time_constant: 0.004, damping_ratio: 1.0, max_correction_speed: 0.05, max_stiffness: 100.0, iterations: 30 }
+    }
+}
+
+impl ConstraintOptions {
+    /// The solver before compliance was introduced: rigid constraints (no force mixing, no speed cap) removing
+    /// half of a position error per step of `h` seconds. Kept to show what the bounds change.
+    pub fn rigid(h: f64) -> Self {
+        // beta = omega / (2 zeta + h omega) = 0.5 / h  <=>  omega = 2 zeta / h  <=>  tau = h / (2 zeta^2).
+        Self { time_constant: 0.5 * h, damping_ratio: 1.0, max_correction_speed: f64::INFINITY, max_stiffness: f64::INFINITY, iterations: 30 }
+    }
+
+    /// Error-reduction rate `beta = omega / (2 zeta + h omega)` with `omega = 1 / (tau zeta)`, 1/s, for a step of
+    /// `h` seconds.
+    pub fn error_reduction_rate(&self, h: f64) -> f64 {
+        let omega = 1.0 / (self.time_constant * self.damping_ratio);
+        omega / (2.0 * self.damping_ratio + h * omega)
+    }
+
+    /// Constraint-force mixing `R = 1 / (h^2 k_max)`, m/s per N s, for a step of `h` seconds (0: rigid).
+    pub fn force_mixing(&self, h: f64) -> f64 {
+        1.0 / (h * h * self.max_stiffness)
+    }
+
+    /// Checks every field, naming the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |field: &'static str, reason: String| Err(StrandError::InvalidParameter { field, reason });
+        if !(self.time_constant.is_finite() && self.time_constant > 0.0) {
+            return bad("time_constant", format!("must be a finite time > 0 s, got {}", self.time_constant));
+        }
+        if !(self.damping_ratio.is_finite() && self.damping_ratio > 0.0) {
+            return bad("damping_ratio", format!("must be finite and > 0, got {}", self.damping_ratio));
+        }
+        if !(self.max_correction_speed > 0.0) {
+            return bad("max_correction_speed", format!("must be > 0 m/s, got {}", self.max_correction_speed));
+        }
+        if !(self.max_stiffness > 0.0) {
+            return bad("max_stiffness", format!("must be > 0 N/m, got {}", self.max_stiffness));
+        }
+        Ok(())
     }
 }
 
@@ -121,6 +193,7 @@ impl Strand {
         for c in constraints {
             c.validate()?;
         }
+        opts.validate()?;
         self.prepare_step(h, external)?;
         self.finish_step(constraints, opts)
     }
@@ -154,6 +227,10 @@ impl Strand {
         for c in constraints {
             c.validate()?;
         }
+        if let Err(e) = opts.validate() {
+            self.prepared = Some((h, v));
+            return Err(e);
+        }
         // Jacobians from the frames and motion subspaces of the step's own sweep (same state).
         let root = self.state.root.clone();
         let mut jac: Vec<Matrix3xX<f64>> = Vec::with_capacity(constraints.len());
@@ -180,29 +257,40 @@ impl Strand {
         let w: Vec<Vec<Matrix3<f64>>> = (0..n).map(|c| (0..n).map(|d| &jac[c] * y[d].transpose()).collect()).collect();
         let u_free: Vec<Vector3<f64>> = (0..n).map(|c| &jac[c] * &v + bias[c]).collect();
         let mut p = vec![Vector3::zeros(); n];
-        let beta = opts.stabilization / h;
+        let beta = opts.error_reduction_rate(h);
+        let v_max = opts.max_correction_speed;
+        let mix = opts.force_mixing(h);
         // A point that (almost) cannot move, such as the clamped root, is left out: its constraint could only
-        // produce an unbounded impulse.
+        // produce an impulse against the root clamp.
         let mobility = |c: usize| w[c][c].trace();
         let max_mobility = (0..n).map(mobility).fold(0.0, f64::max);
         let active: Vec<bool> = (0..n).map(|c| mobility(c).is_finite() && mobility(c) > 1e-9 * max_mobility).collect();
-        // What the sweeps need of each contact, fixed over the iterations: tangent basis, normal mobility and the
-        // inverse of the tangential Delassus block.
+        // What the sweeps need of each contact, fixed over the iterations: tangent basis, regularized normal
+        // mobility `W_nn + R` and the inverse of the regularized tangential Delassus block.
         let contact_frames: Vec<Option<(Vector3<f64>, Vector3<f64>, f64, nalgebra::Matrix2<f64>)>> = (0..n)
             .map(|c| match constraints[c].kind {
                 ConstraintKind::Contact { normal, .. } => {
                     let (t1, t2) = tangents(&normal);
-                    let wnn = normal.dot(&(w[c][c] * normal)).max(1e-300);
+                    let wnn = (normal.dot(&(w[c][c] * normal)) + mix).max(1e-300);
                     let wt = Matrix3::from_columns(&[t1, t2, normal]).transpose() * w[c][c] * Matrix3::from_columns(&[t1, t2, normal]);
-                    let wt2 = nalgebra::Matrix2::new(wt[(0, 0)], wt[(0, 1)], wt[(1, 0)], wt[(1, 1)]);
+                    let wt2 = nalgebra::Matrix2::new(wt[(0, 0)] + mix, wt[(0, 1)], wt[(1, 0)], wt[(1, 1)] + mix);
                     Some((t1, t2, wnn, wt2.try_inverse().unwrap_or_else(nalgebra::Matrix2::zeros)))
                 }
                 ConstraintKind::Pin { .. } => None,
             })
             .collect();
-        // Pseudo-inverses of the pins' Delassus blocks (an SVD each), also used by the post-stabilization.
-        let pin_inverse: Vec<Matrix3<f64>> =
-            (0..n).map(|c| if matches!(constraints[c].kind, ConstraintKind::Pin { .. }) { pinv3(&w[c][c]) } else { Matrix3::zeros() }).collect();
+        // Inverses of the pins' regularized Delassus blocks `W + R I` (pseudo-inverses when rigid); the
+        // post-stabilization uses the pseudo-inverses of the blocks themselves.
+        let is_pin = |c: usize| matches!(constraints[c].kind, ConstraintKind::Pin { .. });
+        let pin_projection: Vec<Matrix3<f64>> = (0..n).map(|c| if is_pin(c) { pinv3(&w[c][c]) } else { Matrix3::zeros() }).collect();
+        let pin_inverse: Vec<Matrix3<f64>> = (0..n)
+            .map(|c| match (is_pin(c), mix > 0.0) {
+                (false, _) => Matrix3::zeros(),
+                (true, true) => (w[c][c] + Matrix3::identity() * mix).try_inverse().unwrap_or_else(|| pinv3(&w[c][c])),
+                (true, false) => pin_projection[c],
+            })
+            .collect();
+        let capped = |x: Vector3<f64>| if x.norm() > v_max { x * (v_max / x.norm()) } else { x };
         for _ in 0..opts.iterations.max(1) {
             for c in (0..n).filter(|&c| active[c]) {
                 let mut u = u_free[c];
@@ -212,18 +300,19 @@ impl Strand {
                 let rel = u - constraints[c].velocity;
                 match constraints[c].kind {
                     ConstraintKind::Pin { target } => {
-                        let want = (target - position[c]) * beta;
-                        let dp = pin_inverse[c] * (want - rel);
+                        let want = capped((target - position[c]) * beta);
+                        let dp = pin_inverse[c] * (want - rel - p[c] * mix);
                         p[c] += dp;
                     }
                     ConstraintKind::Contact { normal, depth, friction } => {
                         let Some((t1, t2, wnn, wt2_inv)) = contact_frames[c] else { continue };
-                        let want_n = beta * depth;
-                        let mut pn = (p[c].dot(&normal) + (want_n - rel.dot(&normal)) / wnn).max(0.0);
+                        let want_n = (beta * depth).min(v_max);
+                        let pn_old = p[c].dot(&normal);
+                        let mut pn = (pn_old + (want_n - rel.dot(&normal) - mix * pn_old) / wnn).max(0.0);
                         // Tangential: aim for zero slip, then clamp to the cone.
                         let rt = nalgebra::Vector2::new(rel.dot(&t1), rel.dot(&t2));
                         let pt_old = nalgebra::Vector2::new(p[c].dot(&t1), p[c].dot(&t2));
-                        let mut pt = pt_old - wt2_inv * rt;
+                        let mut pt = pt_old - wt2_inv * (rt + pt_old * mix);
                         let limit = friction * pn;
                         if pt.norm() > limit {
                             pt *= limit / pt.norm();
@@ -256,7 +345,11 @@ impl Strand {
             let error: Vec<Vector3<f64>> = pins
                 .iter()
                 .map(|&c| match constraints[c].kind {
-                    ConstraintKind::Pin { target } => target - frame_at(&self.model, &self.state.q, &frames, constraints[c].s).position,
+                    ConstraintKind::Pin { target } => {
+                        let e = target - frame_at(&self.model, &self.state.q, &frames, constraints[c].s).position;
+                        // At most `v_max h` per step: a pin far from its target is drawn back, not teleported.
+                        if e.norm() > v_max * h { e * (v_max * h / e.norm()) } else { e }
+                    }
                     ConstraintKind::Contact { .. } => Vector3::zeros(),
                 })
                 .collect();
@@ -266,7 +359,7 @@ impl Strand {
                     for &d in &pins {
                         r -= w[c][d] * lambda[d];
                     }
-                    lambda[c] += pin_inverse[c] * r;
+                    lambda[c] += pin_projection[c] * r;
                 }
             }
             for &c in &pins {

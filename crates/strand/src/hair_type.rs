@@ -154,6 +154,20 @@ impl HairType {
         Self::ALL.into_iter().find(|h| h.name.eq_ignore_ascii_case(name))
     }
 
+    /// Where the preset's figures come from (a short citation).
+    pub fn source(&self) -> &'static str {
+        match self.name {
+            "H1" | "H2" | "GA1" | "GC3" => {
+                "Table 1 of Bonanni, Montagnol, Magnenat-Thalmann (2008), from Wortmann and Schwan-Jonczyk (2006), \
+                 \"Investigating hair properties relevant for hair handle\"; G and density from Robbins (2002)"
+            }
+            _ => {
+                "typical values: Franbourg et al. (2003), \"Current research on ethnic hair\" (diameter, ellipticity); \
+                 Loussouarn et al. (2007), \"Worldwide diversity of hair curliness\" (curl); E, G and density from Robbins (2002)"
+            }
+        }
+    }
+
     /// Coulomb friction coefficient of the fibre against a tool (dimensionless). The single-fibre frictional
     /// forces of Table 1 (0.64-0.79 cN) come from a test whose normal load the paper does not give, so they are
     /// used as relative values: mu = 0.2 x (friction force / 0.7 cN), 0.2 being a typical dry hair-on-comb

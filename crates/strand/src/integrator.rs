@@ -78,6 +78,21 @@ impl Strand {
         self.prepared.is_some()
     }
 
+    /// Mobility of the prepared step at arc length `s` (m) along the unit `direction`: the velocity change of that
+    /// centreline point along `direction` per unit impulse along it, `n^T J A^-1 J^T n`, m/s per N s (the
+    /// diagonal Delassus term of a contact there; the constraint solver's `W_nn`). None if no step was
+    /// prepared (or the step matrix fails). O(N): reuses the prepared step's elimination.
+    pub fn point_mobility(&mut self, s: f64, direction: &nalgebra::Vector3<f64>) -> Option<f64> {
+        self.prepared.as_ref()?;
+        let (j, _) = self.dynamics.point_jacobian(&self.model, &self.state, s);
+        let mut b: DVector<f64> = j.tr_mul(direction);
+        if !self.resolve_step_matrix(&mut b) {
+            return None;
+        }
+        let w = direction.dot(&(&j * &b));
+        (w.is_finite() && w >= 0.0).then_some(w)
+    }
+
     /// Total energy (kinetic + gravity + elastic) at the current state, J.
     pub fn energy(&mut self) -> f64 {
         self.dynamics.evaluate(&self.model, &self.state, &[], false);

@@ -86,3 +86,155 @@ fn bad_constraints_are_rejected_without_changing_the_state() {
         assert_eq!(s.state, before);
     }
 }
+
+// ---------------------------------------------------------------------------------------------------------------
+// Bounds of the soft constraints (ConstraintOptions: compliance, correction speed). Each case is also run with
+// `ConstraintOptions::rigid`, the solver as it was before the compliance, to show that the bound is not
+// trivially met.
+// ---------------------------------------------------------------------------------------------------------------
+
+/// Largest speed of any sampled centreline point (every 1 mm), m/s, from the state's velocities: the points'
+/// displacement over a tiny time `dt` of free motion along `qdot` (root velocity included).
+fn max_point_speed(s: &Strand) -> f64 {
+    let dt = 1e-7;
+    let mut ahead = s.clone();
+    ahead.state.q += &s.state.qdot * dt;
+    ahead.state.root.advance(dt);
+    let n = (s.model.length / 1e-3).round() as usize;
+    (0..=n)
+        .map(|i| {
+            let at = s.model.length * i as f64 / n as f64;
+            (point(&ahead, at) - point(s, at)).norm() / dt
+        })
+        .fold(0.0, f64::max)
+}
+
+/// A hanging 10 cm H1 strand of 16 segments, root at the origin. Full model: it bends both ways (the reduced
+/// model bends only about its soft axis, and a push along the other axis could not move it at all).
+fn hanging() -> Strand {
+    let h = HairType::H1;
+    let m = StrandModel::new(ModelKind::Full, 0.1, 16, h.section().unwrap(), h.material().unwrap()).unwrap();
+    let root = RootFrame::new(Vector3::zeros(), -Vector3::z(), Vector3::x()).unwrap();
+    Strand::new(m, root).unwrap()
+}
+
+#[test]
+fn a_contact_next_to_the_root_gets_a_bounded_impulse() {
+    // A tooth moving at 0.25 m/s along +x, 1 mm deep into the strand 0.5 mm below its clamped root, where the
+    // point can hardly move. One step of 1 ms. The impulse obeys the single-constraint bound
+    // |p| <= h^2 k_max (v_max + |v_tooth|) (1e-9 relative), and no point of the strand moves faster than the
+    // tooth plus v_max (1e-6 m/s). Rigid (the old solver): the impulse asked for is far beyond.
+    let (h, v) = (1e-3, 0.25);
+    let contact = PointConstraint {
+        s: 0.5e-3,
+        kind: ConstraintKind::Contact { normal: Vector3::x(), depth: 1e-3, friction: 0.2 },
+        velocity: Vector3::new(v, 0.0, 0.0),
+    };
+    let opts = ConstraintOptions::default();
+    let mut s = hanging();
+    let p = s.step_constrained(h, &[], &[contact], &opts).unwrap()[0];
+    let bound = h * h * opts.max_stiffness * (opts.max_correction_speed + v);
+    let speed = max_point_speed(&s);
+    let mut rigid = hanging();
+    let p_rigid = rigid.step_constrained(h, &[], &[contact], &ConstraintOptions::rigid(h)).unwrap()[0];
+    let speed_rigid = max_point_speed(&rigid);
+    println!("soft: impulse {:.3e} N s (bound {bound:.3e}), fastest point {speed:.3e} m/s", p.norm());
+    println!("rigid: impulse {:.3e} N s, fastest point {speed_rigid:.3e} m/s", p_rigid.norm());
+    assert!(p.norm() <= bound * (1.0 + 1e-9), "impulse {} above the bound {bound}", p.norm());
+    assert!(p.x > 0.0, "the tooth pushes");
+    assert!(speed <= v + opts.max_correction_speed + 1e-6, "a point moves at {speed} m/s");
+    assert!(p_rigid.norm() > 10.0 * bound, "the rigid solve stays within the bound ({})", p_rigid.norm());
+}
+
+#[test]
+fn a_strand_pinched_between_a_tooth_and_the_scalp_gets_a_finite_compromise() {
+    // The scalp is the plane x = -1 mm (normal +x); a tooth (the plane x = x_t, normal -x) comes from x = 1 mm
+    // at 0.25 m/s and stops 0.5 mm closer to the scalp than a hair's diameter allows: the point 2 cm down a
+    // hanging strand is pinched between contradictory contacts (it cannot be outside both). Over 100 steps of
+    // 1 ms every impulse stays within h^2 k_max (v_max + 0.25 m/s + the point's own speed) (1e-9 relative), the
+    // impulses settle (the last two steps agree to 1 %) on a finite compromise, and no point of the strand moves
+    // faster than 0.5 m/s.
+    let h = 1e-3;
+    let r = HairType::H1.major_diameter / 2.0;
+    let scalp_x = -1e-3;
+    let stop = scalp_x + 2.0 * r - 0.5e-3;
+    let run = |opts: &ConstraintOptions| {
+        let mut s = hanging();
+        let (mut worst, mut fastest, mut last) = (0.0f64, 0.0f64, vec![]);
+        let mut bound_ok = true;
+        for n in 0..100 {
+            let (x_t, v_t) = if 1e-3 - 0.25 * n as f64 * h > stop { (1e-3 - 0.25 * (n + 1) as f64 * h, -0.25) } else { (stop, 0.0) };
+            let x_t = x_t.max(stop);
+            let x = point(&s, 0.02).x;
+            let scalp = PointConstraint {
+                s: 0.02,
+                kind: ConstraintKind::Contact { normal: Vector3::x(), depth: (scalp_x + r - x).max(0.0), friction: 0.0 },
+                velocity: Vector3::zeros(),
+            };
+            let tooth = PointConstraint {
+                s: 0.02,
+                kind: ConstraintKind::Contact { normal: -Vector3::x(), depth: (x - (x_t - r)).max(0.0), friction: 0.2 },
+                velocity: Vector3::new(v_t, 0.0, 0.0),
+            };
+            let own = max_point_speed(&s);
+            let p = s.step_constrained(h, &[], &[scalp, tooth], opts).unwrap();
+            let bound = h * h * opts.max_stiffness * (opts.max_correction_speed + 0.25 + own);
+            bound_ok &= p.iter().all(|p| p.norm() <= bound * (1.0 + 1e-9));
+            worst = worst.max(p[0].norm().max(p[1].norm()));
+            fastest = fastest.max(max_point_speed(&s));
+            last.push(p[1].norm());
+        }
+        (worst, fastest, bound_ok, last)
+    };
+    let (worst, fastest, bound_ok, last) = run(&ConstraintOptions::default());
+    let (worst_rigid, fastest_rigid, _, _) = run(&ConstraintOptions::rigid(h));
+    println!("soft: largest impulse {worst:.3e} N s, fastest point {fastest:.3e} m/s, last {:.3e}", last[last.len() - 1]);
+    println!("rigid: largest impulse {worst_rigid:.3e} N s, fastest point {fastest_rigid:.3e} m/s");
+    assert!(bound_ok, "an impulse above its bound");
+    assert!(worst.is_finite() && fastest < 0.5, "fastest point {fastest} m/s");
+    let (a, b) = (last[last.len() - 2], last[last.len() - 1]);
+    assert!(b > 0.0 && (a - b).abs() <= 0.01 * b, "impulses still changing: {a} then {b}");
+    assert!(worst_rigid > 10.0 * worst, "the rigid solve is as tame ({worst_rigid})");
+}
+
+#[test]
+fn a_kinematic_root_pushed_into_the_body_is_not_kicked_out() {
+    // The body is the half-space z > 0 above a hanging strand's root (outward normal -z, the scalp seen from
+    // below). The root is driven into it at 0.1 m/s for 50 ms (5 mm deep at the end), as a lattice pushed by a
+    // tool once did. Every sampled point (every 1.25 mm) inside the body or within a hair radius of it gets a
+    // frictionless body contact. Each step every impulse stays within h^2 k_max (v_max + the point's speed)
+    // (1e-9 relative), and no point of the strand moves faster than 0.5 m/s (the root moves at 0.1 m/s).
+    let h = 1e-3;
+    let radius = HairType::H1.major_diameter / 2.0;
+    let run = |opts: &ConstraintOptions| {
+        let mut s = hanging();
+        s.state.root.velocity = Vector3::new(0.0, 0.0, 0.1);
+        let (mut worst, mut fastest, mut bound_ok) = (0.0f64, 0.0f64, true);
+        for _ in 0..50 {
+            let mut cons = Vec::new();
+            let own = max_point_speed(&s);
+            for i in 0..=80 {
+                let at = 0.1 * i as f64 / 80.0;
+                let z = point(&s, at).z;
+                if z > -radius {
+                    cons.push(PointConstraint { s: at, kind: ConstraintKind::Contact { normal: -Vector3::z(), depth: z + radius, friction: 0.0 }, velocity: Vector3::zeros() });
+                }
+            }
+            let bound = h * h * opts.max_stiffness * (opts.max_correction_speed + own);
+            let p = s.step_constrained(h, &[], &cons, opts).unwrap();
+            let total: f64 = p.iter().map(|p| p.norm()).sum();
+            bound_ok &= p.iter().all(|p| p.norm() <= bound * (1.0 + 1e-9));
+            worst = worst.max(total);
+            fastest = fastest.max(max_point_speed(&s));
+        }
+        (worst, fastest, bound_ok)
+    };
+    let opts = ConstraintOptions::default();
+    let (worst, fastest, bound_ok) = run(&opts);
+    let (worst_rigid, fastest_rigid, _) = run(&ConstraintOptions::rigid(h));
+    println!("soft: largest total impulse {worst:.3e} N s ({:.3e} N), fastest point {fastest:.3e} m/s", worst / h);
+    println!("rigid: largest total impulse {worst_rigid:.3e} N s ({:.3e} N), fastest point {fastest_rigid:.3e} m/s", worst_rigid / h);
+    assert!(bound_ok, "an impulse above its bound");
+    assert!(fastest < 0.5, "a point moves at {fastest} m/s");
+    assert!(worst_rigid > 10.0 * worst, "the rigid solve is as tame ({worst_rigid})");
+}

@@ -195,6 +195,12 @@ impl Default for HairDrag {
 }
 
 impl HairDrag {
+    /// The default air with the diameter of a round hair of cross-section area `area` (m^2):
+    /// d = 2 sqrt(area / pi), m (an elliptic hair's mean diameter).
+    pub fn for_section_area(area: f64) -> Self {
+        Self { hair_diameter: 2.0 * (area / std::f64::consts::PI).sqrt(), ..Self::default() }
+    }
+
     /// Checks every field (all > 0 and finite), naming the first bad one.
     pub fn validate(&self) -> Result<(), WetnessError> {
         for (field, v) in [

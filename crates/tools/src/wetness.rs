@@ -143,6 +143,16 @@ impl WetnessModel {
         Ok(1.0 + w * (self.water_uptake + self.surface_water))
     }
 
+    /// Coulomb friction coefficient at wetness `w` of a contact whose dry coefficient is `dry` (dimensionless):
+    /// `dry (1 + w (friction_ratio - 1))`. The one wetness law of friction, for the tool on hair and for hair on
+    /// hair (`crate::hair_contact::HairContact::friction`) alike: both are keratin cuticle surfaces, and the
+    /// ratio is measured on combing, where fibre-fibre friction dominates (docs/wetness.md).
+    pub fn friction(&self, dry: f64, w: f64) -> Result<f64, WetnessError> {
+        self.validate()?;
+        let w = check_wetness("wetness", w)?;
+        Ok(dry * (1.0 + w * (self.friction_ratio - 1.0)))
+    }
+
     /// Effective material of `dry` (moduli in Pa, density in kg/m^3) at wetness `w`; the friction coefficient
     /// `dry_friction` (dimensionless) is scaled too, and `area` (m^2) gives the linear density.
     pub fn wet(&self, dry: &Material, dry_friction: f64, area: f64, w: f64) -> Result<WetMaterial, WetnessError> {
@@ -155,7 +165,7 @@ impl WetnessModel {
             shear_modulus: dry.shear_modulus * self.shear_ratio.powf(w),
             density,
             linear_density: density * area,
-            friction: dry_friction * (1.0 + w * (self.friction_ratio - 1.0)),
+            friction: self.friction(dry_friction, w)?,
         })
     }
 

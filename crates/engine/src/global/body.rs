@@ -14,7 +14,7 @@ impl GlobalCore {
             }
             let mut x = self.head.inverse() * self.state.positions[i];
             let mut moved = false;
-            for _ in 0..4 {
+            for _ in 0..self.params.push_out_iterations {
                 let (f, g) = body.field_and_gradient(&x);
                 let gg = g.norm_squared();
                 if f <= t || !(gg > 1e-12) {

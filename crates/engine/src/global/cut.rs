@@ -9,10 +9,6 @@ use nalgebra::{Isometry3, Point3, Vector3};
 use std::sync::Arc;
 use std::time::Instant;
 
-/// Most falling pieces made of one cut: more are sampled evenly, their masses scaled to keep the total.
-pub const MAX_PIECES_PER_CUT: usize = 256;
-/// Most cuts whose clusters fall at once (the oldest is dropped).
-pub(crate) const MAX_CLUSTER_SETS: usize = 8;
 
 /// What one scissors cut of the render strands did (masses in kg, by the render hair's linear density).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -27,7 +23,7 @@ pub struct CutReport {
     pub mass_pieces: f64,
     /// Mass handed to the falling clusters (all pieces, or a sample scaled to the same total), kg.
     pub mass_clusters: f64,
-    /// Pieces turned into falling chains (at most [`MAX_PIECES_PER_CUT`]).
+    /// Pieces turned into falling chains (at most `GlobalParams::max_pieces_per_cut`).
     pub pieces: usize,
     /// Wall time of the cut, s (information).
     pub seconds: f64,
@@ -46,7 +42,7 @@ impl GlobalCore {
     /// What a cut needs of the current state, copied so that another thread can compute it
     /// ([`CutJob::run`]) while this core keeps stepping.
     pub fn cut_job(&self, blade: &Blade) -> CutJob {
-        CutJob { scene: self.scene.clone(), nodes: self.state.positions.clone(), head: self.head, kept_len: self.kept_len.clone(), kept_version: self.kept_version, lambda: self.lambda, blade: *blade }
+        CutJob { scene: self.scene.clone(), nodes: self.state.positions.clone(), head: self.head, kept_len: self.kept_len.clone(), kept_version: self.kept_version, lambda: self.lambda, blade: *blade, max_pieces: self.params.max_pieces_per_cut }
     }
 
     /// Applies a computed cut: shortens the strands and adds the falling clusters. None (and nothing done)
@@ -70,7 +66,7 @@ impl GlobalCore {
                 Ok(set) => {
                     rep.mass_clusters = set.total_mass();
                     rep.pieces = r.pieces.len();
-                    if self.clusters.len() >= MAX_CLUSTER_SETS {
+                    if self.clusters.len() >= self.params.max_cluster_sets {
                         self.clusters.remove(0);
                     }
                     self.clusters.push(set);
@@ -109,6 +105,7 @@ pub struct CutJob {
     kept_version: u64,
     lambda: f64,
     blade: Blade,
+    max_pieces: usize,
 }
 
 /// A computed cut, to apply with [`GlobalCore::apply_cut`].
@@ -116,7 +113,7 @@ pub struct CutResult {
     kept_version: u64,
     /// New kept length (vertex units) of each strand cut.
     changes: Vec<(usize, f64)>,
-    /// The pieces for the falling clusters (at most [`MAX_PIECES_PER_CUT`]).
+    /// The pieces for the falling clusters (at most `GlobalParams::max_pieces_per_cut`).
     pieces: Vec<CutPiece>,
     report: CutReport,
 }
@@ -124,7 +121,7 @@ pub struct CutResult {
 impl CutJob {
     /// Computes the cut: each kept strand (rest positions through the lattice) is cut at its first crossing
     /// of the blade's disk (`hairstyle::cut::cut_polylines`). Strands that cannot reach the blade are skipped
-    /// without mapping them. At most [`MAX_PIECES_PER_CUT`] pieces are kept for the clusters, sampled
+    /// without mapping them. At most `max_pieces` (`GlobalParams::max_pieces_per_cut`) pieces are kept for the clusters, sampled
     /// evenly, their masses scaled so that they carry all the mass cut off.
     pub fn run(&self) -> CutResult {
         let t0 = Instant::now();
@@ -202,8 +199,8 @@ impl CutJob {
             rep.mass_kept += self.lambda * polyline_length(&line(i, k_new));
             rep.mass_pieces += p.mass;
         }
-        // Falling clusters: at most MAX_PIECES_PER_CUT pieces, sampled evenly, masses scaled to the total.
-        let every = pieces.len().div_ceil(MAX_PIECES_PER_CUT).max(1);
+        // Falling clusters: at most max_pieces pieces, sampled evenly, masses scaled to the total.
+        let every = pieces.len().div_ceil(self.max_pieces).max(1);
         let chosen: Vec<&hairstyle::cut::Piece> = pieces.iter().step_by(every).filter(|p| p.points.len() >= 2).collect();
         let chosen_mass: f64 = chosen.iter().map(|p| p.mass).sum();
         if chosen_mass > 0.0 {
@@ -243,7 +240,7 @@ mod tests {
         assert!(rep.strands > 50, "{} strands cut", rep.strands);
         assert!(((rep.mass_kept + rep.mass_pieces) - rep.mass_before).abs() <= 1e-9 * rep.mass_before, "{rep:?}");
         assert!((rep.mass_clusters - rep.mass_pieces).abs() <= 1e-9 * rep.mass_pieces, "{rep:?}");
-        assert!(rep.pieces > 0 && rep.pieces <= MAX_PIECES_PER_CUT);
+        assert!(rep.pieces > 0 && rep.pieces <= crate::params::GlobalParams::default().max_pieces_per_cut);
         let snap = g.snapshot();
         assert_eq!(g.kept_lengths().iter().filter(|&&k| k < (v - 1) as f64).count(), rep.strands);
         assert!(snap.kept.iter().filter(|&&k| (k as usize) < v).count() > rep.strands / 2);

@@ -5,8 +5,10 @@
 //! One step of [`GlobalCore::step`], in order:
 //! 1. **Cuts**: a new scissors close (`ToolInput::cuts` went up) cuts the render strands now, or queues the
 //!    cut for a worker thread ([`GlobalCore::defer_cuts`]).
-//! 2. **Dryer jet**: the held dryer blows on the lattice nodes ([`GlobalCore::blow`]).
-//! 3. **Lattice**: the lattice step with the tool as an obstacle (`LatticeModel::step`).
+//! 2. **Dryer jet**: the held dryer's drag on the hair each lattice node carries, as external node forces
+//!    ([`GlobalCore::blow`]; `tools::dryer::HairDryer::hair_force`, quadratic in the air speed).
+//! 3. **Lattice**: the lattice step with the tool as an obstacle and the jet's forces
+//!    (`LatticeModel::step_with_forces`).
 //! 4. **Body**: nodes that started outside the body are pushed back out of it ([`body`]).
 //! 5. **Recovery**: a non-finite lattice is put back to rest (and reported).
 //! 6. **Wetness**: the held sprayer or dryer wets or dries the guides in its cone ([`GlobalCore::moisten`]).
@@ -17,19 +19,19 @@ mod body;
 pub mod cut;
 mod nozzle;
 
-pub use cut::{CutJob, CutReport, CutResult, MAX_PIECES_PER_CUT};
+pub use cut::{CutJob, CutReport, CutResult};
 
-use crate::params::SessionParams;
+use crate::params::{GlobalParams, SessionParams};
 use crate::scene::{ffd_map, Scene};
 use crate::snapshot::LatticeSnapshot;
 use crate::tool::{tool_metaballs, ToolInput};
 use hairstyle::cut::Blade;
 use lattice::cluster::{ClusterParams, ClusterSet};
-use lattice::lattice::{LatticeModel, LatticeState};
+use lattice::lattice::{LatticeModel, LatticeState, LatticeWorkspace};
 use nalgebra::{Isometry3, Point3, Vector3};
 use std::sync::Arc;
 use std::time::Instant;
-use tools::dryer::HairDryer;
+use tools::dryer::{HairDrag, HairDryer};
 use tools::sprayer::Sprayer;
 use tools::wetness::WetnessField;
 
@@ -42,12 +44,20 @@ pub struct GlobalCore {
     /// The scene's lattice with the obstacle's attraction switched off (the tool repels only).
     pub(crate) model: LatticeModel,
     pub(crate) state: LatticeState,
+    /// The lattice step's cached factorisation and scratch (not state).
+    pub(crate) workspace: LatticeWorkspace,
     pub(crate) version: u64,
     pub(crate) head: Isometry3<f64>,
     /// Nodes outside the body at rest: only these are pushed out of it.
     pub(crate) outside: Vec<bool>,
-    pub(crate) sprayer: Sprayer,
-    pub(crate) dryer: HairDryer,
+    /// The nozzle tools' and the scissors' settings (cone, air speed, rates, blade radius).
+    pub(crate) tools: ToolSettings,
+    /// Air and hair properties of the jet's drag on the hair (the render hair's diameter).
+    pub(crate) drag: HairDrag,
+    /// The jet's force on each node in the last step, N (empty: none).
+    pub(crate) forces: Vec<Vector3<f64>>,
+    /// Magnitude of the total jet force on the lattice in the last step, N.
+    pub(crate) blow_force: f64,
     /// Wetness per guide and segment.
     pub(crate) wet: WetnessField,
     /// Rest (head-frame) centres of each guide's segments, m.
@@ -59,8 +69,10 @@ pub struct GlobalCore {
     pub(crate) cuts: u64,
     /// The render hair's linear density, kg/m.
     pub(crate) lambda: f64,
-    /// Air drag per unit length of a hair, N s/m^2.
-    pub(crate) air_drag: f64,
+    /// The global step's constants.
+    pub(crate) params: GlobalParams,
+    /// Each tool's shape (by wire id), built once.
+    pub(crate) shapes: Vec<tools::shape::ToolShape>,
     pub(crate) clusters: Vec<ClusterSet>,
     pub(crate) cluster_params: ClusterParams,
     /// The last cut's report.
@@ -80,8 +92,11 @@ impl GlobalCore {
         let state = model.rest_state(&head);
         let t = model.params.metaball.threshold;
         let outside = model.rest.iter().map(|p| !scene.head.inside(&(head * p), t)).collect();
-        let sprayer = Sprayer { wetting_rate: params.wetting_rate, ..Sprayer::default() };
-        let dryer = HairDryer { drying_rate: params.drying_rate, ..HairDryer::default() };
+        let tools = ToolSettings {
+            sprayer: Sprayer { wetting_rate: params.wetting_rate, ..Sprayer::default() },
+            dryer: HairDryer { drying_rate: params.drying_rate, ..HairDryer::default() },
+            blade_radius: params.global.blade_radius,
+        };
         let segs: Vec<usize> = scene.guides.iter().map(|g| g.model.segments).collect();
         let centres = scene.guides.iter().map(|g| {
             let n = g.model.segments;
@@ -96,11 +111,11 @@ impl GlobalCore {
         let v = rh.vertices_per_strand;
         let g0 = scene.guides.first();
         let lambda = g0.map_or(6.5e-5, |g| g.model.linear_density());
-        let air_drag = g0.map_or(2e-5, |g| g.model.air_drag.max(2e-5));
+        let drag = g0.map_or_else(HairDrag::default, |g| HairDrag::for_section_area(g.model.section.area()));
         Self {
-            model, state, version: 0, head, outside, sprayer, dryer, wet: WetnessField::dry(&segs), centres,
+            model, state, workspace: LatticeWorkspace::default(), version: 0, head, outside, tools, drag, forces: Vec::new(), blow_force: 0.0, wet: WetnessField::dry(&segs), centres,
             kept_len: vec![v.saturating_sub(1) as f64; rh.strands()], kept: Arc::new(vec![v as u16; rh.strands()]), kept_version: 0, cuts: 0,
-            lambda, air_drag, clusters: Vec::new(), cluster_params: ClusterParams::default(), last_cut: None, deferred: false, pending: Vec::new(), failed: 0, scene,
+            lambda, params: params.global, shapes: crate::tool::Tool::ALL.iter().map(|t| t.shape()).collect(), clusters: Vec::new(), cluster_params: ClusterParams::default(), last_cut: None, deferred: false, pending: Vec::new(), failed: 0, scene,
         }
     }
     /// Back to rest: lattice, wetness, cuts and falling clusters (keeps counting versions and cuts).
@@ -135,6 +150,15 @@ impl GlobalCore {
     pub fn cluster_energy(&self) -> f64 {
         self.clusters.iter().map(|c| c.kinetic_energy()).sum()
     }
+    /// Falling clusters (of all cuts still falling).
+    pub fn cluster_count(&self) -> usize {
+        self.clusters.iter().map(|c| c.clusters.len()).sum()
+    }
+    /// Every cut piece's points now (m, head frame), pushed out of the body and above the floor
+    /// (`ClusterSet::piece_points`).
+    pub fn piece_points(&self) -> Vec<Vec<Point3<f64>>> {
+        self.clusters.iter().flat_map(|c| c.piece_points(&self.cluster_params, &self.scene.head)).collect()
+    }
     /// Height of the floor the clusters land on, m.
     pub fn floor(&self) -> f64 {
         self.cluster_params.floor
@@ -147,6 +171,27 @@ impl GlobalCore {
     pub fn linear_density(&self) -> f64 {
         self.lambda
     }
+    /// The nozzle tools' and the scissors' settings now.
+    pub fn tools(&self) -> &ToolSettings {
+        &self.tools
+    }
+    /// Sets the nozzle tools' and the scissors' settings (the cones' axes and apexes are taken from each
+    /// step's [`ToolInput`]; their half-angles and ranges, the air speed and the rates from here).
+    pub fn set_tools(&mut self, tools: ToolSettings) {
+        self.tools = tools;
+    }
+    /// Sets the height of the floor the falling clusters land on, m (head frame).
+    pub fn set_floor(&mut self, z: f64) {
+        self.cluster_params.floor = z;
+    }
+    /// Magnitude of the total jet force on the lattice in the last step, N (0 when the dryer is not blowing).
+    pub fn blow_force(&self) -> f64 {
+        self.blow_force
+    }
+    /// The scene this core steps.
+    pub fn scene(&self) -> &Arc<Scene> {
+        &self.scene
+    }
 
 
     /// One global step of `dt` s with the tool `input`; returns the new snapshot. A non-finite lattice is
@@ -156,16 +201,21 @@ impl GlobalCore {
         if input.cuts > self.cuts {
             self.cuts = input.cuts;
             if input.present {
+                let blade = input.blade(self.tools.blade_radius);
                 if self.deferred {
-                    self.pending.push(input.blade());
+                    self.pending.push(blade);
                 } else {
-                    self.cut(&input.blade());
+                    self.cut(&blade);
                 }
             }
         }
-        self.blow(input, dt);
-        let obstacle = input.present.then(|| tool_metaballs(&input.tool.shape(), &input.position, &input.rotation));
-        self.model.step(&mut self.state, dt, &self.head, obstacle.as_ref());
+        self.blow(input);
+        let obstacle = input.present.then(|| tool_metaballs(&self.shapes[input.tool as usize], &input.position, &input.rotation, &self.params));
+        if self.model.step_with_forces(&mut self.state, &mut self.workspace, dt, &self.head, obstacle.as_ref(), &self.forces).is_err() {
+            // A non-finite jet force (never expected): the step without it, counted.
+            self.failed += 1;
+            self.model.step(&mut self.state, &mut self.workspace, dt, &self.head, obstacle.as_ref());
+        }
         self.push_out_of_body();
         let bad = self.state.positions.iter().any(|p| !p.coords.iter().all(|x| x.is_finite()));
         if bad {
@@ -198,6 +248,20 @@ impl GlobalCore {
     }
 }
 
+/// The nozzle tools' and the scissors' settings the global layer uses (what a viewer's settings or a
+/// scenario's action sets; the pose comes with each step's [`ToolInput`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ToolSettings {
+    /// The hair dryer: cone half-angle (rad) and range (m), air speed (m/s), drying rate (1/s). Default
+    /// `HairDryer::default()` with `SessionParams::drying_rate`.
+    pub dryer: HairDryer,
+    /// The water sprayer: cone half-angle (rad) and range (m), wetting rate (1/s). Default
+    /// `Sprayer::default()` with `SessionParams::wetting_rate`.
+    pub sprayer: Sprayer,
+    /// Radius of the disk the scissors' blades sweep, m. Default `GlobalParams::blade_radius` (0.04).
+    pub blade_radius: f64,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -216,7 +280,7 @@ mod tests {
         let (mut free, mut pushed) = (GlobalCore::new(scene.clone(), &p), GlobalCore::new(scene.clone(), &p));
         let tool = Vector3::new(0.0, -0.13, 0.0);
         let input = ToolInput { tool: Tool::Comb, present: true, position: tool, rotation: test_rot(), pressed: false, cuts: 0 };
-        let balls = tool_metaballs(&Tool::Comb.shape(), &tool, &test_rot());
+        let balls = tool_metaballs(&Tool::Comb.shape(), &tool, &test_rot(), &GlobalParams::default());
         for _ in 0..30 {
             free.step(0.01, &ToolInput::default());
             pushed.step(0.01, &input);

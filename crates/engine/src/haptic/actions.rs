@@ -3,62 +3,56 @@
 
 use super::HapticCore;
 use crate::tool::{Tool, ToolInput};
-use hairstyle::cut::cut_guide;
+use hairstyle::cut::cut_strand;
 use nalgebra::{Matrix3, Vector3};
-use strand::{PointForce, Strand};
-use tools::dryer::HairDryer;
+use strand::PointForce;
+use tools::dryer::{HairDrag, HairDryer};
 
-/// Pieces of each simulated strand the dryer's air drag is applied to (at their midpoints).
-const DRYER_PIECES: usize = 8;
-/// Distance the held scissors move between two cuts, m.
-pub const SNIP_DISTANCE: f64 = 0.02;
 
 impl HapticCore {
     /// The tool's action this step with the primary button `pressed`, the tool at `proxy` (m) turned by
     /// `rotation`.
     pub(crate) fn act(&mut self, pressed: bool, proxy: &Vector3<f64>, rotation: &Matrix3<f64>) {
         // Scissors: closing the blades (the button going down) cuts the active guides where the blades are,
-        // and again each time the held scissors have moved SNIP_DISTANCE (dragging cuts along the path); the
+        // and again each time the held scissors have moved `snip_distance` (dragging cuts along the path); the
         // global layer cuts the render strands when it sees the count go up (`ToolInput::cuts`).
-        let snip = self.tool == Tool::Scissors && pressed && (!self.was_pressed || self.last_cut_at.is_none_or(|p| (p - *proxy).norm() > SNIP_DISTANCE));
+        let snip = self.tool == Tool::Scissors && pressed && (!self.was_pressed || self.last_cut_at.is_none_or(|p| (p - *proxy).norm() > self.params.haptic.snip_distance));
         if !pressed {
             self.last_cut_at = None;
         }
         if snip {
             self.cuts += 1;
             self.last_cut_at = Some(*proxy);
-            let blade = ToolInput { position: *proxy, rotation: *rotation, ..Default::default() }.blade();
+            let blade = ToolInput { position: *proxy, rotation: *rotation, ..Default::default() }.blade(self.params.global.blade_radius);
             for (slot, &g) in self.active.iter().enumerate() {
-                let s = &self.interaction.strands[slot];
-                if let Ok(Some((m, st, _piece))) = cut_guide(&s.model, &s.state, &blade, 4, g) {
-                    if let Ok(mut ns) = Strand::new(m, st.root.clone()) {
-                        ns.state = st;
-                        ns.integrator = s.integrator;
-                        self.interaction.strands[slot] = ns;
-                    }
+                if let Ok(Some((kept, _piece))) = cut_strand(&self.interaction.strands[slot], &blade, self.params.haptic.cut_pieces, g) {
+                    self.interaction.strands[slot] = kept;
                 }
             }
         }
         self.was_pressed = pressed;
         if self.tool == Tool::Clip {
             if pressed && !self.clipped {
-                self.clipped = self.interaction.clip(0.01).is_some();
+                self.clipped = self.interaction.clip(self.params.haptic.clip_reach).is_some();
             } else if !pressed && self.clipped {
                 self.interaction.release();
                 self.clipped = false;
             }
         }
-        // The dryer's jet blows on the simulated strands near the tool too: linear air drag on each of
-        // DRYER_PIECES pieces per strand (as `GlobalCore` blows on the lattice), held over the step.
+        // The dryer's jet blows on the simulated strands near the tool too: the jet's drag on each of
+        // `dryer_pieces` pieces per strand (one hair: frontal area length x diameter), by the one law
+        // `HairDryer::hair_force` that `GlobalCore` blows the lattice with, held over the step.
         if self.tool == Tool::Dryer && pressed {
-            let jet = HairDryer { cone: ToolInput { position: *proxy, rotation: *rotation, ..Default::default() }.cone(HairDryer::default().cone), ..HairDryer::default() };
+            let jet = HairDryer { cone: ToolInput { position: *proxy, rotation: *rotation, ..Default::default() }.cone(HairDryer::default().cone, self.params.global.nozzle_standoff), ..HairDryer::default() };
+            let pieces = self.params.haptic.dryer_pieces;
             for slot in 0..self.interaction.strands.len() {
                 let s = &self.interaction.strands[slot];
-                let piece = s.model.length / DRYER_PIECES as f64;
-                let line = strand::kinematics::centerline(&s.model, &s.state, DRYER_PIECES + 1);
+                let piece = s.model.length / pieces as f64;
+                let line = strand::kinematics::centerline(&s.model, &s.state, pieces + 1);
+                let drag = HairDrag::for_section_area(s.model.section.area());
                 let loads: Vec<PointForce> = line
                     .windows(2)
-                    .map(|w| PointForce::new(0.5 * (w[0].0 + w[1].0), jet.force(&(0.5 * (w[0].1 + w[1].1)), s.model.air_drag * piece)))
+                    .map(|w| PointForce::new(0.5 * (w[0].0 + w[1].0), jet.hair_force(&(0.5 * (w[0].1 + w[1].1)), piece, piece * drag.hair_diameter, &drag).unwrap_or_default()))
                     .filter(|f| f.force != Vector3::zeros())
                     .collect();
                 for f in loads {
@@ -82,9 +76,10 @@ mod tests {
     #[test]
     fn the_dryer_blows_the_simulated_strands_along_its_jet() {
         // The dryer held still 15 cm behind the hair at the back of the head (its jet along the tool's -z,
-        // here +y), blowing or not for 0.6 s. The jet's air drag (DEFAULT_AIR_DRAG x 10 m/s in the jet's
-        // core, about the weight of a hair per metre) pushes the simulated strands along the jet: their
-        // tips' mean displacement along +y against the still run is over 5 mm, and nothing goes non-finite.
+        // here +y), blowing or not for 0.6 s. The jet's drag (`HairDryer::hair_force`, quadratic: about
+        // 7e-3 N per metre of hair at 10 m/s, many times a hair's weight; the linear drag used here before
+        // issue 11 gave 1e-4 N/m) pushes the simulated strands along the jet: their tips' mean displacement
+        // along +y against the still run is over 5 mm, and nothing goes non-finite.
         let scene = small_scene();
         let run = |blow: bool| {
             let mut core = HapticCore::new(scene.clone(), SessionParams::default()).unwrap();

@@ -1,10 +1,9 @@
 //! The active set: the guides nearest the tool, simulated as local strands (their states persist when
 //! they leave the set).
 
-use super::{resting_on, HapticCore};
+use super::HapticCore;
 use crate::scene::ffd_map;
 use nalgebra::{Point3, Vector3};
-use tools::interaction::LocalInteraction;
 
 impl HapticCore {
     /// Copies the active strands' states back into the guide set.
@@ -33,30 +32,33 @@ impl HapticCore {
             self.write_back();
             self.active = chosen;
             let strands = self.active.iter().map(|&g| self.strands[g].clone()).collect();
-            self.interaction = resting_on(&self.scene, LocalInteraction::new(strands, self.tool.shape(), self.interaction.pose, Self::force_model(&self.hair_type, self.combing_ease)));
+            self.renew_interaction(strands);
             self.wet_version = u64::MAX;
         }
         self.last_select = Some(*tool);
     }
 
 
-    /// Re-selects the active set when the tool has moved 1 cm (never while the clip holds a strand).
+    /// Re-selects the active set when the tool has moved `HapticParams::reselect_distance` (never while the
+    /// clip holds a strand).
     pub(crate) fn reselect(&mut self, proxy: &Vector3<f64>, nodes: &[Point3<f64>]) {
-        let moved = self.last_select.map_or(true, |p| (p - proxy).norm() > 0.01);
+        let moved = self.last_select.map_or(true, |p| (p - proxy).norm() > self.params.haptic.reselect_distance);
         if moved && !self.clipped && nodes.len() == self.scene.lattice.node_count() {
             self.select(proxy, nodes);
         }
     }
 
-    /// The active strands' roots follow the lattice (FFD of each guide's rest root position).
-    pub(crate) fn roots_follow(&mut self, nodes: &[Point3<f64>], dt: f64) {
-        if nodes.len() == self.scene.lattice.node_count() {
-            for (slot, &g) in self.active.iter().enumerate() {
-                let target = ffd_map(&self.scene.lattice.ffd, nodes, &self.scene.guides[g].state.root.position);
-                let root = &mut self.interaction.strands[slot].state.root;
-                root.velocity = (target - root.position) / dt;
-                root.acceleration = Vector3::zeros();
-            }
+    /// The active strands' roots move with the head, which is rigid (and fixed in the scene's frame): each
+    /// root is held at its guide's root on the scalp, at rest. Not with the lattice: the tool's own
+    /// repelling obstacle deforms the lattice, and roots following it sank into the head and were kicked out.
+    pub(crate) fn roots_follow(&mut self, _nodes: &[Point3<f64>], dt: f64) {
+        for (slot, &g) in self.active.iter().enumerate() {
+            let target = self.scene.guides[g].state.root.position;
+            let root = &mut self.interaction.strands[slot].state.root;
+            // A root that is elsewhere (a state from before) is brought back over one step.
+            root.velocity = (target - root.position) / dt;
+            root.angular_velocity = Vector3::zeros();
+            root.acceleration = Vector3::zeros();
         }
     }
 }

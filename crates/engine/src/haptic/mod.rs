@@ -2,16 +2,19 @@
 //! (the few guide strands nearest the tool, Super-Helices) the tool acts on.
 //!
 //! One step of [`HapticCore::step`], in order:
-//! 1. **Device**: the device point follows the mouse target at a bounded speed (absurd readings rejected).
+//! 1. **Device**: the device point follows the pointer's target, interpolated at the haptic rate between its
+//!    events (`haptics::target`; absurd readings rejected).
 //! 2. **Coupling**: the virtual coupling gives the proxy (the tool) and the force on the hand, from the
-//!    hair's reaction of the previous step.
+//!    hair's reaction of the previous step taken implicitly (its force and damping, so the reaction can
+//!    never throw the proxy: `haptics::coupling::HairReaction`).
 //! 3. **Active set**: the guides nearest the tool become the local strands ([`active`]).
-//! 4. **Roots**: the local strands' roots follow the lattice snapshot.
+//! 4. **Roots**: the local strands' roots stay with the head (rigid), not with the tool-deformed lattice.
 //! 5. **Wetness**: the guides' wetness from the lattice snapshot sets the strands' material and the
-//!    friction ([`wetness`]).
+//!    friction, and the wet-set law updates their rest shapes as they dry ([`wetness`]).
 //! 6. **Tool actions**: scissors cut, clip pins, dryer blows ([`actions`]).
 //! 7. **Local strands**: the local interaction steps the strands with the tool's contacts; its reaction
-//!    (times the wisp factor) feeds the coupling at the next step.
+//!    and its damping, times the real hairs each guide stands for ([`HapticCore::hairs_per_guide`]), feed the
+//!    coupling at the next step.
 
 pub mod actions;
 mod active;
@@ -28,7 +31,8 @@ use crate::params::SessionParams;
 use crate::scene::{ffd_map, Scene};
 use crate::snapshot::{HapticSnapshot, LatticeSnapshot};
 use crate::tool::{Tool, ToolInput};
-use haptics::coupling::{Coupling, CouplingParams};
+use haptics::coupling::{Coupling, CouplingParams, HairReaction};
+use haptics::target::TargetFilter;
 use haptics::device::{DeviceCommand, DeviceReading};
 use nalgebra::{Matrix3, Vector3};
 use std::sync::Arc;
@@ -36,6 +40,7 @@ use strand::{HairType, Strand};
 use strands::samples_along;
 use tools::contact::ToolPose;
 use tools::interaction::LocalInteraction;
+use strand::styling::SetState;
 use tools::wetness::WetnessModel;
 
 /// The haptic layer's state and step (coupling, local strands, wetness, cuts), shared by the live thread
@@ -43,24 +48,30 @@ use tools::wetness::WetnessModel;
 pub struct HapticCore {
     pub(crate) scene: Arc<Scene>,
     pub(crate) params: SessionParams,
+    /// Each tool's shape (by wire id), built once.
+    pub(crate) shapes: Vec<tools::shape::ToolShape>,
     pub(crate) tool: Tool,
     pub(crate) hair_type: HairType,
     pub(crate) curliness: f64,
     pub(crate) combing_ease: f64,
     pub(crate) coupling: Coupling,
-    /// Device point following the mouse target at limited speed, m.
-    pub(crate) device: Option<Vector3<f64>>,
+    /// Device point following the pointer's target, interpolated between its events.
+    pub(crate) device: Option<TargetFilter>,
     /// Every guide's strand (inactive ones keep their last state).
     pub(crate) strands: Vec<Strand>,
     /// Active guides and their interaction (strands inside are clones, written back on a change).
     pub(crate) active: Vec<usize>,
     pub(crate) interaction: LocalInteraction,
-    pub(crate) hair_force: Vector3<f64>,
+    /// The hair's reaction on the proxy from the last step (scaled to the real hairs), linearised.
+    pub(crate) hair_force: HairReaction,
     /// Wetness of each guide as last read from the lattice snapshot, and the version it came from
     /// (u64::MAX: apply again).
     pub(crate) wetness: Vec<f32>,
     pub(crate) wet_version: u64,
     pub(crate) wet_model: WetnessModel,
+    /// Each guide's wet set (`strand::styling`): the shape its hydrogen bonds hold, updated while it is
+    /// a local strand (one per guide, remade with the strands).
+    pub(crate) sets: Vec<SetState>,
     /// Scissors closes so far, and whether the primary button was held in the last step.
     pub(crate) cuts: u64,
     pub(crate) was_pressed: bool,
@@ -80,15 +91,17 @@ impl HapticCore {
     pub fn new(scene: Arc<Scene>, params: SessionParams) -> Result<Self, SessionError> {
         params.validate()?;
         let h = scene.hair_type;
-        let strands = Self::build_strands(&scene, &h, 0.0)?;
-        let start = Vector3::new(0.0, -0.25, 0.0);
+        let strands = Self::build_strands(&scene, &h, 0.0, params.haptic.min_air_drag)?;
+        let sets = strands.iter().map(|s| SetState::new(&s.model)).collect();
+        let start = Vector3::from(params.haptic.start);
         let coupling = Coupling::new(params.profile, CouplingParams::for_profile(&params.profile), start);
         let pose = ToolPose { position: start, rotation: Matrix3::identity() };
         let n = scene.guides.len();
-        let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), Tool::Comb.shape(), pose, Self::force_model(&h, 0.0)));
+        let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape()).collect();
+        let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
         Ok(Self {
-            scene, params, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), interaction,
-            hair_force: Vector3::zeros(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, rejected: 0, failed: 0,
+            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), interaction,
+            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, rejected: 0, failed: 0,
         })
     }
 
@@ -102,13 +115,14 @@ impl HapticCore {
                 self.active.clear();
                 self.last_select = None;
                 self.clipped = false;
-                self.interaction = resting_on(&self.scene, LocalInteraction::new(Vec::new(), t.shape(), self.interaction.pose, Self::force_model(&self.hair_type, self.combing_ease)));
+                self.renew_interaction(Vec::new());
             }
             Command::SetHair { hair_type, curliness, combing_ease } => {
                 let h = HairType::ALL.get(hair_type as usize).copied().unwrap_or(self.hair_type);
                 let (c, e) = (if curliness.is_finite() { curliness.clamp(0.0, 1.0) } else { 0.0 }, if combing_ease.is_finite() { combing_ease.clamp(0.0, 1.0) } else { 0.0 });
                 if h != self.hair_type || c != self.curliness {
-                    if let Ok(s) = Self::build_strands(&self.scene, &h, c) {
+                    if let Ok(s) = Self::build_strands(&self.scene, &h, c, self.params.haptic.min_air_drag) {
+                        self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
                         self.strands = s;
                         self.active.clear();
                     }
@@ -117,16 +131,17 @@ impl HapticCore {
                 self.curliness = c;
                 self.combing_ease = e;
                 self.last_select = None;
-                self.interaction = resting_on(&self.scene, LocalInteraction::new(Vec::new(), self.tool.shape(), self.interaction.pose, Self::force_model(&h, e)));
+                self.renew_interaction(Vec::new());
             }
             Command::Reset => {
-                if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness) {
+                if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, self.params.haptic.min_air_drag) {
+                    self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
                     self.strands = s;
                 }
                 self.active.clear();
                 self.last_select = None;
                 self.clipped = false;
-                self.interaction = resting_on(&self.scene, LocalInteraction::new(Vec::new(), self.tool.shape(), self.interaction.pose, Self::force_model(&self.hair_type, self.combing_ease)));
+                self.renew_interaction(Vec::new());
                 self.wet_version = u64::MAX;
             }
         }
@@ -139,11 +154,11 @@ impl HapticCore {
         // 1. Device.
         let Some(reading) = self.follow(&r, dt) else { return DeviceCommand::default() };
         // 2. Coupling.
-        let force = match self.coupling.update(&reading, dt, &self.hair_force) {
+        let force = match self.coupling.update_implicit(&reading, dt, &self.hair_force) {
             Ok(f) => f,
             Err(_) => {
                 self.rejected += 1;
-                self.hair_force = Vector3::zeros();
+                self.hair_force = HairReaction::none();
                 return DeviceCommand::default();
             }
         };
@@ -160,20 +175,28 @@ impl HapticCore {
         let pose = ToolPose { position: proxy, rotation: r.rotation };
         match self.interaction.step(dt, pose) {
             Ok(res) => {
-                self.hair_force = res.force * self.params.wisp;
+                let n = self.hairs_per_guide();
+                self.hair_force = HairReaction { force: res.force * n, damping: res.damping * n, velocity: self.coupling.proxy_velocity };
                 self.last_contacts = res.contacts.len() as u32;
             }
             Err(_) => {
                 self.failed += 1;
-                self.hair_force = Vector3::zeros();
+                self.hair_force = HairReaction::none();
                 self.last_contacts = 0;
             }
         }
         DeviceCommand { force, torque: Vector3::zeros() }
     }
 
-    /// The device point following the mouse target `r` at a bounded speed, as a reading; None (counted)
-    /// for a non-finite target. The first reading puts device, proxy and tool where the mouse is, at rest.
+    /// Real hairs each simulated guide stands for: the render strands times `hairs_per_render_strand`, shared
+    /// among the guides (500 in the built-in scene), dimensionless, >= 1.
+    pub fn hairs_per_guide(&self) -> f64 {
+        (self.scene.render.strands() as f64 * self.params.hairs_per_render_strand / self.scene.guides.len().max(1) as f64).max(1.0)
+    }
+
+    /// The device point following the pointer's target `r` (interpolated between its events), as a reading;
+    /// None (counted) for a non-finite target. The first reading puts device, proxy and tool where the
+    /// pointer is, at rest.
     fn follow(&mut self, r: &DeviceReading, dt: f64) -> Option<DeviceReading> {
         let target = r.position;
         if !target.iter().all(|x| x.is_finite()) {
@@ -184,11 +207,9 @@ impl HapticCore {
             self.coupling = Coupling::new(self.params.profile, CouplingParams::for_profile(&self.params.profile), target);
             self.interaction.pose = ToolPose { position: target, rotation: r.rotation };
         }
-        let dev = self.device.get_or_insert(target);
-        let d = target - *dev;
-        let max = self.params.follow_speed * dt;
-        *dev += if d.norm() > max { d * (max / d.norm()) } else { d };
-        Some(DeviceReading { position: *dev, ..*r })
+        let pointer = self.params.pointer;
+        let dev = self.device.get_or_insert_with(|| TargetFilter::new(pointer, target));
+        Some(DeviceReading { position: dev.step(&target, dt), ..*r })
     }
 
     /// What the global layer needs of the tool now.
@@ -203,7 +224,7 @@ impl HapticCore {
         out.tool = self.tool as u8;
         out.tool_position = self.coupling.proxy;
         out.tool_rotation = self.interaction.pose.rotation;
-        out.device_position = self.device.unwrap_or(self.coupling.proxy);
+        out.device_position = self.device.as_ref().map_or(self.coupling.proxy, |d| d.point);
         out.force = self.coupling.force;
         out.contacts = self.last_contacts;
         out.lattice_version = lattice.version;
@@ -220,7 +241,7 @@ impl HapticCore {
                 let base = if ok { ffd_map(&self.scene.lattice.ffd, &lattice.positions, &reference) } else { reference };
                 let d = p - base;
                 // Keep the viewer's displacement sane even if a strand misbehaves.
-                out.displacement.push(if d.iter().all(|x| x.is_finite()) && d.norm() < 0.5 { d } else { Vector3::zeros() });
+                out.displacement.push(if d.iter().all(|x| x.is_finite()) && d.norm() < self.params.haptic.max_displacement { d } else { Vector3::zeros() });
             }
         }
     }
@@ -248,6 +269,26 @@ mod tests {
     use super::*;
     use crate::global::GlobalCore;
     use crate::testing::{small_scene, test_rot};
+
+    #[test]
+    fn absurd_device_input_never_reaches_the_hand() {
+        // (From the removed second live session, local_session.rs.) NaN readings in the middle of a comb
+        // stroke: zero force on those steps, counted, and the stroke goes on with finite forces.
+        let scene = small_scene();
+        let mut core = HapticCore::new(scene.clone(), SessionParams::default()).unwrap();
+        let snap = GlobalCore::new(scene, &SessionParams::default()).snapshot();
+        let mut forces = Vec::new();
+        for n in 0..300 {
+            let t = n as f64 * 1e-3;
+            let p = if n == 50 || n == 80 { Vector3::new(f64::NAN, 0.0, 0.0) } else { Vector3::new(0.0, -0.118, 0.05 - 0.1 * t) };
+            forces.push(core.step(Some(DeviceReading { time: t, position: p, rotation: test_rot(), buttons: 0 }), &snap, 1e-3).force);
+        }
+        assert_eq!(core.rejected, 2);
+        assert_eq!(forces[50], Vector3::zeros());
+        assert_eq!(forces[80], Vector3::zeros());
+        assert!(forces.iter().all(|f| f.iter().all(|x| x.is_finite())));
+        assert!(forces[100..].iter().any(|f| f.norm() > 0.0), "the stroke goes on");
+    }
 
     #[test]
     fn combing_through_the_guides_gives_force_and_moves_them() {

@@ -3,6 +3,7 @@
 
 use super::HapticCore;
 use crate::error::SessionError;
+use crate::params::HapticParams;
 use crate::scene::Scene;
 use nalgebra::Vector3;
 use strand::{HairType, Strand};
@@ -17,8 +18,9 @@ pub(crate) fn resting_on(scene: &Scene, mut it: LocalInteraction) -> LocalIntera
 
 impl HapticCore {
     /// Every guide's strand in its groomed state, with the hair type's section and material and the
-    /// curliness (in [0, 1], [`hairstyle::Curl`]) added to the rest twist and bend.
-    pub(crate) fn build_strands(scene: &Scene, h: &HairType, curliness: f64) -> Result<Vec<Strand>, SessionError> {
+    /// curliness (in [0, 1], [`hairstyle::Curl`]) added to the rest twist and bend, and an air drag of at least
+    /// `min_air_drag` (N s/m^2, `HapticParams::min_air_drag`).
+    pub(crate) fn build_strands(scene: &Scene, h: &HairType, curliness: f64, min_air_drag: f64) -> Result<Vec<Strand>, SessionError> {
         let err = |e: strand::StrandError| SessionError::Scene(e.to_string());
         let curl = hairstyle::Curl::from_curliness(curliness.clamp(0.0, 1.0)).map_err(|e| SessionError::Scene(e.to_string()))?;
         scene.guides.iter().map(|g| {
@@ -35,15 +37,27 @@ impl HapticCore {
                 }
                 m.set_rest_coordinates(&q);
             }
-            m.air_drag = m.air_drag.max(2e-5);
+            m.air_drag = m.air_drag.max(min_air_drag);
             let mut s = Strand::new(m, g.state.root.clone()).map_err(err)?;
             s.state.q.copy_from(&g.state.q);
             Ok(s)
         }).collect()
     }
 
-    pub(crate) fn force_model(h: &HairType, ease: f64) -> ForceModel {
-        ForceModel::Constraint { friction: h.friction_coefficient() * (1.0 - 0.8 * ease.clamp(0.0, 1.0)), options: Default::default() }
+    /// The tool's contact law on dry hair of type `h` at combing ease `ease` ([`HapticParams::combing_friction`]).
+    pub(crate) fn force_model(params: &HapticParams, h: &HairType, ease: f64) -> ForceModel {
+        ForceModel::Constraint { friction: params.combing_friction(h.friction_coefficient(), ease), options: Default::default() }
+    }
+
+    /// A new local interaction over `strands` with the selected tool's shape (built once) and the current
+    /// hair's contact law; the body the strands rest on moves over from the previous interaction (it is
+    /// not copied in the haptic loop).
+    pub(crate) fn renew_interaction(&mut self, strands: Vec<Strand>) {
+        let body = self.interaction.body.take();
+        let model = Self::force_model(&self.params.haptic, &self.hair_type, self.combing_ease);
+        let mut it = LocalInteraction::new(strands, self.shapes[self.tool as usize].clone(), self.interaction.pose, model);
+        it.body = body;
+        self.interaction = it;
     }
 }
 

@@ -1,8 +1,9 @@
-//! Wet hair on the haptic layer: the local strands' material and the tool's friction from the guides'
-//! wetness in the lattice snapshot.
+//! Wet hair on the haptic layer: the local strands' material, the tool's friction and the wet set of their
+//! rest shapes from the guides' wetness in the lattice snapshot.
 
 use super::HapticCore;
 use crate::snapshot::LatticeSnapshot;
+use strand::styling::{SetModel, SetState};
 use tools::interaction::ForceModel;
 
 impl HapticCore {
@@ -20,15 +21,26 @@ impl HapticCore {
         let h = self.hair_type;
         let (Ok(dry), Ok(section)) = (h.material(), h.section()) else { return };
         let mut mean = 0.0;
+        let set_model = SetModel { hydrogen_share: self.params.haptic.hydrogen_share };
         for (slot, &g) in self.active.iter().enumerate() {
             let w = self.wetness[g] as f64;
             mean += w / self.active.len() as f64;
+            let s = &mut self.interaction.strands[slot];
             if let Ok(m) = self.wet_model.wet(&dry, h.friction_coefficient(), section.area(), w) {
-                self.interaction.strands[slot].model.material = m.material();
+                s.model.material = m.material();
+            }
+            // The wet set (`strand::styling`, the law the headless styling tests check): as the guide dries
+            // its rest shape takes the shape it is held in. A cut strand (fewer segments) starts a new set.
+            if self.sets[g].set.len() != s.model.dofs() {
+                self.sets[g] = SetState::new(&s.model);
+            }
+            let (q, ws) = (s.state.q.clone(), vec![w; s.model.segments]);
+            if self.sets[g].update(&set_model, &mut s.model, &q, &ws).is_err() {
+                self.failed += 1;
             }
         }
         if let Ok(m) = self.wet_model.wet(&dry, h.friction_coefficient(), section.area(), mean) {
-            self.interaction.model = ForceModel::Constraint { friction: m.friction * (1.0 - 0.8 * self.combing_ease), options: Default::default() };
+            self.interaction.model = ForceModel::Constraint { friction: self.params.haptic.combing_friction(m.friction, self.combing_ease), options: Default::default() };
         }
     }
 }
@@ -73,5 +85,41 @@ mod tests {
         assert!(dry.0 > 1e-4, "the dry stroke is felt: {} N", dry.0);
         assert!(wet.0 > 2.0 * dry.0, "peak wet {} N vs dry {} N", wet.0, dry.0);
         assert!(wet.1 > dry.1, "mean wet {} N vs dry {} N", wet.1, dry.1);
+    }
+
+    #[test]
+    fn wet_hair_dried_by_the_live_session_takes_a_set() {
+        // The wet set in the live session (issue 11; headless only before): 0.3 s of a comb stroke through
+        // soaked hair (every guide at wetness 1), then a lattice snapshot saying dry. The active strands'
+        // rest coordinates move towards the shape they are held in (rms change over their coordinates above
+        // 1e-3 rad/m); the same stroke through dry hair dried again leaves them unchanged to the bit.
+        let scene = small_scene();
+        let run = |w: f32| -> f64 {
+            let mut core = HapticCore::new(scene.clone(), SessionParams::default()).unwrap();
+            let mut g = GlobalCore::new(scene.clone(), &SessionParams::default());
+            g.set_wetness(w as f64);
+            let wet = g.snapshot();
+            let mut dry = wet.clone();
+            dry.version += 1;
+            dry.wetness.iter_mut().for_each(|x| *x = 0.0);
+            for n in 0..301 {
+                let t = n as f64 * 1e-3;
+                let p = Vector3::new(0.0, -0.118, 0.05 - 0.1 * t);
+                let snap = if n < 300 { &wet } else { &dry };
+                core.step(Some(DeviceReading { time: t, position: p, rotation: test_rot(), buttons: 0 }), snap, 1e-3);
+            }
+            assert!(!core.active.is_empty());
+            let (mut sq, mut cnt) = (0.0, 0usize);
+            for (slot, &g) in core.active.iter().enumerate() {
+                let d = core.interaction.strands[slot].model.rest_coordinates() - scene.guides[g].model.rest_coordinates();
+                sq += d.norm_squared();
+                cnt += d.len();
+            }
+            (sq / cnt as f64).sqrt()
+        };
+        let (wet, dry) = (run(1.0), run(0.0));
+        eprintln!("rms rest change after drying: {wet} rad/m (wet), {dry} rad/m (dry throughout)");
+        assert!(wet > 1e-3, "{wet}");
+        assert_eq!(dry, 0.0);
     }
 }

@@ -4,6 +4,7 @@ use super::{Record, RecordError, StepRecord};
 use crate::command::Command;
 use crate::tool::{Tool, ToolInput};
 use haptics::device::DeviceReading;
+use hairstyle::formats::bytes::Cursor;
 use nalgebra::{Matrix3, Vector3};
 
 const MAGIC: &[u8; 8] = b"CFREC2\0\0";
@@ -60,7 +61,7 @@ impl Record {
 
     /// Parses a record; errors name the byte offset.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, RecordError> {
-        let mut r = Reader { b: bytes, at: 0 };
+        let mut r = Reader(Cursor::new(bytes, "session record"));
         let magic = r.take(8)?;
         let v2 = magic == MAGIC;
         if !v2 && magic != MAGIC_V1 {
@@ -80,7 +81,7 @@ impl Record {
             let n = r.u64()? as usize;
             global_inputs.reserve(n.min(1 << 20));
             for _ in 0..n {
-                let at = r.at;
+                let at = r.at();
                 let id = r.u8()?;
                 let tool = Tool::from_id(id).ok_or(RecordError::Bad { offset: at, what: format!("tool id {id}") })?;
                 let flags = r.u8()?;
@@ -111,14 +112,14 @@ impl Record {
                     let buttons = u32::from_le_bytes(r.take(4)?.try_into().unwrap());
                     Some(DeviceReading { time, position, rotation: Matrix3::from_column_slice(&m), buttons })
                 }
-                k => return Err(RecordError::Bad { offset: r.at - 1, what: format!("reading flag {k} (0 or 1)") }),
+                k => return Err(RecordError::Bad { offset: r.at() - 1, what: format!("reading flag {k} (0 or 1)") }),
             };
             let lattice_version = r.u64()?;
             let force = Vector3::new(r.f64()?, r.f64()?, r.f64()?);
             let nc = r.u8()?;
             let mut commands = Vec::with_capacity(nc as usize);
             for _ in 0..nc {
-                let at = r.at;
+                let at = r.at();
                 commands.push(match r.u8()? {
                     0 => {
                         let id = r.u8()?;
@@ -131,35 +132,37 @@ impl Record {
             }
             steps.push(StepRecord { reading, lattice_version, commands, force });
         }
-        if r.at != bytes.len() {
-            return Err(RecordError::Bad { offset: r.at, what: format!("{} trailing bytes", bytes.len() - r.at) });
+        if r.at() != bytes.len() {
+            return Err(RecordError::Bad { offset: r.at(), what: format!("{} trailing bytes", bytes.len() - r.at()) });
         }
         Ok(Record { rate_hz, global_resets, global_inputs, steps })
     }
 }
 
-struct Reader<'a> {
-    b: &'a [u8],
-    at: usize,
-}
+/// The hair formats' little-endian reader (one byte reader in the project), its errors as record errors.
+struct Reader<'a>(Cursor<'a>);
 
 impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize) -> Result<&'a [u8], RecordError> {
-        if self.at + n > self.b.len() {
-            return Err(RecordError::Bad { offset: self.at, what: format!("truncated: {n} more bytes expected") });
+    fn err(e: hairstyle::formats::FormatError) -> RecordError {
+        match e {
+            hairstyle::formats::FormatError::Binary { offset, expected, .. } => RecordError::Bad { offset: offset as usize, what: format!("truncated: {expected}") },
+            e => RecordError::Bad { offset: 0, what: e.to_string() },
         }
-        let s = &self.b[self.at..self.at + n];
-        self.at += n;
-        Ok(s)
+    }
+    fn at(&self) -> usize {
+        self.0.pos()
+    }
+    fn take(&mut self, n: usize) -> Result<&'a [u8], RecordError> {
+        self.0.take(n, "bytes").map_err(Self::err)
     }
     fn u8(&mut self) -> Result<u8, RecordError> {
-        Ok(self.take(1)?[0])
+        self.0.u8("a byte").map_err(Self::err)
     }
     fn u64(&mut self) -> Result<u64, RecordError> {
-        Ok(u64::from_le_bytes(self.take(8)?.try_into().unwrap()))
+        self.0.u64("a u64").map_err(Self::err)
     }
     fn f64(&mut self) -> Result<f64, RecordError> {
-        Ok(f64::from_le_bytes(self.take(8)?.try_into().unwrap()))
+        self.0.f64("an f64").map_err(Self::err)
     }
 }
 

@@ -1,7 +1,10 @@
-//! The timed actions of a global scenario: scissors cuts, dryer and sprayer passes.
+//! The timed actions of a global scenario: scissors cuts, dryer and sprayer passes, and the script of the
+//! live tool's inputs they make ([`ToolScript`]).
 
 use super::ScenarioError;
-use nalgebra::Vector3;
+use crate::global::ToolSettings;
+use crate::tool::{Tool, ToolInput};
+use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
 use tools::dryer::{Cone, HairDryer};
 use tools::sprayer::Sprayer;
@@ -128,6 +131,88 @@ impl ConeAction {
         Sprayer {
             cone: self.cone(t, s.cone),
             wetting_rate: self.rate.unwrap_or(s.wetting_rate),
+        }
+    }
+}
+
+/// The actions as the live tool's inputs: what a global scenario gives [`crate::global::GlobalCore::step`] each global
+/// step, as the haptic thread gives it in the live session. A cut is the scissors closing once (pressed,
+/// `cuts` one more) with the tool's y axis along the blade's normal; a dryer or sprayer pass is that tool
+/// held pressed with its nozzle on the action's path (the tool point `GlobalParams::nozzle_standoff` in
+/// front of the nozzle along the jet, the tool's -z along the jet). Between actions the tool is away
+/// (`present` false: it touches nothing).
+#[derive(Debug, Clone)]
+pub struct ToolScript {
+    actions: Vec<Action>,
+    standoff: f64,
+    cuts: u64,
+    base: ToolSettings,
+}
+
+impl ToolScript {
+    /// The script of `actions` (validated by the scenario), nozzles `standoff` m behind the tool point, the
+    /// tools' settings outside the actions' own keys from `base`.
+    pub fn new(actions: &[Action], standoff: f64, base: ToolSettings) -> Self {
+        Self { actions: actions.to_vec(), standoff, cuts: 0, base }
+    }
+
+    /// The tool input and the tools' settings of the global step over (t0, t1] (s): a cut whose time falls
+    /// in it, else the dryer or sprayer pass active at t0, else the tool away.
+    pub fn input(&mut self, t0: f64, t1: f64) -> (ToolInput, ToolSettings) {
+        let mut settings = self.base;
+        for a in &self.actions {
+            if let Action::Cut(c) = a {
+                if c.t > t0 && c.t <= t1 || (t0 <= 0.0 && c.t == 0.0) {
+                    self.cuts += 1;
+                    settings.blade_radius = c.radius;
+                    let rotation = frame_with_axis(1, &Vector3::from(c.normal));
+                    let input = ToolInput { tool: Tool::Scissors, present: true, position: c.point.into(), rotation, pressed: true, cuts: self.cuts };
+                    return (input, settings);
+                }
+            }
+        }
+        for a in &self.actions {
+            let (tool, c) = match a {
+                Action::Dry(c) if c.active(t0) => (Tool::Dryer, c),
+                Action::Spray(c) if c.active(t0) => (Tool::Sprayer, c),
+                _ => continue,
+            };
+            let (apex, axis) = c.pose(t0);
+            let jet = axis.normalize();
+            settings.dryer = c.dryer(t0);
+            settings.sprayer = c.sprayer(t0);
+            let rotation = frame_with_axis(2, &-jet);
+            let input = ToolInput { tool, present: true, position: apex + jet * self.standoff, rotation, pressed: true, cuts: self.cuts };
+            return (input, settings);
+        }
+        (ToolInput { cuts: self.cuts, ..ToolInput::default() }, settings)
+    }
+}
+
+/// A rotation (tool frame to world) whose column `k` is the unit vector along `dir` (non-zero).
+fn frame_with_axis(k: usize, dir: &Vector3<f64>) -> Matrix3<f64> {
+    let a = dir.normalize();
+    let helper = if a.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    let b = (helper - a * a.dot(&helper)).normalize();
+    let c = a.cross(&b);
+    // Columns (k, k+1, k+2 mod 3) = (a, b, c): right-handed.
+    let mut cols = [Vector3::zeros(); 3];
+    cols[k] = a;
+    cols[(k + 1) % 3] = b;
+    cols[(k + 2) % 3] = c;
+    Matrix3::from_columns(&cols)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tool_frames_are_rotations_with_the_asked_axis() {
+        for (k, d) in [(1, Vector3::new(0.0, 0.0, 1.0)), (2, Vector3::new(0.3, 1.0, 0.0)), (2, Vector3::new(1.0, 0.0, 0.0)), (1, Vector3::new(0.0, -2.0, 0.0))] {
+            let r = frame_with_axis(k, &d);
+            assert!((r.transpose() * r - Matrix3::identity()).norm() < 1e-12 && (r.determinant() - 1.0).abs() < 1e-12, "{r}");
+            assert!((r.column(k) - d.normalize()).norm() < 1e-12);
         }
     }
 }

@@ -3,14 +3,26 @@
 //!   the result is the force trace the tool (the hand) feels and a summary.
 //! - [`global`]: a generated hairstyle on the built-in head and timed actions of the scissors, the hair
 //!   dryer and the water sprayer ([`actions`]).
+//! - [`live`]: the live session's own cores driven headless, the tool moved as a device would move it.
+//!
+//! [`run`] runs any kind into memory ([`ScenarioOutput`]); [`files`] reads a scenario's tool files
+//! ([`run_in`]) and writes the outputs ([`write_output`]), for the CLI and the Python binding alike.
 
 pub mod actions;
+pub mod files;
 pub mod global;
+pub mod live;
+pub mod output;
 pub mod patch;
+pub mod run;
 
 pub use actions::{Action, ConeAction, ConePose, CutAction};
+pub use files::{load_tool, read_path_csv, run_in, summary_json, write_output, write_replay};
 pub use global::{GlobalOutput, GlobalRow, GlobalScenario, GlobalSummary, HairstyleSpec};
+pub use live::{LiveScenario, LiveSpec, LiveTool, LiveWaypoint};
+pub use output::{ForceStats, ForceTrace, LiveSummary};
 pub use patch::{PatchSpec, Scenario, Summary, ToolSpec, TraceRow};
+pub use run::{run, run_patch, ScenarioFile, ScenarioOutput, ScenarioSummary};
 
 use strand::StrandError;
 
@@ -28,6 +40,14 @@ pub enum ScenarioError {
         time: f64,
         /// What failed.
         source: StrandError,
+    },
+    /// A file the scenario reads or writes (tool shape or path, outputs): names the file.
+    #[error("{}: {message}", path.display())]
+    File {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What went wrong.
+        message: String,
     },
 }
 

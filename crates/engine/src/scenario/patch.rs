@@ -1,18 +1,28 @@
 //! A patch of strands and a scripted tool, stepped at haptic rate.
 //!
-//! Pipeline of [`Scenario::run`]: build the patch (roots on a rectangle, small random tilts so that teeth
-//! meet hair as in a real tress), settle it under gravity, then every step move the tool along its path,
-//! step the [`tools::interaction::LocalInteraction`] and record the force and torque on the tool, scaled by
-//! the number of real hairs each simulated strand stands for.
+//! Pipeline of [`Scenario::run`]:
+//! 1. build the patch: roots on a rectangle, small random tilts so that teeth meet hair as in a real tress;
+//!    each strand stands for `represents` real fibres (from the tress's mass);
+//! 2. wetness: the strands' material and the friction coefficients (tool-hair and hair-hair) from
+//!    [`tools::wetness::WetnessModel`] at `[patch] wetness`, the same law as the live session's; the combing
+//!    ease lowers both frictions by [`crate::params::HapticParams::combing_friction`], the live session's law;
+//! 3. settle the patch under gravity in the [`tools::interaction::LocalInteraction`] (hair-hair contacts on, the
+//!    tool held at its path's start);
+//! 4. every step move the tool along its path, step the interaction and record the force and torque on the
+//!    tool, scaled by the number of real hairs each simulated strand stands for;
+//! 5. summarise, with the stroke's quality figures ([`super::output::StrokeMetrics`]).
 
+use super::output::{ForceStats, ForceTrace, StrokeMetrics};
 use super::{default_dt, ScenarioError};
+use crate::params::HapticParams;
 use crate::path::{ToolPath, Waypoint};
 use nalgebra::Vector3;
 use serde::Deserialize;
 use strand::constraint::ConstraintOptions;
 use strand::{HairType, ModelKind, RootFrame, Strand, StrandError, StrandModel};
-use tools::interaction::{ForceModel, LocalInteraction};
+use tools::interaction::{ForceModel, HairContact, LocalInteraction};
 use tools::shape::ToolShape;
+use tools::wetness::{check_wetness, WetnessModel};
 
 
 /// A scenario file's contents (TOML; see docs/scenarios.md).
@@ -75,8 +85,25 @@ pub struct PatchSpec {
     /// Real hairs each simulated strand stands for: forces are multiplied by it (default 1).
     #[serde(default = "default_represents")]
     pub represents: f64,
-    /// Or: mass of the real tress, kg; sets `represents` to tress_mass / (strands x strand mass).
+    /// Or: mass of the real (dry) tress, kg; sets `represents` to tress_mass / (strands x dry strand mass).
     pub tress_mass: Option<f64>,
+    /// Wetness of the tress, 0 (dry, in equilibrium with ambient air) to 1 (towel-dried wet), dimensionless
+    /// (default 0). Sets the strands' material and the friction through `tools::wetness::WetnessModel`.
+    #[serde(default)]
+    pub wetness: f64,
+    /// Contact and friction between the simulated strands, each a wisp of `represents` fibres
+    /// (`tools::hair_contact`; default true).
+    #[serde(default = "default_true")]
+    pub hair_contact: bool,
+    /// Packing fraction of the fibres in a wisp (dimensionless, (0, 1]; default `HairContact`'s, 0.5): sets
+    /// the wisps' radius, hence the contact distance between strands.
+    pub packing: Option<f64>,
+    /// Dry fibre-fibre friction coefficient (dimensionless; default `HairContact`'s, 0.25).
+    pub hair_friction: Option<f64>,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 fn default_hair() -> String {
@@ -122,8 +149,12 @@ pub struct ToolSpec {
     /// Gain of the paper's force model, m s (default 1).
     #[serde(default = "default_gain")]
     pub gain: f64,
-    /// Friction coefficient (default: the hair type's).
+    /// Dry tool-hair friction coefficient (default: the hair type's).
     pub friction: Option<f64>,
+    /// Combing ease in [0, 1] (default 0): lowers the tool-hair and hair-hair friction as the live session's
+    /// slider does ([`HapticParams::combing_friction`]).
+    #[serde(default)]
+    pub combing_ease: f64,
     /// Waypoints (time from the end of settling, s).
     #[serde(default)]
     pub path: Vec<Waypoint>,
@@ -154,7 +185,7 @@ pub struct TraceRow {
 }
 
 /// Summary of a run.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Summary {
     /// Largest force magnitude, N.
     pub peak_force: f64,
@@ -170,8 +201,20 @@ pub struct Summary {
     pub tress_mass: f64,
     /// Real hairs per simulated strand (the force scale).
     pub represents: f64,
+    /// Wetness of the tress (dimensionless, 0..1).
+    pub wetness: f64,
+    /// Tool-hair friction coefficient used (after wetness and combing ease).
+    pub tool_friction: f64,
+    /// Hair-hair friction coefficient used (0 without hair contact).
+    pub hair_friction: f64,
+    /// Hair-hair contact distance between two strands' centrelines, m (0 without hair contact).
+    pub hair_contact_distance: f64,
+    /// The stroke's quality figures (peak, median, 90th percentile, continuity, largest step change).
+    pub stroke: StrokeMetrics,
     /// Steps in which some strand's velocities were scaled down by the safety net.
     pub clamped_steps: u64,
+    /// Wall time of the run, s (set by [`super::run_patch`]; 0 from [`Scenario::run`]).
+    pub wall_time_s: f64,
 }
 
 /// splitmix64: a small deterministic generator for the patch layout.
@@ -217,6 +260,18 @@ impl Scenario {
                 return bad("give patch.represents or patch.tress_mass, not both".into());
             }
         }
+        check_wetness("patch.wetness", p.wetness).map_err(|e| ScenarioError::Invalid(e.to_string()))?;
+        check_wetness("tool.combing_ease", self.tool.combing_ease).map_err(|e| ScenarioError::Invalid(e.to_string().replace("wetness must be", "must be")))?;
+        if let Some(k) = p.packing {
+            if !(k.is_finite() && k > 0.0 && k <= 1.0) {
+                return bad(format!("patch.packing must be in (0, 1], got {k}"));
+            }
+        }
+        if let Some(mu) = p.hair_friction {
+            if !(mu.is_finite() && mu >= 0.0) {
+                return bad(format!("patch.hair_friction must be >= 0, got {mu}"));
+            }
+        }
         if !p.root.iter().chain(p.extent.iter()).all(|x| x.is_finite()) || p.extent.iter().any(|x| *x < 0.0) {
             return bad("patch.root and patch.extent must be finite (extent >= 0)".into());
         }
@@ -241,7 +296,8 @@ impl Scenario {
         let p = &self.patch;
         let inv = |e: StrandError| ScenarioError::Invalid(format!("patch: {e}"));
         let (tw, bd) = hair.rest_curvature();
-        let model = StrandModel::new(p.model, p.length, p.segments, hair.section().map_err(inv)?, hair.material().map_err(inv)?)
+        let wet = WetnessModel::default().hair(&hair, p.wetness).map_err(|e| ScenarioError::Invalid(format!("patch: {e}")))?;
+        let model = StrandModel::new(p.model, p.length, p.segments, hair.section().map_err(inv)?, wet.material())
             .map_err(inv)?
             .with_uniform_rest(tw, bd, 0.0);
         let mut rng = p.seed;
@@ -261,52 +317,75 @@ impl Scenario {
     /// Runs the scenario with the tool's shape and path (loaded by the caller). Deterministic.
     pub fn run(&self, shape: ToolShape, path: &ToolPath) -> Result<(Vec<TraceRow>, Summary), ScenarioError> {
         let hair = self.validate()?;
-        let mut strands = self.build_patch()?;
-        let settle_steps = (self.settle / self.dt).round() as usize;
-        for s in strands.iter_mut() {
-            for n in 0..settle_steps {
-                s.step(self.dt, &[]).map_err(|e| ScenarioError::Simulation { time: -self.settle + n as f64 * self.dt, source: e })?;
-            }
-        }
+        let strands = self.build_patch()?;
+        let p = &self.patch;
+        let wet_model = WetnessModel::default();
+        let wet_error = |e: tools::wetness::WetnessError| ScenarioError::Invalid(format!("patch: {e}"));
+        // Fibres each strand stands for, from the dry mass (water adds mass, not fibres).
+        let mass_factor = wet_model.mass_factor(p.wetness).map_err(wet_error)?;
+        let dry_mass = strands.iter().map(|s| s.model.mass()).sum::<f64>() / mass_factor;
+        let k = match p.tress_mass {
+            Some(m) => m / dry_mass,
+            None => p.represents,
+        };
+        let tress_mass = dry_mass * k;
+        // Frictions: wetness, then combing ease (the live session's laws).
+        let ease = HapticParams::default();
+        let tool_friction = ease.combing_friction(wet_model.friction(self.tool.friction.unwrap_or(hair.friction_coefficient()), p.wetness).map_err(wet_error)?, self.tool.combing_ease);
         let model = match self.tool.force_model.as_str() {
             "paper" => ForceModel::Paper { gain: self.tool.gain },
-            _ => ForceModel::Constraint { friction: self.tool.friction.unwrap_or(hair.friction_coefficient()), options: ConstraintOptions::default() },
+            _ => ForceModel::Constraint { friction: tool_friction, options: ConstraintOptions::default() },
         };
-        let simulated_mass = strands.iter().map(|s| s.model.mass()).sum::<f64>();
-        let k = match self.patch.tress_mass {
-            Some(m) => m / simulated_mass,
-            None => self.patch.represents,
-        };
-        let tress_mass = simulated_mass * k;
         let mut it = LocalInteraction::new(strands, shape, path.pose(0.0), model);
+        let mut hair_friction = 0.0;
+        let mut hair_contact_distance = 0.0;
+        if p.hair_contact {
+            let d = HairContact::default();
+            let dry = p.hair_friction.unwrap_or(d.friction);
+            hair_friction = ease.combing_friction(wet_model.friction(dry, p.wetness).map_err(wet_error)?, self.tool.combing_ease);
+            let hc = HairContact { fibres: k.max(1.0), packing: p.packing.unwrap_or(d.packing), friction: hair_friction, ..d };
+            hair_contact_distance = hc.distance(hair.major_diameter / 2.0);
+            it.hair_contact = Some(hc);
+        }
+        // Settle under gravity (and the strands' contacts), the tool held at its start.
+        let settle_steps = (self.settle / self.dt).round() as usize;
+        for n in 0..settle_steps {
+            it.step(self.dt, path.pose(0.0)).map_err(|e| ScenarioError::Simulation { time: -self.settle + n as f64 * self.dt, source: e })?;
+        }
         let duration = self.duration.unwrap_or(path.end_time() + 0.05);
         let steps = (duration / self.dt).round() as usize;
         let mut rows = Vec::with_capacity(steps);
-        let (mut peak, mut sum, mut work, mut contact_steps) = (0.0f64, 0.0, 0.0, 0usize);
+        let mut work = 0.0;
         let mut last = path.pose(0.0).position;
         for n in 1..=steps {
             let t = n as f64 * self.dt;
             let pose = path.pose(t);
             let r = it.step(self.dt, pose).map_err(|e| ScenarioError::Simulation { time: t, source: e })?;
             let force = r.force * k;
-            peak = peak.max(force.norm());
-            if !r.contacts.is_empty() {
-                contact_steps += 1;
-                sum += force.norm();
-            }
             work -= force.dot(&(pose.position - last));
             last = pose.position;
             rows.push(TraceRow { t, force, torque: r.torque * k, contacts: r.contacts.len(), tool: pose.position });
         }
+        let mut trace = ForceTrace::default();
+        for r in &rows {
+            trace.push(r.t, &r.force, &r.torque, r.contacts as u32, &r.tool);
+        }
+        let stats = ForceStats::of(rows.iter().map(|r| (r.force.norm(), r.contacts > 0)), f64::INFINITY);
         let summary = Summary {
-            peak_force: peak,
-            mean_force: if contact_steps > 0 { sum / contact_steps as f64 } else { 0.0 },
+            peak_force: stats.peak,
+            mean_force: stats.mean_in_contact,
             work,
-            contact_steps,
+            contact_steps: stats.contact_steps,
             steps,
             tress_mass,
             represents: k,
+            wetness: p.wetness,
+            tool_friction,
+            hair_friction,
+            hair_contact_distance,
+            stroke: StrokeMetrics::of(&trace),
             clamped_steps: it.strands.iter().map(|s| s.clamped_steps).sum(),
+            wall_time_s: 0.0,
         };
         Ok((rows, summary))
     }

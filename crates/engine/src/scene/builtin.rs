@@ -3,7 +3,8 @@
 use super::{Guide, Mesh, RenderHair, Scene, SceneOptions};
 use crate::error::SessionError;
 use lattice::ffd::FfdLattice;
-use lattice::lattice::{LatticeModel, LatticeParams};
+use lattice::lattice::{CarryParams, LatticeModel, LatticeParams};
+use lattice::metaball::MetaballSet;
 use nalgebra::Point3;
 use strand::HairType;
 
@@ -47,33 +48,22 @@ impl Scene {
         let hi = Point3::new(hi.x.max(rad), hi.y.max(rad), hi.z.max(rad));
         let ffd = FfdLattice::enclosing(lo, hi, opts.cell).map_err(|e| SessionError::Scene(e.to_string()))?;
         let hair_mass: f64 = style.guides.first().map_or(0.0, |g| g.model.mass()) * render.strands() as f64;
-        let lattice = lattice_for_hair(ffd, &render.positions, hair_mass.max(1e-6), rad)?;
+        let lattice = lattice_for_hair(ffd, &render.positions, hair_mass.max(1e-6), &style.head.body, rad)?;
         Ok(Scene { head: style.head.body.clone(), head_mesh, render, guides, hair_type, lattice })
     }
 }
 
-/// A lattice model whose node masses share `hair_mass` (kg) by the render vertices each node's cell holds
-/// (plus a floor of 2 % of the mean), attached fully near the head and more loosely further out.
-pub(super) fn lattice_for_hair(ffd: FfdLattice, positions: &[[f32; 3]], hair_mass: f64, r: f64) -> Result<LatticeModel, SessionError> {
-    let n = ffd.node_count();
-    let mut count = vec![0.0f64; n];
-    for p in positions {
-        let q = Point3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-        let s = (q - ffd.origin) / ffd.h;
-        let (i, j, k) = (s.x.round() as usize, s.y.round() as usize, s.z.round() as usize);
-        if i < ffd.nx && j < ffd.ny && k < ffd.nz {
-            count[ffd.index(i, j, k)] += 1.0;
-        }
-    }
-    let total: f64 = count.iter().sum::<f64>().max(1.0);
-    let mean = hair_mass / n as f64;
-    let masses: Vec<f64> = count.iter().map(|c| hair_mass * c / total + 0.02 * mean).collect();
-    let rest = ffd.rest_positions();
-    let attachment: Vec<f64> = rest.iter().map(|p| {
-        let d = (p.coords.norm() - r).max(0.0);
-        (1.0 - d / (3.0 * r)).clamp(0.35, 1.0)
-    }).collect();
-    LatticeModel::new(ffd, masses, attachment, LatticeParams::default()).map_err(|e| SessionError::Scene(e.to_string()))
+/// The lattice `ffd` carrying the render strands' vertices `positions` (m, head frame), `hair_mass` (kg)
+/// shared among them, with the body `head` (`LatticeModel::carrying_in`, the one law of a lattice around
+/// hair): each node a floor of 2 % of the mean node mass; nodes in or on the body fully attached, the
+/// weight falling over three head radii `r` (m) beyond to 0.35 (the hair's stiffness holds its far ends).
+/// Before issue 11 the live scene had its own copy of this law (each vertex's mass on its nearest node;
+/// distance to a sphere of radius `r` instead of to the body).
+pub(super) fn lattice_for_hair(ffd: FfdLattice, positions: &[[f32; 3]], hair_mass: f64, head: &MetaballSet, r: f64) -> Result<LatticeModel, SessionError> {
+    let each = hair_mass / positions.len().max(1) as f64;
+    let points = positions.iter().map(|p| (Point3::new(p[0] as f64, p[1] as f64, p[2] as f64), each));
+    let carry = CarryParams { cell: ffd.h, attach_distance: 0.0, attach_falloff: 3.0 * r, empty_node_mass: 0.02 * hair_mass / ffd.node_count() as f64, min_attachment: 0.35 };
+    LatticeModel::carrying_in(ffd, points, head, &carry, LatticeParams::default()).map_err(|e| SessionError::Scene(e.to_string()))
 }
 
 #[cfg(test)]
@@ -105,7 +95,7 @@ mod tests {
         assert_eq!(s.render.guide.len(), 2000 * s.render.guides_per_strand);
         assert!(s.render.guide.iter().all(|&g| (g as usize) < s.guides.len()));
         assert!(s.guides.iter().all(|g| g.reference.len() == 16));
-        let strands = HapticCore::build_strands(&s, &s.hair_type, 0.0).unwrap();
+        let strands = HapticCore::build_strands(&s, &s.hair_type, 0.0, crate::params::HapticParams::default().min_air_drag).unwrap();
         for (st, g) in strands.iter().zip(&s.guides) {
             for (a, b) in centreline(st, 16).iter().zip(&g.reference) {
                 assert!((a - b).norm() < 1e-12);

@@ -4,13 +4,13 @@ use super::builtin::lattice_for_hair;
 use super::{RenderHair, Scene, SceneOptions};
 use crate::error::SessionError;
 use lattice::ffd::FfdLattice;
-use nalgebra::{Point3, Vector3};
+use nalgebra::Point3;
 
 impl Scene {
     /// The built-in head and guides of `opts` carrying the render strands of `curves` instead of generated
     /// ones (positions in m in the head frame, root first, as the viewer saves them; at most
     /// 10,000,000 strands): each strand resampled to `opts.render_vertices` points evenly along its
-    /// length, bound to the guides whose roots are nearest its root (inverse-distance weights), spanning
+    /// length, bound to the guides whose roots are nearest its root (`hairstyle::generate::nearest_guides`), spanning
     /// its length over the nearest guide's length (capped at 1), and a lattice enclosing them all whose
     /// node masses come from the strands (the guides' linear density times their lengths).
     /// Errors name the bad strand (empty, non-finite point) or parameter.
@@ -31,23 +31,19 @@ impl Scene {
         let v = opts.render_vertices;
         let curves = hairstyle::formats::tfx::resample(&hairstyle::HairCurves::from_strands(curves.strands.clone()), v).map_err(|e| bad(e.to_string()))?;
         let k = base.render.guides_per_strand.min(base.guides.len()).max(1);
-        let roots: Vec<Vector3<f64>> = base.guides.iter().map(|g| g.state.root.position).collect();
+        let roots: Vec<Point3<f64>> = base.guides.iter().map(|g| Point3::from(g.state.root.position)).collect();
         let density = base.guides.first().map_or(0.0, |g| g.model.mass() / g.model.length);
         let n = curves.strands.len();
         let (mut positions, mut guide, mut weight, mut span) = (Vec::with_capacity(n * v), Vec::with_capacity(n * k), Vec::with_capacity(n * k), Vec::with_capacity(n));
         let mut hair_mass = 0.0;
         for st in &curves.strands {
-            let root = Vector3::new(st[0][0] as f64, st[0][1] as f64, st[0][2] as f64);
-            let mut near: Vec<(f64, usize)> = roots.iter().enumerate().map(|(g, r)| ((r - root).norm(), g)).collect();
-            near.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
-            near.truncate(k);
-            near.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let w: Vec<f64> = near.iter().map(|(d, _)| 1.0 / (d + 1e-3)).collect();
-            let sum: f64 = w.iter().sum();
-            guide.extend(near.iter().map(|&(_, g)| g as u32));
-            weight.extend(w.iter().map(|x| (x / sum) as f32));
+            let root = Point3::new(st[0][0] as f64, st[0][1] as f64, st[0][2] as f64);
+            // The hairstyle's one binding law (inverse-square weights; this used 1/(d + 1 mm) before issue 11).
+            let (near, w) = hairstyle::generate::nearest_guides(&roots, &root, k);
+            guide.extend_from_slice(&near);
+            weight.extend_from_slice(&w);
             let length: f64 = st.windows(2).map(|p| (0..3).map(|a| ((p[1][a] - p[0][a]) as f64).powi(2)).sum::<f64>().sqrt()).sum();
-            span.push((length / base.guides[near[0].1].model.length).min(1.0) as f32);
+            span.push((length / base.guides[near[0] as usize].model.length).min(1.0) as f32);
             hair_mass += density * length;
             positions.extend_from_slice(st);
         }
@@ -65,7 +61,7 @@ impl Scene {
             return Err(bad(format!("the strands span {:?} to {:?} m: a lattice of {} nodes at {} m cells is too large", lo, hi, ffd.node_count(), opts.cell)));
         }
         let radius = hairstyle::HeadParams::default().head_radius;
-        let lattice = lattice_for_hair(ffd, &render.positions, hair_mass.max(1e-6), radius)?;
+        let lattice = lattice_for_hair(ffd, &render.positions, hair_mass.max(1e-6), &base.head, radius)?;
         Ok(Scene { head: base.head, head_mesh: base.head_mesh, render, guides: base.guides, hair_type: base.hair_type, lattice })
     }
 }
@@ -76,6 +72,7 @@ mod tests {
     use crate::global::GlobalCore;
     use crate::params::SessionParams;
     use crate::tool::ToolInput;
+    use nalgebra::Vector3;
     use std::sync::Arc;
 
     #[test]

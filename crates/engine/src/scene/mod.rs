@@ -1,8 +1,12 @@
 //! The scene (model: immutable once built, shared by the threads): head, render hair, guides and lattice.
-//! Built from the built-in hairstyle ([`builtin`]) or from a file's curves ([`from_curves`]).
+//! Built from the built-in hairstyle ([`builtin`]) or from a file's curves ([`from_curves`]); where the render
+//! strands are now ([`render`]: [`Scene::render_curves`]).
 
 mod builtin;
 mod from_curves;
+mod render;
+
+pub use render::GuideDisplacements;
 
 use lattice::ffd::FfdLattice;
 use lattice::lattice::LatticeModel;
@@ -112,10 +116,8 @@ impl Scene {
     }
 }
 
-/// FFD of a head-frame point through lattice nodes (clamped to the embedded volume), m.
+/// FFD of a head-frame point through lattice nodes (clamped to the embedded volume;
+/// [`FfdLattice::deform_clamped`]), m; the point itself if the nodes are not the lattice's.
 pub fn ffd_map(ffd: &FfdLattice, nodes: &[Point3<f64>], p: &Vector3<f64>) -> Vector3<f64> {
-    match ffd.weights_clamped(&Point3::from(*p)) {
-        Ok((idx, w)) => idx.iter().zip(w.iter()).fold(Vector3::zeros(), |a, (&i, &w)| a + nodes[i].coords * w),
-        Err(_) => *p,
-    }
+    ffd.deform_clamped(&Point3::from(*p), nodes).unwrap_or(*p)
 }

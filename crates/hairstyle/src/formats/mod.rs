@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 pub(crate) use bytes::{put_f32, put_u32, Cursor};
 
-mod bytes;
+pub mod bytes;
 pub mod hair;
 pub mod tfx;
 pub mod usc;

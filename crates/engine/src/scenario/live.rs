@@ -1,0 +1,378 @@
+//! `[live]` scenarios: the live session's own cores (the code `coiffure serve` runs) on the built-in scene,
+//! stepped in lockstep on one thread ([`crate::lockstep::Lockstep`], deterministic), with the tool moved
+//! along a scripted path as a haptic device would move it. Also the replay of a `coiffure serve --record`
+//! file into the same outputs ([`replay_record`]).
+
+use super::output::{ForceTrace, LiveSummary};
+use super::ScenarioError;
+use crate::command::Command;
+use crate::lockstep::Lockstep;
+use crate::params::SessionParams;
+use crate::record::Record;
+use crate::scene::{ffd_map, Scene, SceneOptions};
+use crate::tool::Tool;
+use haptics::device::{DeviceProfile, DeviceReading};
+use nalgebra::{Rotation3, Vector3};
+use serde::Deserialize;
+use std::sync::Arc;
+use std::time::Instant;
+use strand::HairType;
+
+/// A `[live]` scenario file (TOML; docs/scenarios.md, "Live scenarios").
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LiveScenario {
+    /// Name (default: the file's stem).
+    pub name: Option<String>,
+    /// Time before the path starts, s: the lattice settles, no device reading yet. Default 0.5.
+    #[serde(default = "default_settle")]
+    pub settle: f64,
+    /// Time after the path starts, s. Default: the path's last time + 0.2 s.
+    pub duration: Option<f64>,
+    /// The live session.
+    pub live: LiveSpec,
+    /// The tool and its path.
+    pub tool: LiveTool,
+}
+
+fn default_settle() -> f64 {
+    0.5
+}
+
+/// The `[live]` table: the scene and the session's settings.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LiveSpec {
+    /// Render strands of the built-in hairstyle. Default 20 000.
+    pub render_strands: usize,
+    /// Guide strands. Default 200 (as `coiffure serve`).
+    pub guides: usize,
+    /// Device profile: "phantom-omni" (default), "phantom-desktop" or "omega3".
+    pub device: String,
+    /// Hair type (a `HairType` name, e.g. "caucasian", "asian", "african", "H1"). Default "caucasian".
+    pub hair_type: String,
+    /// Curliness in [0, 1]. Default 0.
+    pub curliness: f64,
+    /// Combing ease in [0, 1] (the viewer's slider). Default 0.
+    pub combing_ease: f64,
+    /// Initial wetness of every guide, in [0, 1]. Default 0.
+    pub wetness: f64,
+}
+
+impl Default for LiveSpec {
+    fn default() -> Self {
+        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), curliness: 0.0, combing_ease: 0.0, wetness: 0.0 }
+    }
+}
+
+/// The `[tool]` table of a live scenario.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LiveTool {
+    /// One of the live tools: "comb", "brush", "scissors", "dryer", "sprayer", "clip".
+    pub shape: String,
+    /// Waypoints in the head frame, time from the end of settling.
+    pub path: Vec<LiveWaypoint>,
+}
+
+/// One waypoint of a live tool path.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LiveWaypoint {
+    /// Time from the end of settling, s.
+    pub t: f64,
+    /// Device position, m (head frame).
+    pub position: [f64; 3],
+    /// Device rotation as a rotation vector (axis times angle, rad). Default none.
+    #[serde(default)]
+    pub rotation: [f64; 3],
+    /// The device's primary button, held from this waypoint until the next. Default false.
+    #[serde(default)]
+    pub pressed: bool,
+}
+
+/// The device profile named `name`.
+pub fn device_profile(name: &str) -> Option<DeviceProfile> {
+    match name {
+        "phantom-omni" => Some(DeviceProfile::PHANTOM_OMNI),
+        "phantom-desktop" => Some(DeviceProfile::PHANTOM_DESKTOP),
+        "omega3" => Some(DeviceProfile::OMEGA3),
+        _ => None,
+    }
+}
+
+/// The live tool named `name`.
+pub fn tool_by_name(name: &str) -> Option<Tool> {
+    Tool::ALL.into_iter().find(|t| t.name() == name)
+}
+
+impl LiveScenario {
+    /// Checks every value, naming the bad key.
+    pub fn validate(&self) -> Result<(DeviceProfile, Tool, HairType), ScenarioError> {
+        let bad = |m: String| Err(ScenarioError::Invalid(m));
+        if !(self.settle.is_finite() && (0.0..=60.0).contains(&self.settle)) {
+            return bad(format!("settle must be in [0, 60] s, got {}", self.settle));
+        }
+        if let Some(d) = self.duration {
+            if !(d.is_finite() && d > 0.0 && d <= 600.0) {
+                return bad(format!("duration must be in (0, 600] s, got {d}"));
+            }
+        }
+        let l = &self.live;
+        let profile = device_profile(&l.device).ok_or_else(|| ScenarioError::Invalid(format!("live.device must be \"phantom-omni\", \"phantom-desktop\" or \"omega3\", got {:?}", l.device)))?;
+        let hair = HairType::by_name(&l.hair_type).ok_or_else(|| ScenarioError::Invalid(format!("live.hair_type: unknown {:?}", l.hair_type)))?;
+        if l.render_strands == 0 || l.render_strands > 1_000_000 {
+            return bad(format!("live.render_strands must be 1..=1000000, got {}", l.render_strands));
+        }
+        if l.guides == 0 || l.guides > 10_000 {
+            return bad(format!("live.guides must be 1..=10000, got {}", l.guides));
+        }
+        for (k, v) in [("curliness", l.curliness), ("combing_ease", l.combing_ease), ("wetness", l.wetness)] {
+            if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
+                return bad(format!("live.{k} must be in [0, 1], got {v}"));
+            }
+        }
+        let tool = tool_by_name(&self.tool.shape).ok_or_else(|| ScenarioError::Invalid(format!("tool.shape must be one of comb, brush, scissors, dryer, sprayer, clip, got {:?}", self.tool.shape)))?;
+        let p = &self.tool.path;
+        if p.is_empty() {
+            return bad("tool.path needs at least one waypoint { t, position, rotation, pressed }".into());
+        }
+        for (i, w) in p.iter().enumerate() {
+            if !(w.t.is_finite() && w.t >= 0.0 && w.position.iter().chain(&w.rotation).all(|x| x.is_finite())) {
+                return bad(format!("tool.path[{i}]: t must be >= 0 and every value finite, got {w:?}"));
+            }
+            if i > 0 && w.t <= p[i - 1].t {
+                return bad(format!("tool.path[{i}]: times must increase, got {} after {}", w.t, p[i - 1].t));
+            }
+        }
+        Ok((profile, tool, hair))
+    }
+
+    /// Simulated time after settling, s.
+    pub fn run_time(&self) -> f64 {
+        self.duration.unwrap_or_else(|| self.tool.path.last().map_or(0.0, |w| w.t) + 0.2)
+    }
+
+    /// The device reading at path time `t` (s): position and rotation vector interpolated linearly, the
+    /// button of the last waypoint at or before `t`.
+    pub fn reading(&self, t: f64) -> DeviceReading {
+        let w = &self.tool.path;
+        let k = w.partition_point(|x| x.t <= t);
+        let (p, r, pressed) = if k == 0 {
+            (Vector3::from(w[0].position), Vector3::from(w[0].rotation), false)
+        } else if k == w.len() {
+            let l = &w[k - 1];
+            (Vector3::from(l.position), Vector3::from(l.rotation), l.pressed)
+        } else {
+            let (a, b) = (&w[k - 1], &w[k]);
+            let f = (t - a.t) / (b.t - a.t);
+            let lerp = |x: [f64; 3], y: [f64; 3]| Vector3::from(x) * (1.0 - f) + Vector3::from(y) * f;
+            (lerp(a.position, b.position), lerp(a.rotation, b.rotation), a.pressed)
+        };
+        DeviceReading { time: t, position: p, rotation: Rotation3::new(r).into_inner(), buttons: pressed as u32 }
+    }
+
+    /// The scene options: the built-in scene of `coiffure serve` with this scenario's strands and hair.
+    pub fn scene_options(&self) -> SceneOptions {
+        let l = &self.live;
+        SceneOptions { render_strands: l.render_strands, guides: l.guides, hair_type: l.hair_type.clone(), curliness: l.curliness, ..SceneOptions::default() }
+    }
+
+    /// Runs the scenario on a new built-in scene. Deterministic.
+    pub fn run(&self) -> Result<(ForceTrace, LiveSummary), ScenarioError> {
+        self.validate()?;
+        let scene = Scene::builtin(&self.scene_options()).map_err(|e| ScenarioError::Invalid(format!("live scene: {e}")))?;
+        self.run_on(Arc::new(scene))
+    }
+
+    /// Runs the scenario on `scene` (built from [`LiveScenario::scene_options`]): `settle` s with no device
+    /// reading, then the path; one global step every `haptic_rate / global_rate` haptic steps, before the
+    /// haptic step, reading the haptic core's tool input. The hair type, curliness and combing ease are set
+    /// by the viewer's command, the tool by a tool selection, the wetness on the global core, all before
+    /// the first step.
+    pub fn run_on(&self, scene: Arc<Scene>) -> Result<(ForceTrace, LiveSummary), ScenarioError> {
+        self.run_recorded(scene, false).map(|(t, s, _)| (t, s))
+    }
+
+    /// [`LiveScenario::run_on`], also giving the run's record (`record`: the format of
+    /// `coiffure serve --record`, replayable by [`crate::replay::replay`]).
+    pub fn run_recorded(&self, scene: Arc<Scene>, record: bool) -> Result<(ForceTrace, LiveSummary, Option<Record>), ScenarioError> {
+        let (profile, tool, hair) = self.validate()?;
+        let params = SessionParams { profile, ..SessionParams::default() };
+        let sim = |e: crate::error::SessionError| ScenarioError::Invalid(format!("live session: {e}"));
+        let mut ls = Lockstep::new(scene.clone(), params, params.haptic_rate_hz).map_err(sim)?;
+        ls.global.set_wetness(self.live.wetness);
+        ls.record = record.then(|| Record::new(params.haptic_rate_hz));
+        let hair_index = HairType::ALL.iter().position(|h| *h == hair).unwrap_or(0) as u8;
+        let mut commands = vec![Command::SelectTool(tool), Command::SetHair { hair_type: hair_index, curliness: self.live.curliness, combing_ease: self.live.combing_ease }];
+        let every = ((params.haptic_rate_hz / params.global_rate_hz).round() as u64).max(1);
+        let settle_steps = (self.settle / ls.dt).round() as u64;
+        let steps = settle_steps + (self.run_time() / ls.dt).round() as u64;
+        let mut meter = Meter::new(&scene);
+        let mut trace = ForceTrace::default();
+        let mut timing = Vec::with_capacity((steps - settle_steps) as usize);
+        let started = Instant::now();
+        let max_force = profile.max_force;
+        for n in 0..steps {
+            if n % every == 0 {
+                ls.global_step_live();
+                if n >= settle_steps {
+                    meter.measure(&ls);
+                }
+            }
+            let t = (n as f64 - settle_steps as f64) * ls.dt;
+            let reading = (n >= settle_steps).then(|| self.reading(t));
+            if n == settle_steps {
+                meter.settle(&ls);
+            }
+            let t0 = Instant::now();
+            let cmd = ls.haptic_step(&std::mem::take(&mut commands), reading);
+            if n >= settle_steps {
+                timing.push(t0.elapsed().as_secs_f64());
+                trace.push(t, &cmd.force, &cmd.torque, ls.haptic.last_contacts, &ls.haptic.tool_input().position);
+            }
+        }
+        meter.measure(&ls);
+        let wall = started.elapsed().as_secs_f64();
+        let summary = LiveSummary::new(&trace, max_force, &meter, &mut timing, ls.haptic.rejected, ls.haptic.failed, wall);
+        Ok((trace, summary, ls.record.take()))
+    }
+}
+
+/// Replays a `coiffure serve --record` file on `scene` (the scene the server ran: same render strands and
+/// guides) with the session parameters `params` into the outputs of a live scenario. The force trace is
+/// the replayed one (equal to the recorded one bit for bit, see [`crate::replay::replay`]).
+pub fn replay_record(scene: Arc<Scene>, params: SessionParams, record: &Record) -> Result<(ForceTrace, LiveSummary), ScenarioError> {
+    let sim = |e: crate::error::SessionError| ScenarioError::Invalid(format!("replay: {e}"));
+    let mut ls = Lockstep::new(scene.clone(), params, record.rate_hz).map_err(sim)?;
+    let mut meter = Meter::new(&scene);
+    meter.settle(&ls);
+    let mut trace = ForceTrace::default();
+    let mut timing = Vec::with_capacity(record.steps.len());
+    let started = Instant::now();
+    let mut last = Instant::now();
+    ls.replay(record, |ls, cmd| match cmd {
+        None => {
+            meter.measure(ls);
+            last = Instant::now();
+        }
+        Some(c) => {
+            // The haptic step's wall time (from the end of the previous step or global step).
+            timing.push(last.elapsed().as_secs_f64());
+            trace.push(trace.len() as f64 * ls.dt, &c.force, &c.torque, ls.haptic.last_contacts, &ls.haptic.tool_input().position);
+            last = Instant::now();
+        }
+    });
+    meter.measure(&ls);
+    let wall = started.elapsed().as_secs_f64();
+    Ok((trace.clone(), LiveSummary::new(&trace, params.profile.max_force, &meter, &mut timing, ls.haptic.rejected, ls.haptic.failed, wall)))
+}
+
+/// Guide point displacements: every guide's samples as the viewer shows them (reference through the
+/// lattice, plus the local strand's displacement for the active guides), against their settled positions.
+pub(crate) struct Meter {
+    scene: Arc<Scene>,
+    settled: Vec<Vector3<f64>>,
+    /// Largest distance over the run, m.
+    pub max: f64,
+    /// At the last measure, m.
+    pub last: f64,
+}
+
+impl Meter {
+    fn new(scene: &Arc<Scene>) -> Self {
+        Self { scene: scene.clone(), settled: Vec::new(), max: 0.0, last: 0.0 }
+    }
+    fn points(&self, ls: &Lockstep) -> Vec<Vector3<f64>> {
+        let s = &self.scene;
+        let n = s.samples();
+        let mut pts: Vec<Vector3<f64>> = s.guides.iter().flat_map(|g| g.reference.iter().map(|p| ffd_map(&s.lattice.ffd, &ls.lattice.positions, p))).collect();
+        let mut snap = crate::snapshot::HapticSnapshot::default();
+        ls.haptic.snapshot(&ls.lattice, ls.dt, &mut snap);
+        for (a, &g) in snap.active.iter().enumerate() {
+            for k in 0..n {
+                pts[g as usize * n + k] += snap.displacement[a * n + k];
+            }
+        }
+        pts
+    }
+    fn settle(&mut self, ls: &Lockstep) {
+        self.settled = self.points(ls);
+    }
+    fn measure(&mut self, ls: &Lockstep) {
+        if self.settled.is_empty() {
+            return;
+        }
+        let d = self.points(ls).iter().zip(&self.settled).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+        self.max = self.max.max(d);
+        self.last = d;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::small_scene;
+
+    const COMB: &str = r#"
+        settle = 0.2
+        duration = 0.8
+        [live]
+        render_strands = 2000
+        guides = 60
+        [tool]
+        shape = "comb"
+        path = [ { t = 0.0, position = [0.0, -0.118, 0.05], rotation = [0.0, 2.2214415, -2.2214415] },
+                 { t = 0.7, position = [0.0, -0.118, -0.02], rotation = [0.0, 2.2214415, -2.2214415], pressed = true } ]
+    "#;
+
+    fn comb() -> LiveScenario {
+        toml::from_str(COMB).unwrap()
+    }
+
+    #[test]
+    fn a_live_scenario_replays_through_the_live_sessions_replay_to_the_bit() {
+        // The [live] run records what it fed the live session's cores (device readings, lattice versions,
+        // the global steps' tool inputs) in the format of `coiffure serve --record`; `replay` (the function
+        // a threaded live session's record is checked against, bit for bit, in replay.rs) gives every
+        // haptic step's force of the scenario's trace again, to the bit.
+        let s = comb();
+        let scene = small_scene();
+        let (trace, summary, rec) = s.run_recorded(scene.clone(), true).unwrap();
+        let rec = rec.unwrap();
+        let settle = (s.settle / 1e-3).round() as usize;
+        assert_eq!(rec.steps.len(), settle + trace.len());
+        assert_eq!(trace.len(), 800);
+        let rec = Record::from_bytes(&rec.to_bytes()).unwrap();
+        let forces = crate::replay::replay(scene, SessionParams::default(), &rec).unwrap();
+        for (i, f) in forces[settle..].iter().enumerate() {
+            assert_eq!(*f, trace.force(i), "step {i}");
+        }
+        eprintln!("{summary:?}");
+        assert!(summary.peak_force_n > 1e-3 && summary.peak_force_n <= 3.3 + 1e-12, "{summary:?}");
+        assert!(summary.contact_steps > 0 && summary.max_displacement_m > 1e-3, "{summary:?}");
+        assert!(summary.final_max_displacement_m <= summary.max_displacement_m);
+    }
+
+    #[test]
+    fn the_device_follows_the_path_and_the_button_is_held_between_waypoints() {
+        let s = comb();
+        let r = s.reading(0.35);
+        assert!((r.position - Vector3::new(0.0, -0.118, 0.015)).norm() < 1e-12);
+        assert_eq!(r.buttons, 0, "pressed from the second waypoint only");
+        assert_eq!(s.reading(0.7).buttons, 1);
+        assert_eq!(s.reading(5.0).position, Vector3::new(0.0, -0.118, -0.02));
+        let want = nalgebra::Matrix3::from_columns(&[Vector3::new(-1.0, 0.0, 0.0), Vector3::new(0.0, 0.0, -1.0), Vector3::new(0.0, -1.0, 0.0)]);
+        assert!((r.rotation - want).norm() < 1e-6, "{}", r.rotation);
+    }
+
+    #[test]
+    fn bad_live_values_are_named() {
+        for (from, to, key) in [("shape = \"comb\"", "shape = \"rake\"", "tool.shape"), ("guides = 60", "guides = 60\n        device = \"wii\"", "live.device"), ("guides = 60", "guides = 60\n        wetness = 2.0", "live.wetness"), ("t = 0.7", "t = 0.0", "tool.path[1]")] {
+            let s: LiveScenario = toml::from_str(&COMB.replace(from, to)).unwrap();
+            let e = s.validate().unwrap_err().to_string();
+            assert!(e.contains(key), "{key}: {e}");
+        }
+        assert!(toml::from_str::<LiveScenario>(&COMB.replace("guides = 60", "guides = 60\n        colour = 1")).is_err());
+    }
+}

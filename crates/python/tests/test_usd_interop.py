@@ -2,8 +2,7 @@
 a DCC tool writes it (cubic B-spline curves in a nested Xform, centimetres, y up) goes through
 `coiffure fit` onto the head, and the .usda files Coiffure writes open in usd-core with metres and z up.
 
-Needs only `pxr` and the `coiffure` binary: $COIFFURE_BIN, else target/release/coiffure of this repository
-(`cargo build --release -p coiffure-server`)."""
+Needs `pxr` (usd-core, in requirements-test.txt) and the `coiffure` binary (the `cli` fixture of conftest.py)."""
 
 import json
 import math
@@ -14,12 +13,6 @@ from pathlib import Path
 from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
 REPO = Path(__file__).resolve().parents[3]
-
-
-def coiffure():
-    path = Path(os.environ.get("COIFFURE_BIN", REPO / "target" / "release" / "coiffure"))
-    assert path.is_file(), f"{path} missing: build it with `cargo build --release -p coiffure-server` or set COIFFURE_BIN"
-    return str(path)
 
 
 def write_dcc_hairstyle(path):
@@ -60,13 +53,13 @@ def write_dcc_hairstyle(path):
     return len(counts)
 
 
-def test_a_usd_core_cubic_nested_centimetre_hairstyle_loads_and_fits(tmp_path):
+def test_a_usd_core_cubic_nested_centimetre_hairstyle_loads_and_fits(cli, tmp_path):
     src = tmp_path / "dcc.usda"
     n = write_dcc_hairstyle(src)
     text = src.read_text()
     assert "bspline" in text and 'metersPerUnit = 0.01' in text and 'upAxis = "Y"' in text
     out = tmp_path / "fitted.usda"
-    run = subprocess.run([coiffure(), "fit", str(src), str(out), "--json"], capture_output=True, text=True)
+    run = subprocess.run([str(cli), "fit", str(src), str(out), "--json"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     report = json.loads(run.stdout)
     print(report)
@@ -81,11 +74,11 @@ def test_a_usd_core_cubic_nested_centimetre_hairstyle_loads_and_fits(tmp_path):
     assert len(UsdGeom.BasisCurves(prim).GetCurveVertexCountsAttr().Get()) == n
 
 
-def test_our_usda_opens_in_usd_core_with_metres_and_z_up(tmp_path):
+def test_our_usda_opens_in_usd_core_with_metres_and_z_up(cli, tmp_path):
     src = tmp_path / "dcc.usda"
     n = write_dcc_hairstyle(src)
     out = tmp_path / "ours.usda"
-    run = subprocess.run([coiffure(), "fit", str(src), str(out)], capture_output=True, text=True)
+    run = subprocess.run([str(cli), "fit", str(src), str(out)], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     stage = Usd.Stage.Open(str(out))
     assert UsdGeom.GetStageMetersPerUnit(stage) == 1.0

@@ -33,6 +33,7 @@ interface Status {
   hairColour: string;
   strands: number;
   lastFile: { format: number; bytes: number } | null;
+  fit: P.FitMsg | null; // how the last loaded hairstyle was placed on the head (FIT)
   send: (b: ArrayBuffer) => void;
 }
 
@@ -48,6 +49,7 @@ const status: Status = {
   lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], frameTimes: [], strands: 0,
   gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairColour: DEFAULT_HAIR_COLOUR,
   lastFile: null,
+  fit: null,
   send: (b) => { if (ws.readyState === WebSocket.OPEN) ws.send(b); },
 };
 (window as unknown as { coiffure: Status }).coiffure = status;
@@ -74,6 +76,17 @@ ws.onmessage = (ev) => {
     case P.Server.SCENE: onScene(P.decodeScene(buf)); break;
     case P.Server.FRAME: onFrame(P.decodeFrame(buf)); break;
     case P.Server.STRANDS: onStrands(P.decodeStrands(buf)); break;
+    case P.Server.FIT: {
+      const f = P.decodeFit(buf);
+      status.fit = f;
+      const t = f.translation.map((x) => x.toFixed(3)).join(', ');
+      const el = document.getElementById('fit-info');
+      if (el) {
+        el.textContent = `fit: ${f.metersPerUnit} m/unit (${f.unitsSource}), up ${f.up} front ${f.front} (${f.axesSource}), scale ${f.scale.toPrecision(4)}, move [${t}] m; roots to scalp median ${(1e3 * f.rootMedian).toFixed(1)} mm, p95 ${(1e3 * f.rootP95).toFixed(1)} mm`;
+        el.title = `rotation (file to head frame, rows): ${f.rotation.map((x) => x.toFixed(3)).join(' ')}; ${(100 * f.inliers).toFixed(0)} % of roots kept by the fit; ${f.pushedOut} points pushed out of the head`;
+      }
+      break;
+    }
     case P.Server.ERROR: {
       const e = P.decodeError(buf);
       status.errors.push(e);
@@ -205,7 +218,13 @@ document.getElementById('load')!.addEventListener('change', async (ev) => {
   const ext = file.name.split('.').pop()?.toLowerCase() ?? '';
   const format = P.FORMATS.indexOf(ext);
   if (format < 0) { statusEl.textContent = `unknown hair file type .${ext} (use .hair, .data, .tfx or .usda)`; return; }
-  status.send(P.encodeLoad(format, await file.arrayBuffer()));
+  const sel = (id: string): number => Number((document.getElementById(id) as HTMLSelectElement).value);
+  const opts: P.FitOptions = {
+    up: sel('fit-up'), front: sel('fit-front'), metersPerUnit: sel('fit-units'),
+    noFit: (document.getElementById('fit-none') as HTMLInputElement).checked,
+  };
+  status.send(P.encodeLoad(format, await file.arrayBuffer(), opts));
+  (ev.target as HTMLInputElement).value = '';
 });
 
 // The mouse drives the device.

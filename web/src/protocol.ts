@@ -22,7 +22,58 @@ export const Server = {
   PONG: 0x86,
   // --- STRANDS (issue 5: scissors) ---
   STRANDS: 0x87,
+  FIT: 0x88,
 } as const;
+
+/** Axis names of LOAD's options and FIT (index 1-6; 0 = detect). */
+export const AXES = ['detect', '+x', '-x', '+y', '-y', '+z', '-z'];
+/** Where a fit choice came from (FIT). */
+export const FIT_SOURCES = ['option', 'metadata', 'detected', 'assumed'];
+
+/** FIT: how a loaded hairstyle was placed on the head (docs/protocol.md). */
+export interface FitMsg {
+  scale: number; // m per file unit
+  rotation: number[]; // 3x3 row-major, file to head frame
+  translation: [number, number, number]; // m
+  metersPerUnit: number;
+  up: string;
+  front: string;
+  unitsSource: string;
+  axesSource: string;
+  inliers: number;
+  rootMedian: number; // m
+  rootP95: number; // m
+  rootMax: number; // m
+  pushedOut: number;
+}
+
+export function decodeFit(buf: ArrayBuffer): FitMsg {
+  const v = new DataView(buf);
+  const f = (i: number): number => v.getFloat32(2 + 4 * i, true);
+  return {
+    scale: f(0),
+    rotation: [1, 2, 3, 4, 5, 6, 7, 8, 9].map(f),
+    translation: [f(10), f(11), f(12)],
+    metersPerUnit: f(13),
+    up: AXES[v.getUint8(58)] ?? '?',
+    front: AXES[v.getUint8(59)] ?? '?',
+    unitsSource: FIT_SOURCES[v.getUint8(60)] ?? '?',
+    axesSource: FIT_SOURCES[v.getUint8(61)] ?? '?',
+    inliers: v.getFloat32(62, true),
+    rootMedian: v.getFloat32(66, true),
+    rootP95: v.getFloat32(70, true),
+    rootMax: v.getFloat32(74, true),
+    pushedOut: v.getUint32(78, true),
+  };
+}
+
+/** Overrides of the fit sent with LOAD. */
+export interface FitOptions {
+  up: number; // 0 detect, 1-6 +x -x +y -y +z -z
+  front: number; // same
+  noFit: boolean;
+  metersPerUnit: number; // 0 detect
+}
 
 export const FORMATS = ['hair', 'data', 'tfx', 'usda'];
 
@@ -204,9 +255,20 @@ export function encodeSave(format: number): ArrayBuffer {
   return b;
 }
 
-export function encodeLoad(format: number, file: ArrayBuffer): ArrayBuffer {
-  const [b, v] = header(Client.LOAD, 1 + file.byteLength);
-  v.setUint8(2, format);
-  new Uint8Array(b, 3).set(new Uint8Array(file));
+export function encodeLoad(format: number, file: ArrayBuffer, opts?: FitOptions): ArrayBuffer {
+  if (!opts) {
+    const [b, v] = header(Client.LOAD, 1 + file.byteLength);
+    v.setUint8(2, format);
+    new Uint8Array(b, 3).set(new Uint8Array(file));
+    return b;
+  }
+  const [b, v] = header(Client.LOAD, 9 + file.byteLength);
+  v.setUint8(2, format | 0x80);
+  v.setUint8(3, opts.up);
+  v.setUint8(4, opts.front);
+  v.setUint8(5, opts.noFit ? 1 : 0);
+  v.setUint8(6, 0);
+  v.setFloat32(7, opts.metersPerUnit, true);
+  new Uint8Array(b, 11).set(new Uint8Array(file));
   return b;
 }

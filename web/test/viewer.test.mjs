@@ -4,7 +4,7 @@ import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { artifacts, binary, dragWorld, launchBrowser, openViewer, startServer, stopServer } from './harness.mjs';
+import { artifacts, binary, dragWorld, launchBrowser, openViewer, repoDir, startServer, stopServer } from './harness.mjs';
 
 describe('the default scene (100k render strands)', () => {
   let server, browser;
@@ -183,6 +183,28 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     console.log('load', { strands: n, error: e });
     assert.match(e.message, /cannot read the hair file/);
     assert.equal(await page.evaluate(() => window.coiffure.strands), n);
+  });
+
+  test('the TressFX mohawk (y up) is fitted onto the head when loaded', async () => {
+    // AMD's TressFX sample hairstyle from ../shared/data (not in the repository): 2,228 strands, y up, metres.
+    const file = join(repoDir, '..', 'shared', 'data', 'tressfx', 'Ratboy_mohawk.tfx');
+    const buf = readFileSync(file);
+    await page.setInputFiles('#load', { name: 'Ratboy_mohawk.tfx', mimeType: 'application/octet-stream', buffer: buf });
+    await page.waitForFunction(() => window.coiffure.strands === 2228 && window.coiffure.fit !== null, null, { timeout: 120_000 });
+    const fit = await page.evaluate(() => window.coiffure.fit);
+    const frames = await page.evaluate(() => window.coiffure.framesReceived);
+    await page.waitForFunction((f) => window.coiffure.framesReceived > f + 5, frames, { timeout: 30_000 });
+    await page.screenshot({ path: join(artifacts, 'mohawk-fitted.png') });
+    writeFileSync(join(artifacts, 'mohawk-fit.json'), JSON.stringify(fit, null, 1));
+    console.log('mohawk fit', fit);
+    // The format's convention and the hair's shape: y up, facing +z, metres; the head part of the roots (a fifth
+    // and more: the rest runs down Ratboy's neck and back) kept on the scalp; no point left inside the head.
+    assert.equal(fit.up, '+y');
+    assert.equal(fit.front, '+z');
+    assert.equal(fit.metersPerUnit, 1);
+    assert.ok(fit.inliers >= 0.2, `fraction of roots on the scalp ${fit.inliers}`);
+    assert.ok(fit.rootMedian < 0.2, `root-to-scalp median ${fit.rootMedian} m`);
+    assert.ok(fit.scale > 0.7 && fit.scale < 1.3, `scale ${fit.scale}`);
   });
 
   test('a second viewer watches; it controls only after TAKE_CONTROL', async () => {

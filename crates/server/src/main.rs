@@ -2,6 +2,7 @@
 
 mod demo;
 mod files_cmd;
+mod fit_cmd;
 mod protocol;
 mod run_cmd;
 mod serve;
@@ -34,6 +35,8 @@ enum Command {
     Convert(files_cmd::ConvertArgs),
     /// Print a hair file's strand and point counts and bounds.
     Info(files_cmd::InfoArgs),
+    /// Place a hairstyle from another tool on the built-in head (units, axes, fit to the scalp) and write it.
+    Fit(fit_cmd::FitArgs),
 }
 
 fn main() -> ExitCode {
@@ -52,6 +55,7 @@ fn main() -> ExitCode {
         Command::Replay(args) => run_cmd::replay(&args),
         Command::Convert(args) => files_cmd::convert(&args),
         Command::Info(args) => files_cmd::show_info(&args),
+        Command::Fit(args) => fit_cmd::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

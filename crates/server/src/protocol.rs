@@ -22,7 +22,7 @@ pub mod client {
     pub const SET_HAIR: u8 = 0x04;
     /// Reset the scene (no payload).
     pub const RESET: u8 = 0x05;
-    /// u8 format, then the file's bytes.
+    /// u8 format (bit 7: an 8-byte fit-options block follows), then the file's bytes.
     pub const LOAD: u8 = 0x06;
     /// u8 format: ask for the current hairstyle as a file.
     pub const SAVE: u8 = 0x07;
@@ -47,6 +47,8 @@ pub mod server {
     // --- STRANDS (issue 5: scissors) ---
     /// Kept points of every render strand: u32 S, S x u16 (at connect and after each cut).
     pub const STRANDS: u8 = 0x87;
+    /// How a loaded hairstyle was placed on the head (after its SCENE): transform and root distances.
+    pub const FIT: u8 = 0x88;
 }
 
 /// Error codes of ERROR messages.
@@ -84,8 +86,8 @@ pub enum ClientMessage {
     TakeControl,
     /// A session command.
     Command(Command),
-    /// Load a hairstyle: format index into [`FORMATS`], bytes.
-    Load(usize, Vec<u8>),
+    /// Load a hairstyle: format index into [`FORMATS`], fit options, bytes.
+    Load(usize, hairstyle::fit::FitOptions, Vec<u8>),
     /// Save the hairstyle in a format (index into [`FORMATS`]).
     Save(usize),
     /// Ping.
@@ -159,10 +161,33 @@ pub fn parse_client(b: &[u8]) -> Result<ClientMessage, WireError> {
         }
         client::RESET => need(0, "RESET").map(|_| ClientMessage::Command(Command::Reset)),
         client::LOAD => {
-            if p.is_empty() || p[0] as usize >= FORMATS.len() {
-                return Err(err(code::MALFORMED, "LOAD needs a format byte (0 .hair, 1 .data, 2 .tfx, 3 .usda) and the file".into()));
+            let format = p.first().map_or(usize::MAX, |f| (f & 0x7f) as usize);
+            if format >= FORMATS.len() {
+                return Err(err(code::MALFORMED, "LOAD needs a format byte (0 .hair, 1 .data, 2 .tfx, 3 .usda; bit 7 set when fit options follow) and the file".into()));
             }
-            Ok(ClientMessage::Load(p[0] as usize, p[1..].to_vec()))
+            if p[0] & 0x80 == 0 {
+                return Ok(ClientMessage::Load(format, hairstyle::fit::FitOptions::default(), p[1..].to_vec()));
+            }
+            if p.len() < 9 {
+                return Err(err(code::MALFORMED, format!("LOAD with fit options needs 8 option bytes after the format, got {}", p.len() - 1)));
+            }
+            let axis = |b: u8, name: &str| -> Result<Option<hairstyle::fit::Axis>, WireError> {
+                match b {
+                    0 => Ok(None),
+                    1..=6 => Ok(Some(hairstyle::fit::Axis::ALL[b as usize - 1])),
+                    _ => Err(err(code::MALFORMED, format!("LOAD {name} axis {b} unknown (0 detect, 1-6 +x -x +y -y +z -z)"))),
+                }
+            };
+            let (up, front) = (axis(p[1], "up")?, axis(p[2], "front")?);
+            if p[3] > 1 || p[4] != 0 {
+                return Err(err(code::MALFORMED, format!("LOAD option flags {} and reserved byte {} (flags: bit 0 no fit; reserved 0)", p[3], p[4])));
+            }
+            let units = f32_at(p, 5) as f64;
+            if !(units.is_finite() && units >= 0.0) {
+                return Err(err(code::MALFORMED, format!("LOAD units {units}: metres per unit must be positive, or 0 to detect")));
+            }
+            let opts = hairstyle::fit::FitOptions { units: (units > 0.0).then_some(units), up, front, fit: p[3] & 1 == 0 };
+            Ok(ClientMessage::Load(format, opts, p[9..].to_vec()))
         }
         client::SAVE => {
             need(1, "SAVE")?;
@@ -227,6 +252,31 @@ pub fn encode_control(you: bool, viewers: u32) -> Vec<u8> {
 pub fn encode_pong(token: u32) -> Vec<u8> {
     let mut w = W::new(server::PONG, 4);
     w.u32(token);
+    w.0
+}
+
+/// FIT message: how a loaded hairstyle was placed (docs/protocol.md).
+pub fn encode_fit(r: &hairstyle::fit::FitReport) -> Vec<u8> {
+    let mut w = W::new(server::FIT, 84);
+    let t = &r.transform;
+    w.f32(t.scale);
+    for i in 0..3 {
+        for j in 0..3 {
+            w.f32(t.rotation[(i, j)]);
+        }
+    }
+    w.v3(&t.translation);
+    w.f32(r.meters_per_unit);
+    let source = |s: hairstyle::fit::Source| s as u8;
+    w.u8(r.up as u8 + 1);
+    w.u8(r.front as u8 + 1);
+    w.u8(source(r.units_source));
+    w.u8(source(r.orientation_source));
+    w.f32(r.inliers);
+    w.f32(r.root_distance.median);
+    w.f32(r.root_distance.p95);
+    w.f32(r.root_distance.max);
+    w.u32(r.pushed_out as u32);
     w.0
 }
 
@@ -416,6 +466,39 @@ mod tests {
         assert_eq!((u32_at(12), u32_at(16), u32_at(20), u32_at(24)), (2, 2, 2, 1));
         assert_eq!((f32_at(28), f32_at(28 + 8 * 4)), (1.0, 9.0));
         assert_eq!(tail.len(), 28 + 9 * 4);
+    }
+
+    #[test]
+    fn load_with_fit_options_and_the_fit_message() {
+        use hairstyle::fit::{Axis, FitOptions};
+        assert_eq!(parse_client(&[client::LOAD, VERSION, 2, 9, 9]).unwrap(), ClientMessage::Load(2, FitOptions::default(), vec![9, 9]));
+        let mut m = vec![client::LOAD, VERSION, 0x80 | 3, 3, 6, 1, 0];
+        m.extend_from_slice(&0.01f32.to_le_bytes());
+        m.push(7);
+        let opts = FitOptions { units: Some(0.01f32 as f64), up: Some(Axis::PosY), front: Some(Axis::NegZ), fit: false };
+        assert_eq!(parse_client(&m).unwrap(), ClientMessage::Load(3, opts, vec![7]));
+        let mut bad = m.clone();
+        bad[3] = 7;
+        assert!(parse_client(&bad).unwrap_err().message.contains("up axis 7 unknown"));
+        assert!(parse_client(&m[..8]).unwrap_err().message.contains("8 option bytes"));
+        assert!(parse_client(&[client::LOAD, VERSION, 4]).is_err());
+        let r = hairstyle::fit::FitReport {
+            meters_per_unit: 0.01,
+            units_source: hairstyle::fit::Source::Detected,
+            up: Axis::PosY,
+            front: Axis::PosZ,
+            orientation_source: hairstyle::fit::Source::Option,
+            transform: hairstyle::fit::Similarity::identity(),
+            inliers: 0.5,
+            root_distance: hairstyle::fit::Distances { median: 0.001, p95: 0.002, max: 0.003 },
+            pushed_out: 42,
+            scores: None,
+        };
+        let b = encode_fit(&r);
+        assert_eq!((b[0], b.len()), (server::FIT, 2 + 4 * 14 + 4 + 4 * 4 + 4));
+        assert_eq!(&b[2..6], &1f32.to_le_bytes());
+        assert_eq!(&b[58..62], &[3, 5, 2, 0]); // up +y, front +z, units detected, orientation option
+        assert_eq!(&b[78..82], &42u32.to_le_bytes());
     }
 
     #[test]

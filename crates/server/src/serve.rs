@@ -380,20 +380,35 @@ fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
             Ok(b) => Some(protocol::encode_file(format, &b)),
             Err(e) => Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message: e })),
         },
-        ClientMessage::Load(format, bytes) => {
+        ClientMessage::Load(format, opts, bytes) => {
             if !controls {
                 return not_controller();
             }
             let f = hairstyle::formats::Format::from_path(Path::new(&format!("x.{}", protocol::FORMATS[format]))).expect("known extension");
-            match f.read(&bytes) {
-                Ok(c) => load(app, &c).err().map(|message| protocol::encode_error(&WireError { code: protocol::code::FILE, message })),
-                Err(e) => Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message: format!("cannot read the {} file: {e}", protocol::FORMATS[format]) })),
+            let file_error = |message| Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message }));
+            match hairstyle::fit::read_and_fit(f, &bytes, &opts) {
+                Ok((c, report)) => {
+                    tracing::info!("loaded hairstyle fitted: scale {:.5} m per unit, up {} front {} ({}), roots to scalp median {:.2} mm, p95 {:.2} mm", report.transform.scale, report.up.name(), report.front.name(), report.orientation_source.name(), 1e3 * report.root_distance.median, 1e3 * report.root_distance.p95);
+                    match load(app, &c) {
+                        Ok(()) => {
+                            let msg = protocol::encode_fit(&report);
+                            let c = app.control.lock().unwrap();
+                            for (_, tx) in &c.viewers {
+                                let _ = tx.send(msg.clone());
+                            }
+                            None
+                        }
+                        Err(message) => file_error(message),
+                    }
+                }
+                Err(hairstyle::fit::LoadError::Format(e)) => file_error(format!("cannot read the {} file: {e}", protocol::FORMATS[format])),
+                Err(e) => file_error(e.to_string()),
             }
         }
     }
 }
 
-/// Replaces the live hairstyle by `curves` (m, head frame): a scene of the built-in head and guides
+/// Replaces the live hairstyle by `curves` (m, head frame, as `hairstyle::fit` leaves them): a scene of the built-in head and guides
 /// carrying them ([`Scene::from_curves`]), a new session on it, the new SCENE sent to every viewer, then
 /// the frame thread switched to the new session's snapshots. The old session stops. Refused while
 /// recording (a record is of one scene).
@@ -435,5 +450,8 @@ fn save(app: &App, format: usize) -> Result<Vec<u8>, String> {
     let guides = engine::scene::GuideDisplacements { active: &active, displacement: &disp, samples };
     let curves = scene.render_curves(&nodes, &engine::scene::Scene::kept_lengths_of_points(&kept), &guides);
     let f = hairstyle::formats::Format::from_path(Path::new(&format!("x.{}", protocol::FORMATS[format]))).expect("known extension");
+    // thickness (USD `widths`) from the scene's hair type
+    let mut curves = curves;
+    curves.thickness = Some(vec![scene.hair_type.major_diameter as f32; curves.num_points()]);
     f.write(&curves).map_err(|e| format!("cannot write {}: {e}", protocol::FORMATS[format]))
 }

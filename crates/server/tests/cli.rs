@@ -270,3 +270,35 @@ fn drying_scenario_wets_then_dries() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("action 0 (spray)"), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// Issue 18's acceptance through the command: a hairstyle written by Coiffure, rotated to y up facing +z,
+/// scaled to centimetres and moved, comes back through `coiffure fit` with its roots within 5 mm (median) and
+/// 15 mm (95th percentile) of where they were; the JSON report says what was detected; bad flags are named.
+#[test]
+fn fit_brings_a_moved_centimetre_y_up_hairstyle_back() {
+    use hairstyle::fit::{axes_rotation, transform_curves, Axis, Similarity};
+    let dir = scratch("fit");
+    let h = hairstyle::Hairstyle::generate(&hairstyle::HairstyleParams { render_count: 2000, guide_count: 100, ..Default::default() }).unwrap();
+    let original = h.to_curves();
+    let mut moved = original.clone();
+    let to_file = Similarity { scale: 100.0, rotation: axes_rotation(Axis::PosY, Axis::PosZ).transpose(), translation: nalgebra::Vector3::new(-20.0, 95.0, 33.0) };
+    transform_curves(&mut moved, &to_file);
+    hairstyle::write_file(dir.join("moved.hair"), &moved).unwrap();
+    let out = bin().args(["fit", "--json"]).arg(dir.join("moved.hair")).arg(dir.join("back.usda")).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!((report["up"].as_str(), report["front"].as_str(), report["meters_per_unit"].as_f64()), (Some("+y"), Some("+z"), Some(0.01)));
+    let back = hairstyle::read_file(dir.join("back.usda")).unwrap();
+    let mut d: Vec<f64> = original.strands.iter().zip(&back.strands).map(|(a, b)| (0..3).map(|k| ((a[0][k] - b[0][k]) as f64).powi(2)).sum::<f64>().sqrt()).collect();
+    d.sort_by(f64::total_cmp);
+    let (median, p95) = (d[d.len() / 2], d[d.len() * 95 / 100]);
+    println!("coiffure fit round trip: root error median {:.2} mm, p95 {:.2} mm", 1e3 * median, 1e3 * p95);
+    assert!(median <= 0.005 && p95 <= 0.015, "median {median} m, p95 {p95} m");
+    let text = std::fs::read_to_string(dir.join("back.usda")).unwrap();
+    assert!(text.contains("metersPerUnit = 1") && text.contains("upAxis = \"Z\"") && text.contains("float[] widths"));
+    let bad = bin().args(["fit", "--up", "w"]).arg(dir.join("moved.hair")).arg(dir.join("x.hair")).output().unwrap();
+    assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("--up: axis `w`"));
+    let usdz = bin().arg("fit").arg(dir.join("a.usdz")).arg(dir.join("x.hair")).output().unwrap();
+    assert!(String::from_utf8_lossy(&usdz.stderr).contains("usdcat"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

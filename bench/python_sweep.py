@@ -28,7 +28,7 @@ def main() -> None:
     types = ["H1", "H2", "GA1", "GC3"]
     scenarios = []
     for i in range(args.n):
-        s = comb_stroke(types[i % 4], None)
+        s = comb_stroke(types[i % 4], 0.0)
         s["name"] = f"comb-{i}"
         s["patch"]["seed"] = i + 1
         scenarios.append(s)

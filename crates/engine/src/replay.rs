@@ -102,18 +102,8 @@ mod tests {
         // threads' schedule (which lattice version each haptic step reads) is the machine's, so the two
         // traces are compared through their records, not with each other.
         let scene = small_scene();
-        let text = r#"
-            settle = 0.0
-            duration = 0.8
-            [live]
-            render_strands = 2000
-            guides = 60
-            [tool]
-            shape = "comb"
-            path = [ { t = 0.0, position = [0.0, -0.118, 0.05], rotation = [0.0, 2.2214415, -2.2214415] },
-                     { t = 0.7, position = [0.0, -0.118, -0.02], rotation = [0.0, 2.2214415, -2.2214415], pressed = true } ]
-        "#;
-        let s: crate::scenario::LiveScenario = toml::from_str(text).unwrap();
+        let text = crate::testing::LIVE_COMB.replace("settle = 0.2", "settle = 0.0");
+        let s: crate::scenario::LiveScenario = toml::from_str(&text).unwrap();
         let params = SessionParams { record: true, ..SessionParams::default() };
         let (session, mut io) = Session::start(scene.clone(), params).unwrap();
         loop {

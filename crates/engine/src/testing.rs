@@ -14,3 +14,17 @@ pub(crate) fn small_scene() -> Arc<Scene> {
 pub(crate) fn test_rot() -> Matrix3<f64> {
     Matrix3::from_columns(&[Vector3::new(-1.0, 0.0, 0.0), Vector3::new(0.0, 0.0, -1.0), Vector3::new(0.0, -1.0, 0.0)])
 }
+
+/// A `[live]` comb stroke on [`small_scene`]'s hairstyle: settle 0.2 s, then the comb drawn 7 cm down the back
+/// of the head in 0.7 s, pressed at the end; 0.8 s in all.
+pub(crate) const LIVE_COMB: &str = r#"
+        settle = 0.2
+        duration = 0.8
+        [live]
+        render_strands = 2000
+        guides = 60
+        [tool]
+        shape = "comb"
+        path = [ { t = 0.0, position = [0.0, -0.118, 0.05], rotation = [0.0, 2.2214415, -2.2214415] },
+                 { t = 0.7, position = [0.0, -0.118, -0.02], rotation = [0.0, 2.2214415, -2.2214415], pressed = true } ]
+    "#;

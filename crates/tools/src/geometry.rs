@@ -2,6 +2,23 @@
 
 use nalgebra::Vector3;
 
+/// Where on the segment `[a, b]` the point closest to `p` lies: `t` in [0, 1] with the point `a + t (b - a)`
+/// (0 for a degenerate segment).
+pub fn closest_point_param(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    let ab = b - a;
+    let n2 = ab.norm_squared();
+    if n2 > 0.0 {
+        ((p - a).dot(&ab) / n2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}
+
+/// Distance from `p` to the segment `[a, b]` (same unit as the points, m in Coiffure).
+pub fn point_segment_distance(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    (a + (b - a) * closest_point_param(p, a, b) - p).norm()
+}
+
 /// Closest points between segments `[p0, p1]` and `[q0, q1]`: returns `(s, t)` in [0, 1] with the points
 /// `p0 + s (p1 - p0)` and `q0 + t (q1 - q0)`. Handles degenerate (point) segments and parallel ones.
 pub fn closest_segment_params(p0: &Vector3<f64>, p1: &Vector3<f64>, q0: &Vector3<f64>, q1: &Vector3<f64>) -> (f64, f64) {
@@ -75,6 +92,16 @@ impl Aabb {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn point_segment_distance_inside_beyond_and_degenerate() {
+        let (a, b) = (Vector3::new(0.0, 0.0, 0.0), Vector3::new(2.0, 0.0, 0.0));
+        // Beside the interior (foot at t = 0.25), beyond b (nearest b), and a point-like segment; exact to 1e-15 m.
+        assert!((closest_point_param(&Vector3::new(0.5, 1.0, 0.0), &a, &b) - 0.25).abs() < 1e-15);
+        assert!((point_segment_distance(&Vector3::new(0.5, 1.0, 0.0), &a, &b) - 1.0).abs() < 1e-15);
+        assert!((point_segment_distance(&Vector3::new(5.0, 4.0, 0.0), &a, &b) - 5.0).abs() < 1e-15);
+        assert!((point_segment_distance(&Vector3::new(0.0, 3.0, 4.0), &a, &a) - 5.0).abs() < 1e-15);
+    }
 
     fn brute(p0: &Vector3<f64>, p1: &Vector3<f64>, q0: &Vector3<f64>, q1: &Vector3<f64>) -> f64 {
         let n = 400;

@@ -217,9 +217,8 @@ impl LocalInteraction {
         let origin = self.pose.position;
         let mut best: Option<(f64, usize, f64, Vector3<f64>)> = None;
         for p in Self::sample(&self.strands) {
-            let ab = p.b - p.a;
-            let t = ((origin - p.a).dot(&ab) / ab.norm_squared().max(1e-300)).clamp(0.0, 1.0);
-            let x = p.a + ab * t;
+            let t = crate::geometry::closest_point_param(&origin, &p.a, &p.b);
+            let x = p.a + (p.b - p.a) * t;
             let d = (x - origin).norm();
             if d <= reach && best.map_or(true, |b| d < b.0) {
                 best = Some((d, p.strand, p.s + t * p.length, x));

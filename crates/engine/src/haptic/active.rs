@@ -23,6 +23,7 @@
 
 use super::HapticCore;
 use crate::scene::ffd_map;
+use tools::geometry::point_segment_distance;
 use nalgebra::{Matrix3, Point3, Vector3};
 use strand::Strand;
 
@@ -61,13 +62,6 @@ fn tip(s: &Strand) -> Vector3<f64> {
     frames.last().map_or(s.state.root.position, |f| f.position)
 }
 
-/// Distance from `p` to the segment `a`-`b`, m.
-fn to_segment(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
-    let ab = b - a;
-    let t = if ab.norm_squared() > 0.0 { ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0) } else { 0.0 };
-    (a + ab * t - p).norm()
-}
-
 impl HapticCore {
     /// Copies the active strands' states back into the guide store.
     pub(crate) fn write_back(&mut self) {
@@ -101,13 +95,13 @@ impl HapticCore {
             for p in &guide.reference {
                 let x = ffd_map(&self.scene.lattice.ffd, nodes, p);
                 // Cheap rejection by the shape's bounding sphere swept along the way.
-                if to_segment(&x, tool, ahead) - reach >= r.min(d) {
+                if point_segment_distance(&x, tool, ahead) - reach >= r.min(d) {
                     continue;
                 }
                 for c in &poses {
                     let q = rotation.transpose() * (x - c);
                     for (a, b, rad) in &caps {
-                        d = d.min(to_segment(&q, a, b) - rad);
+                        d = d.min(point_segment_distance(&q, a, b) - rad);
                     }
                 }
             }

@@ -353,12 +353,7 @@ impl Meter {
                 return false;
             }
             let q = input.rotation.transpose() * d;
-            shape.capsules.iter().any(|c| {
-                let (a, b) = (Vector3::from(c.a), Vector3::from(c.b));
-                let ab = b - a;
-                let t = if ab.norm_squared() > 0.0 { ((q - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0) } else { 0.0 };
-                (a + ab * t - q).norm() - c.radius < self.params.in_hair_distance
-            })
+            shape.capsules.iter().any(|c| tools::geometry::point_segment_distance(&q, &Vector3::from(c.a), &Vector3::from(c.b)) - c.radius < self.params.in_hair_distance)
         });
         self.in_hair.push(inside);
         self.max_tip_speed = self.max_tip_speed.max(ls.haptic.max_tip_speed());
@@ -370,17 +365,7 @@ mod tests {
     use super::*;
     use crate::testing::small_scene;
 
-    const COMB: &str = r#"
-        settle = 0.2
-        duration = 0.8
-        [live]
-        render_strands = 2000
-        guides = 60
-        [tool]
-        shape = "comb"
-        path = [ { t = 0.0, position = [0.0, -0.118, 0.05], rotation = [0.0, 2.2214415, -2.2214415] },
-                 { t = 0.7, position = [0.0, -0.118, -0.02], rotation = [0.0, 2.2214415, -2.2214415], pressed = true } ]
-    "#;
+    use crate::testing::LIVE_COMB as COMB;
 
     fn comb() -> LiveScenario {
         toml::from_str(COMB).unwrap()

@@ -14,8 +14,9 @@ pub struct SessionParams {
     /// Global (lattice) step rate, Hz. Default 100.
     pub global_rate_hz: f64,
     /// Most guide strands simulated at once near the tool (the chosen ones and those still relaxing after
-    /// they left, `crate::haptic` active set). Default 48: enough strands around a comb for a continuous
-    /// force, within the 1 ms haptic step (bench/RESULTS.md).
+    /// they left, `crate::haptic` active set; strands let go are no longer simulated while their shown
+    /// displacement fades out). Default 48: enough strands around a comb for a continuous force, within the
+    /// 1 ms haptic step (bench/RESULTS.md).
     pub max_active: usize,
     /// A guide joins the active set when its settled shape comes within this distance of the tool's shape
     /// (its capsules) on its way over the next `HapticParams::lookahead` s, m. Default 0.03.
@@ -96,6 +97,10 @@ pub struct HapticParams {
     /// The active set is chosen again when the tool has moved this far since the last choice, m.
     /// Default 0.01.
     pub reselect_distance: f64,
+    /// Haptic steps one choice of the active set is spread over (each step scans an equal share of the guides,
+    /// so that no step pays for the whole scan; `crate::haptic` active set), >= 1. Default 10 (10 ms at 1 kHz,
+    /// far less than `lookahead`).
+    pub choice_steps: usize,
     /// The clip pins the strand point nearest its jaws if it is within this distance, m. Default 0.01.
     pub clip_reach: f64,
     /// Displacements of the local strands from their references larger than this are not sent to the
@@ -146,7 +151,7 @@ pub struct HapticParams {
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { reselect_distance: 0.01, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8 }
+        Self { reselect_distance: 0.01, choice_steps: 10, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8 }
     }
 }
 
@@ -181,8 +186,8 @@ impl HapticParams {
         if !(0.0..1.0).contains(&self.combing_ease_reduction) {
             return p(format!("haptic.combing_ease_reduction must be in [0, 1), got {}", self.combing_ease_reduction));
         }
-        if self.dryer_pieces == 0 || self.cut_pieces == 0 {
-            return p("haptic.dryer_pieces and haptic.cut_pieces must be > 0".into());
+        if self.dryer_pieces == 0 || self.cut_pieces == 0 || self.choice_steps == 0 {
+            return p(format!("haptic.dryer_pieces, haptic.cut_pieces and haptic.choice_steps must be > 0, got {}, {}, {}", self.dryer_pieces, self.cut_pieces, self.choice_steps));
         }
         if !(0.0..=1.0).contains(&self.hydrogen_share) {
             return p(format!("haptic.hydrogen_share must be in [0, 1], got {}", self.hydrogen_share));

@@ -120,6 +120,8 @@ pub struct LocalInteraction {
     surface_torques: Vec<Vec<PointForce>>,
     pieces: Vec<Piece>,
     bvh: Bvh,
+    /// The strands were replaced: build the tree anew at the next step rather than refit it.
+    rebuild_tree: bool,
     /// Workspace: which strands' steps were prepared this step.
     prepared: Vec<bool>,
     /// Workspace: contacts of this step.
@@ -150,9 +152,31 @@ impl LocalInteraction {
             surface_torques,
             pieces,
             bvh,
+            rebuild_tree: false,
             prepared,
             contacts: Vec::new(),
         }
+    }
+
+    /// Replaces the strands by `strands`, keeping the workspaces (the batches' solver storage, the contact
+    /// buffers): strand `i` of the new set was strand `from[i]` of the old one (its pending surface torques and
+    /// loads move with it), or is new (`None`). The pins are released (they name old strands). The collision
+    /// tree is rebuilt at the next step. Cheaper than a new interaction when a few strands join or leave.
+    pub fn set_strands(&mut self, strands: Vec<Strand>, from: &[Option<usize>]) {
+        let mut old = std::mem::take(&mut self.surface_torques);
+        self.surface_torques = (0..strands.len()).map(|i| match from.get(i).copied().flatten() {
+            Some(j) if j < old.len() => std::mem::take(&mut old[j]),
+            _ => Vec::new(),
+        }).collect();
+        self.prepared.clear();
+        self.prepared.resize(strands.len(), false);
+        self.lane_of.clear();
+        self.lane_of.resize(strands.len(), None);
+        self.pins.clear();
+        self.strands = strands;
+        self.rebuild_tree = true;
+        // The hair-hair contacts' velocities come from the last step's chords of the same strands.
+        self.hair_finder = HairContactFinder::new();
     }
 
     /// Prepares the steps of the reduced, linearly implicit strands in batches of four strands of equal size
@@ -334,11 +358,12 @@ impl LocalInteraction {
                 Self::sample_strand(k, strand, &mut self.pieces);
             }
         }
-        if self.pieces.len() == self.bvh.len() {
+        if self.pieces.len() == self.bvh.len() && !self.rebuild_tree {
             self.bvh.refit(&self.pieces);
         } else {
             // A strand changed its number of pieces (cut by the scissors, or replaced): new tree.
             self.bvh = Bvh::build(&self.pieces, Self::hair_radius(&self.strands));
+            self.rebuild_tree = false;
         }
         let t_sample = clock.elapsed().as_secs_f64();
         timings.sample = t_sample - t_dynamics;

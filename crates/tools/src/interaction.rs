@@ -84,6 +84,8 @@ pub struct StepTimings {
     pub free: f64,
     /// Strands that had contacts this step.
     pub touched_strands: usize,
+    /// Of `constrained` and `free`: finding the strands' body contacts, s.
+    pub body: f64,
 }
 
 /// A patch of strands, a tool, and the contact between them.
@@ -384,6 +386,14 @@ impl LocalInteraction {
         let t_detect = clock.elapsed().as_secs_f64();
         timings.detect = t_detect - t_sample;
         let mut result = StepResult { report, hair_pairs, ..Default::default() };
+        // Where each strand's pieces start (they are contiguous per strand, in strand order).
+        let mut first_piece = vec![self.pieces.len(); self.strands.len() + 1];
+        for (i, p) in self.pieces.iter().enumerate().rev() {
+            first_piece[p.strand] = i;
+        }
+        for k in (0..self.strands.len()).rev() {
+            first_piece[k] = first_piece[k].min(first_piece[k + 1]);
+        }
         for (k, strand) in self.strands.iter_mut().enumerate() {
             let t_strand = clock.elapsed().as_secs_f64();
             // A clip's jaws hold the strands it pins rather than pushing them.
@@ -392,11 +402,13 @@ impl LocalInteraction {
             let pinned = self.pins.iter().any(|p| p.0 == k);
             // Body contacts (constraint model): sampled points inside the body or within a hair's radius of it.
             let mut resting: Vec<PointConstraint> = Vec::new();
+            let t_body = clock.elapsed().as_secs_f64();
             if let (Some((body, threshold)), ForceModel::Constraint { .. }) = (&self.body, &self.model) {
-                // Each piece's start, and the strand's last end (a piece's end is the next one's start).
-                let pieces = &self.pieces;
-                let points = pieces.iter().enumerate().filter(|(_, p)| p.strand == k).flat_map(|(i, p)| {
-                    let last = pieces.get(i + 1).map_or(true, |n| n.strand != k);
+                // Each piece's start, and the strand's last end (a piece's end is the next one's start). The
+                // pieces are contiguous per strand, in strand order.
+                let pieces = &self.pieces[first_piece[k]..first_piece[k + 1]];
+                let points = pieces.iter().enumerate().flat_map(|(i, p)| {
+                    let last = i + 1 == pieces.len();
                     std::iter::once((p.s, p.a)).chain(last.then_some((p.s + p.length, p.b)))
                 });
                 for (s, x) in points {
@@ -409,6 +421,7 @@ impl LocalInteraction {
                     }
                 }
             }
+            timings.body += clock.elapsed().as_secs_f64() - t_body;
             // Hair-hair contacts of this strand (their impulses are not the tool's either).
             if hair_on {
                 resting.extend(self.hair_finder.constraints(k));

@@ -6,7 +6,7 @@
 //! 1. **Choice** (started when the tool has moved `HapticParams::reselect_distance` since the last one): the
 //!    guides whose settled shape (through the lattice) comes within `SessionParams::activation_radius` of the
 //!    tool's shape on its way over the next `HapticParams::lookahead` s (from the tool to where its velocity
-//!    takes it), nearest first, at most `SessionParams::max_active`. The scan is spread over
+//!    takes it), nearest first, at most `SessionParams::max_chosen`. The scan is spread over
 //!    `HapticParams::choice_steps` haptic steps (an equal share of the guides each step, [`Choice`]), so that
 //!    no step pays for all of it; the chosen set takes effect when the scan ends.
 //! 2. **Joining** guides start from their stored shape (groomed, or where they came to rest), at rest, their
@@ -108,7 +108,7 @@ impl HapticCore {
 
     /// The guides whose settled shapes (through the lattice `nodes`) come within the activation radius of the
     /// tool's shape (its capsules, turned by `rotation`) anywhere on its way from `tool` to `ahead` (m; checked
-    /// at both ends and midway), nearest first, at most `max_active`. The shape, not the tool's point: a
+    /// at both ends and midway), nearest first, at most `max_chosen`. The shape, not the tool's point: a
     /// comb's outer teeth are 6.5 cm from it, and a strand chosen only once a tooth is inside it is kicked.
     /// All at once ([`HapticCore::update_active`] spreads the same scan over steps).
     pub(crate) fn choose(&self, tool: &Vector3<f64>, ahead: &Vector3<f64>, rotation: &Matrix3<f64>, nodes: &[Point3<f64>]) -> Vec<usize> {
@@ -160,10 +160,10 @@ impl HapticCore {
         c.next = end;
     }
 
-    /// The chosen guides of a finished scan: nearest first, at most `max_active`.
+    /// The chosen guides of a finished scan: nearest first, at most `max_chosen`.
     fn chosen(&self, mut c: Choice) -> Vec<usize> {
         c.near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        c.near.iter().take(self.params.max_active).map(|x| x.1).collect()
+        c.near.iter().take(self.params.max_chosen).map(|x| x.1).collect()
     }
 
     /// Stage 3 of the step: the choice (started when the tool, the proxy at `proxy`, m, moving at `velocity`,

@@ -12,3 +12,4 @@ pub mod haptic_loop;
 pub mod realtime;
 pub mod target;
 pub mod udp;
+pub mod workspace;

@@ -47,10 +47,6 @@ fn main() {
         let t0 = Instant::now();
         ls.haptic_step(&std::mem::take(&mut commands), reading);
         let wall = t0.elapsed().as_secs_f64();
-        if std::env::var("DBG").is_ok() && n >= settle && (ls.haptic.max_tip_speed() > 1.0 || n - settle > 655 && n - settle < 668 || n - settle > 800 && n - settle < 815) {
-            let tm = ls.haptic.timings();
-            eprintln!("step {} tip {:.2} force {:.3} active {} rebuild {} choose {} contacts {}", n - settle, ls.haptic.max_tip_speed(), ls.haptic.force().norm(), ls.haptic.active().len(), tm.rebuild > 0.0, tm.choose > 0.0, ls.haptic.last_contacts());
-        }
         if n >= settle {
             rows.push((n - settle, wall, ls.haptic.timings(), ls.haptic.active().len(), ls.haptic.last_contacts()));
         }

@@ -176,13 +176,13 @@ pub struct HapticParams {
     /// dimensionless in [0, 1]. Default 0.8.
     pub hydrogen_share: f64,
     /// The local strands touch each other (contact and Coulomb friction, `tools::hair_contact`; each guide a
-    /// wisp of the real hairs it stands for, `HapticCore::hair_contact`). Default true.
+    /// wisp of the real hairs it stands for, `HapticCore::hair_contact`). Default false (see bench/RESULTS.md).
     pub hair_contact: bool,
 }
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { reselect_distance: 0.01, choice_steps: 10, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true }
+        Self { reselect_distance: 0.01, choice_steps: 10, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: false }
     }
 }
 

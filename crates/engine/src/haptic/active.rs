@@ -111,6 +111,7 @@ impl HapticCore {
     /// at both ends and midway), nearest first, at most `max_chosen`. The shape, not the tool's point: a
     /// comb's outer teeth are 6.5 cm from it, and a strand chosen only once a tooth is inside it is kicked.
     /// All at once ([`HapticCore::update_active`] spreads the same scan over steps).
+    #[cfg(test)]
     pub(crate) fn choose(&self, tool: &Vector3<f64>, ahead: &Vector3<f64>, rotation: &Matrix3<f64>, nodes: &[Point3<f64>]) -> Vec<usize> {
         let mut c = Choice { tool: *tool, ahead: *ahead, rotation: *rotation, next: 0, near: Vec::new() };
         self.scan(&mut c, self.scene.guides.len(), nodes);
@@ -349,5 +350,40 @@ impl HapticCore {
             root.angular_velocity = Vector3::zeros();
             root.acceleration = Vector3::zeros();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::global::GlobalCore;
+    use crate::params::SessionParams;
+    use crate::testing::{small_scene, test_rot};
+    use haptics::device::DeviceReading;
+
+    #[test]
+    fn the_choice_spread_over_steps_is_the_whole_scan() {
+        // The comb held still in the hair at the back of the head: after `choice_steps` steps the active set is
+        // exactly the guides the whole scan at once chooses (same set, nearest first), and not before (the scan
+        // is spread: the set is empty at step choice_steps - 1). Then at most `max_active` are simulated.
+        let scene = small_scene();
+        let params = SessionParams::default();
+        let mut core = HapticCore::new(scene.clone(), params).unwrap();
+        let snap = GlobalCore::new(scene, &params).snapshot();
+        let at = Vector3::new(0.0, -0.118, 0.0);
+        let reading = DeviceReading { time: 0.0, position: at, rotation: test_rot(), buttons: 0 };
+        let steps = params.haptic.choice_steps;
+        let mut way = None;
+        for n in 0..steps {
+            assert!(core.active().is_empty(), "chosen after {n} steps");
+            core.step(Some(reading), &snap, 1e-3);
+            // The way the choice is made for: the proxy (kept out of the body) and where its velocity takes it.
+            way.get_or_insert((core.coupling.proxy, core.coupling.proxy + core.coupling.proxy_velocity * params.haptic.lookahead));
+        }
+        let (from, to) = way.unwrap();
+        let want = core.choose(&from, &to, &test_rot(), &snap.positions);
+        assert!(want.len() >= 3, "the comb is in the hair: {want:?}");
+        assert_eq!(core.active(), &want[..]);
+        assert!(core.active().len() <= params.max_active);
     }
 }

@@ -335,7 +335,6 @@ impl Meter {
             return;
         }
         let d = self.points(ls).iter().zip(&self.settled).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
-        if std::env::var("DBG_MEASURE").is_ok() { let n = self.scene.samples(); let pts = self.points(ls); let (i, dd) = pts.iter().zip(&self.settled).map(|(a, b)| (a - b).norm()).enumerate().fold((0, 0.0), |b, x| if x.1 > b.1 { x } else { b }); let g = i / n; eprintln!("t {:.3} d {:.4} guide {} sample {} active {} faded {} in_hair {:?}", self.in_hair.len() as f64 * 1e-3, dd, g, i % n, ls.haptic.active().contains(&g), ls.haptic.faded.iter().any(|f| f.guide == g), self.in_hair.last()); }
         self.max = self.max.max(d);
         if self.in_hair.last() == Some(&true) {
             self.stroke_max = self.stroke_max.max(d);

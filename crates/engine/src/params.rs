@@ -6,6 +6,25 @@ use crate::error::SessionError;
 use haptics::device::DeviceProfile;
 use haptics::target::TargetParams;
 
+/// Where the session's device readings come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum InputKind {
+    /// A pointer (the browser's mouse): sparse events, interpolated with [`SessionParams::pointer`].
+    #[default]
+    Pointer,
+    /// A haptic device streaming poses (`coiffure serve --device`): followed with
+    /// [`SessionParams::device_follow`]; when its stream is lost (no reading) the tool stops and the next
+    /// reading re-anchors device, proxy and tool where the device is, at rest.
+    Device,
+}
+
+/// How the tool follows a streaming device's samples: interpolated over the mean interval between them
+/// (`haptics::target`) so that a device slower than the loop, or jitter in the packets' arrival, gives no
+/// velocity spikes to the coupling's damper. Interval bounds 0.00025-0.05 s (4 kHz to 20 Hz devices),
+/// running-mean weight 0.2, largest speed 5 m/s (the profiles' hand speed), largest acceleration 1000 m/s^2
+/// (follows a hand at 2 m/s sampled at 1 kHz without lag beyond one interval).
+pub const DEVICE_FOLLOW: TargetParams = TargetParams { min_interval: 0.00025, max_interval: 0.05, smoothing: 0.2, max_speed: 5.0, max_acceleration: 1000.0 };
+
 /// Parameters of a live session. Defaults: the README's `coiffure serve`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SessionParams {
@@ -27,6 +46,11 @@ pub struct SessionParams {
     /// running-mean weight 0.2, largest speed 1.5 m/s, largest acceleration 1 m/s^2: a jump of the mouse
     /// target, e.g. when the button presses the tool into the hair, never throws the proxy).
     pub pointer: TargetParams,
+    /// Where the device readings come from. Default [`InputKind::Pointer`] (`coiffure serve --device`:
+    /// [`InputKind::Device`]).
+    pub input: InputKind,
+    /// How the tool follows a streaming device ([`InputKind::Device`]). Default [`DEVICE_FOLLOW`].
+    pub device_follow: TargetParams,
     /// Haptic steps between two snapshots published for the viewer. Default 5 (200 Hz).
     pub publish_every: u64,
     /// Keep a record of the device input for replay. Default false.
@@ -52,7 +76,7 @@ pub struct SessionParams {
 
 impl Default for SessionParams {
     fn default() -> Self {
-        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_active: 48, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0 }, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default() }
+        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_active: 48, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0 }, input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default() }
     }
 }
 
@@ -72,9 +96,10 @@ impl SessionParams {
         if !(self.activation_radius > 0.0 && self.wetting_rate >= 0.0 && self.drying_rate >= 0.0 && self.wetting_rate.is_finite() && self.drying_rate.is_finite()) {
             return p(format!("activation_radius must be > 0 and wetting_rate, drying_rate finite and >= 0: {self:?}"));
         }
-        let t = &self.pointer;
-        if !(t.min_interval > 0.0 && t.max_interval >= t.min_interval && t.max_interval.is_finite() && t.smoothing > 0.0 && t.smoothing <= 1.0 && t.max_speed > 0.0 && t.max_speed.is_finite() && t.max_acceleration > 0.0 && t.max_acceleration.is_finite()) {
-            return p(format!("pointer: need 0 < min_interval <= max_interval (finite), smoothing in (0, 1], max_speed and max_acceleration > 0 finite, got {t:?}"));
+        for (k, t) in [("pointer", &self.pointer), ("device_follow", &self.device_follow)] {
+            if !(t.min_interval > 0.0 && t.max_interval >= t.min_interval && t.max_interval.is_finite() && t.smoothing > 0.0 && t.smoothing <= 1.0 && t.max_speed > 0.0 && t.max_speed.is_finite() && t.max_acceleration > 0.0 && t.max_acceleration.is_finite()) {
+                return p(format!("{k}: need 0 < min_interval <= max_interval (finite), smoothing in (0, 1], max_speed and max_acceleration > 0 finite, got {t:?}"));
+            }
         }
         if !(self.hairs_per_render_strand > 0.0 && self.hairs_per_render_strand.is_finite()) {
             return p(format!("hairs_per_render_strand must be finite and > 0, got {}", self.hairs_per_render_strand));

@@ -2,8 +2,9 @@
 //! (the few guide strands nearest the tool, Super-Helices) the tool acts on.
 //!
 //! One step of [`HapticCore::step`], in order:
-//! 1. **Device**: the device point follows the pointer's target, interpolated at the haptic rate between its
-//!    events (`haptics::target`; absurd readings rejected).
+//! 1. **Device**: the device point follows the pointer's target or a streaming device's samples,
+//!    interpolated at the haptic rate between them (`haptics::target`; absurd readings rejected; no reading:
+//!    zero force, and the next re-anchors the tool).
 //! 2. **Coupling**: the virtual coupling gives the proxy (the tool) and the force on the hand, from the
 //!    hair's reaction of the previous step taken implicitly (its force and damping, so the reaction can
 //!    never throw the proxy: `haptics::coupling::HairReaction`).
@@ -34,7 +35,7 @@ pub(crate) use strands::resting_on;
 
 use crate::command::Command;
 use crate::error::SessionError;
-use crate::params::SessionParams;
+use crate::params::{InputKind, SessionParams};
 use crate::scene::{ffd_map, Scene};
 use crate::snapshot::{HapticSnapshot, LatticeSnapshot};
 use crate::tool::{Tool, ToolInput};
@@ -161,7 +162,14 @@ impl HapticCore {
     /// snapshot `lattice`. Returns the command for the device.
     pub fn step(&mut self, reading: Option<DeviceReading>, lattice: &LatticeSnapshot, dt: f64) -> DeviceCommand {
         self.step += 1;
-        let Some(r) = reading else { return DeviceCommand::default() };
+        let Some(r) = reading else {
+            // No reading: before the first, or a device's stream lost. Zero force; the next reading
+            // re-anchors device, proxy and tool where the device is (`follow`).
+            if self.device.take().is_some() {
+                self.coupling.force = Vector3::zeros();
+            }
+            return DeviceCommand::default();
+        };
         // 1. Device.
         let Some(reading) = self.follow(&r, dt) else { return DeviceCommand::default() };
         // 2. Coupling.
@@ -210,9 +218,9 @@ impl HapticCore {
         (self.scene.render.strands() as f64 * self.params.hairs_per_render_strand / self.scene.guides.len().max(1) as f64).max(1.0)
     }
 
-    /// The device point following the pointer's target `r` (interpolated between its events), as a reading;
-    /// None (counted) for a non-finite target. The first reading puts device, proxy and tool where the
-    /// pointer is, at rest.
+    /// The device point following the pointer's target or the device's samples `r` (interpolated between
+    /// them, `SessionParams::input`), as a reading; None (counted) for a non-finite target. The first reading
+    /// (and the first after none) puts device, proxy and tool where the pointer or device is, at rest.
     fn follow(&mut self, r: &DeviceReading, dt: f64) -> Option<DeviceReading> {
         let target = r.position;
         if !target.iter().all(|x| x.is_finite()) {
@@ -222,9 +230,13 @@ impl HapticCore {
         if self.device.is_none() {
             self.coupling = Coupling::new(self.params.profile, CouplingParams::for_profile(&self.params.profile), target);
             self.interaction.pose = ToolPose { position: target, rotation: r.rotation };
+            self.hair_force = HairReaction::none();
         }
-        let pointer = self.params.pointer;
-        let dev = self.device.get_or_insert_with(|| TargetFilter::new(pointer, target));
+        let follow = match self.params.input {
+            InputKind::Pointer => self.params.pointer,
+            InputKind::Device => self.params.device_follow,
+        };
+        let dev = self.device.get_or_insert_with(|| TargetFilter::new(follow, target));
         Some(DeviceReading { position: dev.step(&target, dt), ..*r })
     }
 

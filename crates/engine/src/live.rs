@@ -27,8 +27,8 @@ use crate::record::{Record, StepRecord};
 use crate::scene::Scene;
 use crate::snapshot::{HapticSnapshot, LatticeSnapshot};
 use crate::tool::ToolInput;
-use haptics::backends::{virtual_device, VirtualDevice, VirtualHandle};
-use haptics::device::{DeviceCommand, DeviceReading};
+use haptics::backends::{virtual_device, VirtualHandle};
+use haptics::device::{DeviceCommand, DeviceReading, HapticDevice};
 use haptics::haptic_loop::{HapticLoop, LoopStats};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{channel, Receiver, Sender};
@@ -39,7 +39,8 @@ use triple_buffer::{triple_buffer, Output};
 
 /// The viewer side's handles: device input, commands, and the latest snapshots.
 pub struct SessionIo {
-    /// Push mouse readings here (the haptic thread reads the newest).
+    /// Push mouse readings here (the haptic thread reads the newest; unused when the session was started
+    /// with its own device, [`Session::start_with_device`]).
     pub device: VirtualHandle,
     /// Viewer commands, applied by the haptic thread before its next step.
     pub commands: Sender<Command>,
@@ -71,13 +72,19 @@ pub struct Session {
     stop: Arc<AtomicBool>,
     reset_epoch: Arc<AtomicU64>,
     global: Option<JoinHandle<GlobalRun>>,
-    haptic: Option<HapticLoop<VirtualDevice>>,
+    haptic: Option<HapticLoop<Box<dyn HapticDevice>>>,
     record: Arc<std::sync::Mutex<Option<Record>>>,
 }
 
 impl Session {
-    /// Starts both threads on `scene`.
+    /// Starts both threads on `scene`, the haptic thread reading the mouse through [`SessionIo::device`].
     pub fn start(scene: Arc<Scene>, params: SessionParams) -> Result<(Session, SessionIo), SessionError> {
+        Self::start_with_device(scene, params, None)
+    }
+
+    /// [`Session::start`] with the haptic thread reading `device` (e.g. a `haptics::udp::UdpDevice`, with
+    /// `params.input` = `InputKind::Device`) instead of the mouse; None: the mouse.
+    pub fn start_with_device(scene: Arc<Scene>, params: SessionParams, device: Option<Box<dyn HapticDevice>>) -> Result<(Session, SessionIo), SessionError> {
         params.validate()?;
         let mut core = HapticCore::new(scene.clone(), params)?;
         let mut global = GlobalCore::new(scene.clone(), &params);
@@ -90,7 +97,8 @@ impl Session {
         core.snapshot(&rest, dt, &mut first);
         let (mut hap_in, hap_out) = triple_buffer(&first);
         let (cmd_tx, cmd_rx): (Sender<Command>, Receiver<Command>) = channel();
-        let (dev, handle) = virtual_device();
+        let (mouse, handle) = virtual_device();
+        let dev: Box<dyn HapticDevice> = device.unwrap_or_else(|| Box::new(mouse));
         let stop = Arc::new(AtomicBool::new(false));
         let reset_epoch = Arc::new(AtomicU64::new(0));
 
@@ -313,5 +321,73 @@ mod tests {
         session.stop();
         assert_eq!(h.tool, Tool::Sprayer as u8);
         assert!(sum > 0.1, "wetness summed over the guides {sum}");
+    }
+
+    #[test]
+    fn a_udp_device_drives_the_session_and_losing_it_zeroes_the_force() {
+        // A device streams a comb stroke down the back of the head at 1 kHz over loopback into a live session
+        // (InputKind::Device, identity workspace). Its answers: finite, within the Omni's 3.3 N, non-zero while
+        // the comb is in the hair. Then the stream stops: the session's force is zero once 50 ms have passed
+        // (read within 50 ms + the 5 ms publish period + 20 ms of scheduling slack). Then it resumes 12 cm
+        // away, out of the hair: the tool re-anchors there (no pull across the head), so the first answer is
+        // within one force-rate step of zero (300 N/s x 1 ms = 0.3 N).
+        use haptics::udp::{UdpClient, UdpDevice, UdpParams};
+        use haptics::workspace::Workspace;
+        let scene = small_scene();
+        let params = SessionParams { input: crate::params::InputKind::Device, ..SessionParams::default() };
+        let udp = UdpParams { workspace: Workspace { scale: 1.0, offset: Vector3::zeros() }, ..UdpParams::for_profile(&params.profile) };
+        let dev = UdpDevice::bind_with("127.0.0.1:0", udp).unwrap();
+        let status = dev.status();
+        let mut client = UdpClient::connect(dev.local_addr().unwrap()).unwrap();
+        client.set_nonblocking(true).unwrap();
+        let (session, mut io) = Session::start_with_device(scene, params, Some(Box::new(dev))).unwrap();
+        let start = Instant::now();
+        let (mut peak, mut worst, mut answers, mut sent) = (0.0f64, 0.0f64, 0u32, 0u32);
+        for k in 0..900u32 {
+            let t = k as f64 * 1e-3;
+            let p = Vector3::new(0.0, -0.118, 0.05 - 0.1 * t.min(0.8));
+            client.send(&DeviceReading { time: t, position: p, rotation: test_rot(), buttons: 0 }).unwrap();
+            sent += 1;
+            while let Ok((_, c, flags)) = client.receive() {
+                assert_eq!(flags, 0);
+                answers += 1;
+                assert!(c.force.iter().all(|x| x.is_finite()));
+                worst = worst.max(c.force.norm());
+                if t > 0.3 {
+                    peak = peak.max(c.force.norm());
+                }
+            }
+            if let Some(d) = (start + Duration::from_millis(k as u64 + 1)).checked_duration_since(Instant::now()) {
+                std::thread::sleep(d);
+            }
+        }
+        let stopped = Instant::now();
+        let mut zero_after = None;
+        while stopped.elapsed() < Duration::from_millis(300) {
+            if io.haptic.read().force == Vector3::zeros() {
+                zero_after = Some(stopped.elapsed());
+                break;
+            }
+            std::thread::sleep(Duration::from_micros(500));
+        }
+        let lost = status.counts();
+        std::thread::sleep(Duration::from_millis(30));
+        client.set_nonblocking(false).unwrap();
+        let far = Vector3::new(0.0, -0.24, 0.0);
+        client.send(&DeviceReading { time: 2.0, position: far, rotation: test_rot(), buttons: 0 }).unwrap();
+        let (_, first, _) = client.receive().unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+        let tool = io.haptic.read().tool_position;
+        let report = session.stop();
+        eprintln!("answered {answers} of {sent}; peak force in the hair {peak:.3} N, largest {worst:.3} N; zero force {zero_after:?} after the stream stopped; first force on resuming {:.4} N; tool at {tool:?}; {:?}; loop {:?}", first.force.norm(), status.counts(), report.haptic);
+        assert!(answers as f64 >= 0.9 * sent as f64, "answered {answers} of {sent}");
+        assert!(peak > 0.01, "the comb in the hair gives a force: {peak} N");
+        assert!(worst <= 3.3 + 1e-12, "{worst} N");
+        let zero_after = zero_after.expect("the force went to zero after the stream stopped");
+        assert!(zero_after <= Duration::from_millis(75), "zero force after {zero_after:?}");
+        assert!(!lost.connected, "the status says lost");
+        assert!(status.counts().lost >= 1);
+        assert!(first.force.norm() <= 0.3 + 1e-9, "re-anchored on resuming: {} N", first.force.norm());
+        assert!((tool - far).norm() < 0.01, "the tool re-anchored where the device came back: {tool:?}");
     }
 }

@@ -7,7 +7,7 @@ pub use crate::error::SessionError;
 pub use crate::global::{CutJob, CutReport, CutResult, GlobalCore};
 pub use crate::haptic::HapticCore;
 pub use crate::live::{Session, SessionIo, SessionReport};
-pub use crate::params::{GlobalParams, HapticParams, SessionParams};
+pub use crate::params::{GlobalParams, HapticParams, InputKind, SessionParams, DEVICE_FOLLOW};
 pub use crate::replay::replay;
 pub use crate::scene::{ffd_map, Guide, Mesh, RenderHair, Scene, SceneOptions};
 pub use crate::snapshot::{HapticSnapshot, LatticeSnapshot};

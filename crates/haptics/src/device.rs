@@ -32,6 +32,16 @@ pub trait HapticDevice: Send {
     fn write(&mut self, command: &DeviceCommand);
 }
 
+/// A boxed device is a device (the live session holds the mouse's or a UDP device behind one type).
+impl<T: HapticDevice + ?Sized> HapticDevice for Box<T> {
+    fn read(&mut self, time: f64) -> Option<DeviceReading> {
+        (**self).read(time)
+    }
+    fn write(&mut self, command: &DeviceCommand) {
+        (**self).write(command)
+    }
+}
+
 /// Limits of a force-feedback device.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DeviceProfile {
@@ -45,17 +55,24 @@ pub struct DeviceProfile {
     pub max_stiffness: f64,
     /// Largest believable hand speed, m/s; faster input is treated as a teleport (a glitch).
     pub max_speed: f64,
+    /// Apparent mass of the end-effector at the handle, kg (`coiffure device-sim`'s device dynamics).
+    pub mass: f64,
+    /// Viscous friction of the mechanism at the handle, N s/m (`coiffure device-sim`).
+    pub damping: f64,
+    /// Size of the usable workspace along x, y, z (device frame: x right, y away from the user, z up), m.
+    pub workspace: [f64; 3],
 }
 
 impl DeviceProfile {
-    /// 3D Systems (SensAble) Phantom Omni / Touch: 3.3 N peak, about 1 N/mm stiffness.
-    pub const PHANTOM_OMNI: DeviceProfile = DeviceProfile { name: "Phantom Omni", max_force: 3.3, max_force_rate: 300.0, max_stiffness: 1000.0, max_speed: 5.0 };
-    /// Phantom Desktop: 7.9 N peak, about 1.9 N/mm.
-    pub const PHANTOM_DESKTOP: DeviceProfile = DeviceProfile { name: "Phantom Desktop", max_force: 7.9, max_force_rate: 600.0, max_stiffness: 1860.0, max_speed: 5.0 };
-    /// Force Dimension omega.3: 12 N, about 14.5 N/mm.
-    pub const OMEGA3: DeviceProfile = DeviceProfile { name: "omega.3", max_force: 12.0, max_force_rate: 2000.0, max_stiffness: 14500.0, max_speed: 5.0 };
+    /// 3D Systems (SensAble) Phantom Omni / Touch: 3.3 N peak, about 1 N/mm stiffness, 160 x 120 x 70 mm
+    /// workspace, about 45 g apparent mass at the stylus.
+    pub const PHANTOM_OMNI: DeviceProfile = DeviceProfile { name: "Phantom Omni", max_force: 3.3, max_force_rate: 300.0, max_stiffness: 1000.0, max_speed: 5.0, mass: 0.045, damping: 0.05, workspace: [0.16, 0.07, 0.12] };
+    /// Phantom Desktop: 7.9 N peak, about 1.9 N/mm, 160 x 130 x 130 mm, about 75 g at the stylus.
+    pub const PHANTOM_DESKTOP: DeviceProfile = DeviceProfile { name: "Phantom Desktop", max_force: 7.9, max_force_rate: 600.0, max_stiffness: 1860.0, max_speed: 5.0, mass: 0.075, damping: 0.05, workspace: [0.16, 0.13, 0.13] };
+    /// Force Dimension omega.3: 12 N, about 14.5 N/mm, a 160 mm x 110 mm workspace, about 200 g at the handle.
+    pub const OMEGA3: DeviceProfile = DeviceProfile { name: "omega.3", max_force: 12.0, max_force_rate: 2000.0, max_stiffness: 14500.0, max_speed: 5.0, mass: 0.2, damping: 0.1, workspace: [0.16, 0.16, 0.11] };
     /// A mouse in the browser (no force output; the force is only shown).
-    pub const MOUSE: DeviceProfile = DeviceProfile { name: "mouse", max_force: 10.0, max_force_rate: 1e4, max_stiffness: 1000.0, max_speed: 20.0 };
+    pub const MOUSE: DeviceProfile = DeviceProfile { name: "mouse", max_force: 10.0, max_force_rate: 1e4, max_stiffness: 1000.0, max_speed: 20.0, mass: 0.0, damping: 0.0, workspace: [0.0; 3] };
 
     /// Looks a profile up by a short name: "omni", "desktop", "omega3", "mouse".
     pub fn by_name(name: &str) -> Option<DeviceProfile> {

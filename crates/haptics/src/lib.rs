@@ -10,5 +10,7 @@ pub mod coupling;
 pub mod device;
 pub mod haptic_loop;
 pub mod realtime;
+pub mod sim;
 pub mod target;
 pub mod udp;
+pub mod workspace;

@@ -1,6 +1,7 @@
 //! `coiffure`: the command line of the Coiffure hair simulator.
 
 mod demo;
+mod device_sim_cmd;
 mod files_cmd;
 mod fit_cmd;
 mod protocol;
@@ -23,6 +24,8 @@ struct Cli {
 enum Command {
     /// The visuo-haptic app: serve the browser viewer and the live session (http://127.0.0.1:8080).
     Serve(serve::ServeArgs),
+    /// A simulated haptic device and hand streaming a scenario's tool path to `serve --device` (UDP).
+    DeviceSim(device_sim_cmd::DeviceSimArgs),
     /// Headless run of the built-in default scene: a few strands hanging from a moving root.
     Demo(demo::DemoArgs),
     /// Simulate or solve the statics of one strand described by a TOML spec file.
@@ -49,6 +52,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Serve(args) => serve::run(&args),
+        Command::DeviceSim(args) => device_sim_cmd::run(&args),
         Command::Demo(args) => demo::run(&args),
         Command::Strand(args) => strand_cmd::run(&args),
         Command::Run(args) => run_cmd::run(&args),

@@ -49,6 +49,8 @@ pub mod server {
     pub const STRANDS: u8 = 0x87;
     /// How a loaded hairstyle was placed on the head (after its SCENE): transform and root distances.
     pub const FIT: u8 = 0x88;
+    /// Haptic device status (`--device`): u8 state, u32 x 6 counters.
+    pub const DEVICE: u8 = 0x89;
 }
 
 /// Error codes of ERROR messages.
@@ -245,6 +247,29 @@ pub fn encode_control(you: bool, viewers: u32) -> Vec<u8> {
     let mut w = W::new(server::CONTROL, 5);
     w.u8(you as u8);
     w.u32(viewers);
+    w.0
+}
+
+/// Device states of the DEVICE message.
+pub mod device_state {
+    /// No pose received yet.
+    pub const WAITING: u8 = 0;
+    /// Poses arriving (one accepted within the last 50 ms).
+    pub const CONNECTED: u8 = 1;
+    /// The stream was lost (no accepted pose for 50 ms); zero force until it resumes.
+    pub const LOST: u8 = 2;
+}
+
+/// DEVICE message (`coiffure serve --device`, about 10 Hz): u8 state ([`device_state`]), then u32 poses
+/// accepted, u32 poses rejected (non-finite or out of range, teleport, out of order, duplicate), u32
+/// packets dropped as malformed, u32 poses dropped from another sender, u32 times the stream was lost,
+/// u32 force packets sent.
+pub fn encode_device(c: &haptics::udp::UdpCounts) -> Vec<u8> {
+    let mut w = W::new(server::DEVICE, 25);
+    w.u8(if c.connected { device_state::CONNECTED } else if c.accepted == 0 { device_state::WAITING } else { device_state::LOST });
+    for v in [c.accepted, c.rejected_total(), c.malformed, c.foreign, c.lost, c.answered] {
+        w.u32(v.min(u32::MAX as u64) as u32);
+    }
     w.0
 }
 

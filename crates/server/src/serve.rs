@@ -12,11 +12,13 @@ use axum::routing::get;
 use axum::Router;
 use clap::Args;
 use engine::record::Record;
-use engine::session::{Command, HapticSnapshot, LatticeSnapshot, Scene, SceneOptions, Session, SessionIo, SessionParams};
+use engine::session::{Command, HapticSnapshot, InputKind, LatticeSnapshot, Scene, SceneOptions, Session, SessionIo, SessionParams};
 use triple_buffer::Output;
 use futures_util::{SinkExt, StreamExt};
 use haptics::backends::VirtualHandle;
-use haptics::device::DeviceReading;
+use haptics::device::{DeviceProfile, DeviceReading, HapticDevice};
+use haptics::udp::{UdpDevice, UdpParams, UdpStatus};
+use haptics::workspace::Workspace;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -62,6 +64,35 @@ pub struct ServeArgs {
     /// root or CAP_SYS_NICE; without the right the loop runs at normal priority and a warning says so.
     #[arg(long, default_value_t = 10)]
     pub haptic_priority: i32,
+    /// Haptic loop rate, Hz, in (0, 4000] (`SessionParams::haptic_rate_hz`).
+    #[arg(long, default_value_t = 1000.0)]
+    pub haptic_rate: f64,
+    /// A haptic device drives the tool instead of the mouse: it streams poses in the UDP protocol
+    /// (docs/protocol.md) to `udp:PORT` (on 127.0.0.1) or `udp:ADDR:PORT`; port 0 takes any free port
+    /// (printed). The viewers watch; the toolbar still works.
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Device profile (force, force-rate and stiffness limits): phantom-omni, phantom-desktop or omega3.
+    #[arg(long, default_value = "phantom-omni")]
+    pub device_profile: String,
+    /// Device workspace to head frame, `SCALE` or `SCALE,X,Y,Z`: head = (X, Y, Z) + SCALE x device (m).
+    /// Default per profile: scale 2, the workspace's centre 13 cm behind the head's centre (0,-0.13,0).
+    #[arg(long)]
+    pub device_workspace: Option<String>,
+}
+
+/// The UDP address of `--device`: `udp:PORT` (127.0.0.1) or `udp:ADDR:PORT`.
+pub fn parse_device(spec: &str) -> anyhow::Result<SocketAddr> {
+    let rest = spec.strip_prefix("udp:").ok_or_else(|| anyhow!("--device {spec:?}: expected udp:PORT or udp:ADDR:PORT (the UDP protocol of docs/protocol.md)"))?;
+    if let Ok(port) = rest.parse::<u16>() {
+        return Ok(SocketAddr::from(([127, 0, 0, 1], port)));
+    }
+    rest.parse::<SocketAddr>().map_err(|e| anyhow!("--device {spec:?}: expected udp:PORT or udp:ADDR:PORT: {e}"))
+}
+
+/// The device profile named by `--device-profile`.
+fn device_profile(name: &str) -> anyhow::Result<DeviceProfile> {
+    DeviceProfile::by_name(name).ok_or_else(|| anyhow!("--device-profile {name:?}: expected phantom-omni, phantom-desktop or omega3"))
 }
 
 /// The viewer folder: `--web`, else `./web/dist`, else `web/dist` beside the sources.
@@ -106,9 +137,26 @@ struct App {
     session: Mutex<Option<Session>>,
     /// A new session's snapshot outputs, for the frame thread to take over.
     swap: Mutex<Option<(Output<LatticeSnapshot>, Output<HapticSnapshot>)>>,
+    /// `--device`: the UDP device each session reads (a clone on the same socket), and its counters.
+    udp: Option<(UdpDevice, Arc<UdpStatus>)>,
 }
 
 impl App {
+    /// The device a new session reads: the UDP device's clone with `--device`, else None (the mouse).
+    fn session_device(&self) -> Result<Option<Box<dyn HapticDevice>>, String> {
+        match &self.udp {
+            Some((d, _)) => d.try_clone().map(|d| Some(Box::new(d) as Box<dyn HapticDevice>)).map_err(|e| format!("cannot share the device socket: {e}")),
+            None => Ok(None),
+        }
+    }
+
+    fn broadcast(&self, msg: &[u8]) {
+        let c = self.control.lock().unwrap();
+        for (_, tx) in &c.viewers {
+            let _ = tx.send(msg.to_vec());
+        }
+    }
+
     fn broadcast_control(&self) {
         let c = self.control.lock().unwrap();
         let n = c.viewers.len() as u32;
@@ -137,9 +185,33 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let scene = Arc::new(Scene::builtin(&opts).context("building the built-in scene")?);
     tracing::info!("scene: {} render strands, {} guides, {} lattice nodes, built in {:.2} s", scene.render.strands(), scene.guides.len(), scene.lattice.node_count(), t0.elapsed().as_secs_f64());
     let haptic_priority = (args.haptic_priority != 0).then_some(args.haptic_priority);
-    let params = SessionParams { record: args.record.is_some(), haptic_priority, hairs_per_render_strand: args.hairs_per_render_strand, ..SessionParams::default() };
-    params.validate().context("--hairs-per-render-strand")?;
-    let (session, io) = Session::start(scene.clone(), params).context("starting the session")?;
+    let profile = device_profile(&args.device_profile)?;
+    let input = if args.device.is_some() { InputKind::Device } else { InputKind::Pointer };
+    let params = SessionParams { record: args.record.is_some(), haptic_priority, hairs_per_render_strand: args.hairs_per_render_strand, haptic_rate_hz: args.haptic_rate, profile, input, ..SessionParams::default() };
+    params.validate().context("--hairs-per-render-strand, --haptic-rate")?;
+    let udp = match &args.device {
+        Some(spec) => {
+            let addr = parse_device(spec)?;
+            let workspace = match &args.device_workspace {
+                Some(w) => Workspace::parse(w, &profile).map_err(|e| anyhow!("--device-workspace: {e}"))?,
+                None => Workspace::for_profile(&profile),
+            };
+            let dev = UdpDevice::bind_with(&addr.to_string(), UdpParams { workspace, ..UdpParams::for_profile(&profile) }).with_context(|| format!("cannot bind the device socket {addr}"))?;
+            let local = dev.local_addr()?;
+            println!(
+                "coiffure serve: device on udp:{local} ({}, {:.1} N; workspace: head = ({:.3}, {:.3}, {:.3}) m + {} x device; haptic loop {} Hz)",
+                profile.name, profile.max_force, workspace.offset.x, workspace.offset.y, workspace.offset.z, workspace.scale, args.haptic_rate
+            );
+            let status = dev.status();
+            Some((dev, status))
+        }
+        None => None,
+    };
+    let first_device = match &udp {
+        Some((d, _)) => Some(Box::new(d.try_clone()?) as Box<dyn HapticDevice>),
+        None => None,
+    };
+    let (session, io) = Session::start_with_device(scene.clone(), params, first_device).context("starting the session")?;
     let SessionIo { device, commands, lattice, haptic } = io;
     let scene_msg = Arc::new(protocol::encode_scene(&scene));
     let (frame_tx, frame_rx) = watch::channel(Arc::new(Vec::new()));
@@ -159,6 +231,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         params,
         session: Mutex::new(Some(session)),
         swap: Mutex::new(None),
+        udp,
     });
     let app_end = app.clone();
 
@@ -200,6 +273,12 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
             }
             st.bytes += msg.len() as u64;
             let _ = frame_tx.send(Arc::new(msg));
+            // The device's status to every viewer, about 10 times a second.
+            if let Some((_, status)) = &app_p.udp {
+                if st.frames % (fps / 10.0).ceil().max(1.0) as u64 == 0 {
+                    app_p.broadcast(&protocol::encode_device(&status.counts()));
+                }
+            }
             st.encode_seconds += match (c0, cpu_time()) {
                 (Some(a), Some(b)) => b - a,
                 _ => w0.elapsed().as_secs_f64(),
@@ -244,6 +323,13 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame); haptic loop: {} steps, step mean {:.1} us, p99 {:.0} us, p99.9 {:.0} us, {} misses, {} step panics, real-time priority: {}; global: {} steps, mean {:.2} ms",
         st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, report.haptic.steps, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, report.haptic.misses, report.haptic.panics, report.haptic.realtime, report.global_steps, 1e3 * report.global_step_mean
     );
+    if let Some((_, status)) = &app_end.udp {
+        let c = status.counts();
+        println!(
+            "device: {} poses accepted, rejected {} (invalid {}, teleport {}, out of order {}, duplicate {}), {} malformed, {} from another sender, lost {} times, {} forces sent",
+            c.accepted, c.rejected_total(), c.rejected[0], c.rejected[1], c.rejected[2], c.rejected[3], c.malformed, c.foreign, c.lost, c.answered
+        );
+    }
     if let (Some(path), Some(rec)) = (&args.record, report.record) {
         write_record(path, &rec)?;
         println!("record: {} haptic steps written to {}", rec.steps.len(), path.display());
@@ -290,6 +376,9 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
     if !kept.is_empty() && sink.send(Message::Binary(protocol::encode_strands(&kept).into())).await.is_err() {
         leave(&app, id);
         return;
+    }
+    if let Some((_, status)) = &app.udp {
+        let _ = tx.send(protocol::encode_device(&status.counts()));
     }
     app.broadcast_control();
     let mut frames = app.frames.clone();
@@ -365,6 +454,10 @@ fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
             if !controls {
                 return not_controller();
             }
+            if app.udp.is_some() {
+                // A haptic device drives the tool (`--device`); the mouse does not fight it.
+                return None;
+            }
             let time = app.started.elapsed().as_secs_f64();
             app.device.lock().unwrap().push(DeviceReading { time, position, rotation, buttons });
             None
@@ -418,7 +511,7 @@ fn load(app: &App, curves: &hairstyle::HairCurves) -> Result<(), String> {
     }
     let t0 = Instant::now();
     let scene = Arc::new(Scene::from_curves(curves, &app.opts).map_err(|e| format!("cannot use the loaded hairstyle: {e}"))?);
-    let (session, io) = Session::start(scene.clone(), app.params).map_err(|e| e.to_string())?;
+    let (session, io) = Session::start_with_device(scene.clone(), app.params, app.session_device()?).map_err(|e| e.to_string())?;
     let SessionIo { device, commands, lattice, haptic } = io;
     let old = app.session.lock().unwrap().replace(session);
     *app.device.lock().unwrap() = device;

@@ -1,0 +1,180 @@
+//! `coiffure serve --device` driven by `coiffure device-sim` end to end: real processes, UDP on loopback,
+//! a WebSocket viewer watching the device status (issue 13's acceptance).
+
+use std::io::{BufRead, BufReader};
+use std::net::TcpStream;
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_coiffure"))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("coiffure-device-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn repo(path: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(path)
+}
+
+/// A running `coiffure serve` (killed when dropped) and the addresses it printed.
+struct Server {
+    child: Child,
+    http: String,
+    udp: String,
+    /// Keeps the stdout reader going (the server must not see a closed pipe).
+    _lines: mpsc::Receiver<String>,
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Starts `coiffure serve --device udp:127.0.0.1:0` on a small built-in hairstyle (5000 render strands
+/// standing for 20 hairs each: the force of a full head) with a stub viewer folder.
+fn serve(extra: &[&str]) -> Server {
+    let web = scratch("web");
+    std::fs::write(web.join("index.html"), "<!doctype html><title>stub</title>").unwrap();
+    let mut child = bin()
+        .args(["serve", "--port", "0", "--render-strands", "5000", "--hairs-per-render-strand", "20", "--haptic-priority", "0", "--duration", "30", "--device", "udp:127.0.0.1:0", "--web"])
+        .arg(&web)
+        .args(extra)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let out = child.stdout.take().unwrap();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for l in BufReader::new(out).lines().map_while(Result::ok) {
+            if tx.send(l).is_err() {
+                break;
+            }
+        }
+    });
+    let (mut http, mut udp) = (None, None);
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while http.is_none() || udp.is_none() {
+        let l = rx.recv_timeout(deadline.saturating_duration_since(Instant::now())).expect("serve printed its addresses");
+        if let Some(rest) = l.split("device on udp:").nth(1) {
+            udp = rest.split_whitespace().next().map(str::to_string);
+        }
+        if let Some(rest) = l.split("listening on http://").nth(1) {
+            http = rest.split('/').next().map(str::to_string);
+        }
+    }
+    Server { child, http: http.unwrap(), udp: udp.unwrap(), _lines: rx }
+}
+
+/// Watches the viewer protocol's DEVICE messages (0x89): (seconds since `t0`, state, counters).
+fn watch_device(http: &str, t0: Instant, stop: mpsc::Receiver<()>) -> std::thread::JoinHandle<Vec<(f64, u8, [u32; 6])>> {
+    let stream = TcpStream::connect(http).unwrap();
+    let (mut ws, _) = tungstenite::client(format!("ws://{http}/ws"), stream).unwrap();
+    ws.get_mut().set_read_timeout(Some(Duration::from_millis(200))).unwrap();
+    std::thread::spawn(move || {
+        let mut seen = Vec::new();
+        while stop.try_recv().is_err() {
+            match ws.read() {
+                Ok(tungstenite::Message::Binary(b)) if b.len() == 27 && b[0] == 0x89 => {
+                    let u = |i: usize| u32::from_le_bytes(b[3 + 4 * i..7 + 4 * i].try_into().unwrap());
+                    seen.push((t0.elapsed().as_secs_f64(), b[2], [u(0), u(1), u(2), u(3), u(4), u(5)]));
+                }
+                Ok(_) => {}
+                Err(tungstenite::Error::Io(e)) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
+                Err(e) => panic!("viewer connection: {e}"),
+            }
+        }
+        seen
+    })
+}
+
+/// Rows of device-sim's CSV: t, x, y, z, fx, fy, fz, latency_us, flags.
+fn read_csv(path: &PathBuf) -> Vec<[f64; 9]> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), "t,x,y,z,fx,fy,fz,latency_us,flags");
+    lines.map(|l| l.split(',').map(|x| x.parse::<f64>().unwrap()).collect::<Vec<_>>().try_into().unwrap()).collect()
+}
+
+fn quantile(mut v: Vec<f64>, q: f64) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1]
+}
+
+#[test]
+fn a_simulated_device_combs_the_live_hair_and_faults_are_handled() {
+    // The comb stroke of examples/scenarios/live-comb.toml (in the back hair from 0.3 s to 1.05 s, out by
+    // 1.45 s) streamed at 1 kHz by a rigid simulated Phantom Omni through the default workspace mapping; then,
+    // out of the hair, a NaN pose at 1.6 s, a 10 m teleport at 1.7 s, a duplicate at 1.8 s, and no poses
+    // from 2.0 s for 0.15 s. A viewer watches the DEVICE status.
+    let server = serve(&[]);
+    let dir = scratch("sim");
+    let csv = dir.join("trace.csv");
+    let t0 = Instant::now();
+    let (stop_tx, stop_rx) = mpsc::channel();
+    let watcher = watch_device(&server.http, t0, stop_rx);
+    let started = t0.elapsed().as_secs_f64();
+    let out = bin()
+        .args(["device-sim", "--server", &format!("udp:{}", server.udp), "--rate", "1000", "--duration", "2.6"])
+        .arg("--path")
+        .arg(repo("examples/scenarios/live-comb.toml"))
+        .args(["--nan-at", "1.6", "--teleport-at", "1.7", "--duplicate-at", "1.8", "--pause", "2.0:0.15", "--out"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    std::thread::sleep(Duration::from_millis(300));
+    stop_tx.send(()).unwrap();
+    let status = watcher.join().unwrap();
+    let summary = String::from_utf8_lossy(&out.stdout).to_string();
+    let rows = read_csv(&csv);
+    drop(server);
+
+    // Poses answered, round trip, forces.
+    let flagged = |r: &[f64; 9]| r[8] as u32 & 1 == 1;
+    let poses: Vec<&[f64; 9]> = rows.iter().filter(|r| !flagged(r) && r[1].is_finite() && r[1].abs() < 5.0).collect();
+    let answered: Vec<&&[f64; 9]> = poses.iter().filter(|r| r[7].is_finite()).collect();
+    let latency: Vec<f64> = answered.iter().map(|r| r[7] * 1e-6).collect();
+    let (p50, p99) = (quantile(latency.clone(), 0.5), quantile(latency.clone(), 0.99));
+    let in_hair = answered.iter().filter(|r| r[0] > 0.4 && r[0] < 1.0).map(|r| (r[4] * r[4] + r[5] * r[5] + r[6] * r[6]).sqrt()).fold(0.0, f64::max);
+    let largest = answered.iter().map(|r| (r[4] * r[4] + r[5] * r[5] + r[6] * r[6]).sqrt()).fold(0.0, f64::max);
+    println!("{summary}");
+    println!("poses {} answered {} ({:.1} %), round trip p50 {:.0} us p99 {:.0} us; largest force in the hair {in_hair:.3} N, anywhere {largest:.3} N", poses.len(), answered.len(), 100.0 * answered.len() as f64 / poses.len() as f64, p50 * 1e6, p99 * 1e6);
+    assert!(answered.len() as f64 >= 0.95 * poses.len() as f64, "answered {} of {}", answered.len(), poses.len());
+    assert!(answered.iter().all(|r| r[4].is_finite() && r[5].is_finite() && r[6].is_finite()), "finite forces");
+    assert!(largest <= 3.3 + 1e-9, "within the Omni's 3.3 N: {largest} N");
+    assert!(in_hair > 0.05, "the comb in the hair is felt: {in_hair} N");
+    // A loose bound: answers are fresh, not queued (the 2 ms p99 figure on an idle machine is in
+    // bench/RESULTS.md; timing targets are not asserted in tests on a shared machine).
+    assert!(p99 < 0.05, "round trip p99 {p99} s");
+
+    // The NaN pose, the 10 m teleport and the duplicate: answered with the rejected flag and zero force.
+    let rejected: Vec<&[f64; 9]> = rows.iter().filter(|r| flagged(r)).collect();
+    for (what, t) in [("NaN", 1.6), ("teleport", 1.7), ("duplicate", 1.8)] {
+        let r = rejected.iter().find(|r| (r[0] - t).abs() < 0.01).unwrap_or_else(|| panic!("the {what} pose at {t} s was answered with the flag: {rejected:?}"));
+        assert_eq!([r[4], r[5], r[6]], [0.0; 3], "{what}: zero force");
+    }
+    assert!(rows.iter().any(|r| r[1].is_nan() && flagged(r)), "the NaN row");
+    assert!(rows.iter().any(|r| r[1].abs() > 5.0 && flagged(r)), "the teleport row");
+    assert_eq!(rejected.len(), 3, "nothing else rejected: {rejected:?}");
+
+    // The pause: no poses for 150 ms. The viewer saw the device connected during the stroke, lost during the
+    // pause, and connected again after it.
+    let at = |t: f64| started + t;
+    let state_in = |a: f64, b: f64| status.iter().filter(|s| s.0 >= at(a) && s.0 <= at(b)).map(|s| s.1).collect::<Vec<_>>();
+    println!("device status seen by the viewer: {:?}", status.iter().map(|s| (format!("{:.2}", s.0 - started), s.1)).collect::<Vec<_>>());
+    assert!(state_in(0.3, 1.5).contains(&1), "connected during the stroke");
+    assert!(state_in(2.05, 2.2).contains(&2), "lost during the pause");
+    assert!(state_in(2.25, 2.6).contains(&1), "connected after the pause");
+    let last = status.last().unwrap().2;
+    assert_eq!(last[4], 2, "lost twice: the pause and the end of the stream: {last:?}");
+    assert_eq!(last[1], 3, "three rejected poses: {last:?}");
+}

@@ -46,7 +46,7 @@ pub struct Entanglement {
 
 impl Default for Entanglement {
     fn default() -> Self {
-        Self { span: 8e-3, surface_tension: 0.072 }
+        Self { span: 6.6e-3, surface_tension: 0.072 }
     }
 }
 

@@ -54,7 +54,8 @@ pub struct StepResult {
     /// adds its compliant response `g = 1 / (h (W_nn + R))` (the strand point's mobility `W_nn` in the
     /// prepared step, [`Strand::point_mobility`], and the solver's force mixing `R`) along its normal,
     /// `g n n^T`, and the friction's share `mu g (I - n n^T)` across it. Coupling between contacts is left
-    /// out. Zero with the paper's model. Used to couple the tool proxy implicitly
+    /// out, and so are the entanglement drags ([`Entanglement`]: a sliding Coulomb drag does not change with
+    /// the speed). Zero with the paper's model. Used to couple the tool proxy implicitly
     /// (`haptics::coupling::HairReaction`).
     pub damping: Matrix3<f64>,
     /// Contacts found this step.
@@ -476,7 +477,7 @@ impl LocalInteraction {
                             let r_t = self.shape.capsules.get(c.primitive).map_or(0.0, |cap| cap.radius);
                             let distance = r_t + reach - c.depth;
                             let share = crate::entanglement::parted_share(distance, wisp_radius, r_t + r_f);
-                            let max_force = friction * share * e.parting_load(ei, r_f, r_t, w);
+                            let max_force = friction * share * e.parting_load(ei, r_f, r_t, w, strand.model.length - c.s);
                             if max_force > 0.0 {
                                 cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Drag { max_force }, velocity: c.tool_velocity });
                                 levers.push(c.lever);

@@ -72,7 +72,7 @@ pub struct WetnessModel {
     /// *effective* coefficient, calibrated on the tress scenarios (docs/scenarios.md). Wet combing of a 4.75 g
     /// tress takes about 7.5 times the dry force (0.9 N / 0.12 N, J. Soc. Cosmet. Chem. 24, 1973); part of that
     /// rise is the capillary bridges and the softer wet fibres of the comb's drag (`crate::entanglement`), the
-    /// rest is put here: 6.0 gives the four Table 1 tresses wet/dry peak ratios of 5.6-8.0. Single-fibre wet/dry
+    /// rest is put here: 6.0 gives the four Table 1 tresses wet/dry peak ratios of 5.0-6.7. Single-fibre wet/dry
     /// friction ratios are smaller (about 1.5-2), so this still lumps wet clumping in (docs/wetness.md).
     pub friction_ratio: f64,
 }

@@ -32,9 +32,13 @@ pub struct SessionParams {
     pub haptic_rate_hz: f64,
     /// Global (lattice) step rate, Hz. Default 100.
     pub global_rate_hz: f64,
-    /// Most guide strands simulated at once near the tool (the chosen ones and those still relaxing after
-    /// they left, `crate::haptic` active set). Default 48: enough strands around a comb for a continuous
-    /// force, within the 1 ms haptic step (bench/RESULTS.md).
+    /// Most guide strands chosen near the tool's path at once (`crate::haptic` active set). Default 48: enough
+    /// strands around a comb for a continuous force (issue 12).
+    pub max_chosen: usize,
+    /// Most guide strands simulated at once: the chosen ones and those still relaxing after they left (the
+    /// relaxing ones that left first are let go first beyond it; strands let go are no longer simulated while
+    /// their shown displacement fades out), >= `max_chosen`. Bounds the haptic step's cost. Default 64
+    /// (within the 1 ms haptic step: bench/RESULTS.md).
     pub max_active: usize,
     /// A guide joins the active set when its settled shape comes within this distance of the tool's shape
     /// (its capsules) on its way over the next `HapticParams::lookahead` s, m. Default 0.03.
@@ -76,7 +80,7 @@ pub struct SessionParams {
 
 impl Default for SessionParams {
     fn default() -> Self {
-        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_active: 48, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0 }, input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default() }
+        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 64, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0 }, input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default() }
     }
 }
 
@@ -90,8 +94,8 @@ impl SessionParams {
         if !(self.global_rate_hz > 0.0 && self.global_rate_hz <= 1000.0) {
             return p(format!("global_rate_hz must be in (0, 1000], got {}", self.global_rate_hz));
         }
-        if self.max_active == 0 {
-            return p("max_active must be > 0".into());
+        if self.max_chosen == 0 || self.max_active < self.max_chosen {
+            return p(format!("max_chosen must be > 0 and max_active >= max_chosen, got {} and {}", self.max_chosen, self.max_active));
         }
         if !(self.activation_radius > 0.0 && self.wetting_rate >= 0.0 && self.drying_rate >= 0.0 && self.wetting_rate.is_finite() && self.drying_rate.is_finite()) {
             return p(format!("activation_radius must be > 0 and wetting_rate, drying_rate finite and >= 0: {self:?}"));
@@ -121,6 +125,10 @@ pub struct HapticParams {
     /// The active set is chosen again when the tool has moved this far since the last choice, m.
     /// Default 0.01.
     pub reselect_distance: f64,
+    /// Haptic steps one choice of the active set is spread over (each step scans an equal share of the guides,
+    /// so that no step pays for the whole scan; `crate::haptic` active set), >= 1. Default 10 (10 ms at 1 kHz,
+    /// far less than `lookahead`).
+    pub choice_steps: usize,
     /// The clip pins the strand point nearest its jaws if it is within this distance, m. Default 0.01.
     pub clip_reach: f64,
     /// Displacements of the local strands from their references larger than this are not sent to the
@@ -167,11 +175,14 @@ pub struct HapticParams {
     /// Share of the rest shape a wet set holds once dry (`strand::styling::SetModel::hydrogen_share`),
     /// dimensionless in [0, 1]. Default 0.8.
     pub hydrogen_share: f64,
+    /// The local strands touch each other (contact and Coulomb friction, `tools::hair_contact`; each guide a
+    /// wisp of the real hairs it stands for, `HapticCore::hair_contact`). Default false (see bench/RESULTS.md).
+    pub hair_contact: bool,
 }
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { reselect_distance: 0.01, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8 }
+        Self { reselect_distance: 0.01, choice_steps: 10, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: false }
     }
 }
 
@@ -206,8 +217,8 @@ impl HapticParams {
         if !(0.0..1.0).contains(&self.combing_ease_reduction) {
             return p(format!("haptic.combing_ease_reduction must be in [0, 1), got {}", self.combing_ease_reduction));
         }
-        if self.dryer_pieces == 0 || self.cut_pieces == 0 {
-            return p("haptic.dryer_pieces and haptic.cut_pieces must be > 0".into());
+        if self.dryer_pieces == 0 || self.cut_pieces == 0 || self.choice_steps == 0 {
+            return p(format!("haptic.dryer_pieces, haptic.cut_pieces and haptic.choice_steps must be > 0, got {}, {}, {}", self.dryer_pieces, self.cut_pieces, self.choice_steps));
         }
         if !(0.0..=1.0).contains(&self.hydrogen_share) {
             return p(format!("haptic.hydrogen_share must be in [0, 1], got {}", self.hydrogen_share));

@@ -86,6 +86,8 @@ pub struct StepTimings {
     pub free: f64,
     /// Strands that had contacts this step.
     pub touched_strands: usize,
+    /// Of `constrained` and `free`: finding the strands' body contacts, s.
+    pub body: f64,
 }
 
 /// A patch of strands, a tool, and the contact between them.
@@ -130,6 +132,8 @@ pub struct LocalInteraction {
     surface_torques: Vec<Vec<PointForce>>,
     pieces: Vec<Piece>,
     bvh: Bvh,
+    /// The strands were replaced: build the tree anew at the next step rather than refit it.
+    rebuild_tree: bool,
     /// Workspace: which strands' steps were prepared this step.
     prepared: Vec<bool>,
     /// Workspace: contacts of this step.
@@ -162,9 +166,35 @@ impl LocalInteraction {
             surface_torques,
             pieces,
             bvh,
+            rebuild_tree: false,
             prepared,
             contacts: Vec::new(),
         }
+    }
+
+    /// Replaces the strands by `strands`, keeping the workspaces (the batches' solver storage, the contact
+    /// buffers): strand `i` of the new set was strand `from[i]` of the old one (its pending surface torques and
+    /// loads and its wetness move with it), or is new (`None`, dry). The pins are released (they name old strands). The collision
+    /// tree is rebuilt at the next step. Cheaper than a new interaction when a few strands join or leave.
+    pub fn set_strands(&mut self, strands: Vec<Strand>, from: &[Option<usize>]) {
+        let mut old = std::mem::take(&mut self.surface_torques);
+        self.surface_torques = (0..strands.len()).map(|i| match from.get(i).copied().flatten() {
+            Some(j) if j < old.len() => std::mem::take(&mut old[j]),
+            _ => Vec::new(),
+        }).collect();
+        if !self.wetness.is_empty() {
+            let wet = std::mem::take(&mut self.wetness);
+            self.wetness = (0..strands.len()).map(|i| from.get(i).copied().flatten().and_then(|j| wet.get(j).copied()).unwrap_or(0.0)).collect();
+        }
+        self.prepared.clear();
+        self.prepared.resize(strands.len(), false);
+        self.lane_of.clear();
+        self.lane_of.resize(strands.len(), None);
+        self.pins.clear();
+        self.strands = strands;
+        self.rebuild_tree = true;
+        // The hair-hair contacts' velocities come from the last step's chords of the same strands.
+        self.hair_finder = HairContactFinder::new();
     }
 
     /// Prepares the steps of the reduced, linearly implicit strands in batches of four strands of equal size
@@ -364,12 +394,13 @@ impl LocalInteraction {
         }
         let radius = Self::hair_radius(&self.strands);
         let reach = self.reach_radius(radius);
-        if self.pieces.len() == self.bvh.len() && self.bvh.margin() == reach {
+        if self.pieces.len() == self.bvh.len() && self.bvh.margin() == reach && !self.rebuild_tree {
             self.bvh.refit(&self.pieces);
         } else {
             // A strand changed its number of pieces (cut by the scissors, or replaced), or the reach changed: new
             // tree.
             self.bvh = Bvh::build(&self.pieces, reach);
+            self.rebuild_tree = false;
         }
         let t_sample = clock.elapsed().as_secs_f64();
         timings.sample = t_sample - t_dynamics;
@@ -389,6 +420,14 @@ impl LocalInteraction {
         let t_detect = clock.elapsed().as_secs_f64();
         timings.detect = t_detect - t_sample;
         let mut result = StepResult { report, hair_pairs, ..Default::default() };
+        // Where each strand's pieces start (they are contiguous per strand, in strand order).
+        let mut first_piece = vec![self.pieces.len(); self.strands.len() + 1];
+        for (i, p) in self.pieces.iter().enumerate().rev() {
+            first_piece[p.strand] = i;
+        }
+        for k in (0..self.strands.len()).rev() {
+            first_piece[k] = first_piece[k].min(first_piece[k + 1]);
+        }
         let entanglement = if constraint { self.entanglement } else { None };
         if let Some(e) = entanglement {
             e.validate()?;
@@ -402,11 +441,13 @@ impl LocalInteraction {
             let pinned = self.pins.iter().any(|p| p.0 == k);
             // Body contacts (constraint model): sampled points inside the body or within a hair's radius of it.
             let mut resting: Vec<PointConstraint> = Vec::new();
+            let t_body = clock.elapsed().as_secs_f64();
             if let (Some((body, threshold)), ForceModel::Constraint { .. }) = (&self.body, &self.model) {
-                // Each piece's start, and the strand's last end (a piece's end is the next one's start).
-                let pieces = &self.pieces;
-                let points = pieces.iter().enumerate().filter(|(_, p)| p.strand == k).flat_map(|(i, p)| {
-                    let last = pieces.get(i + 1).map_or(true, |n| n.strand != k);
+                // Each piece's start, and the strand's last end (a piece's end is the next one's start). The
+                // pieces are contiguous per strand, in strand order.
+                let pieces = &self.pieces[first_piece[k]..first_piece[k + 1]];
+                let points = pieces.iter().enumerate().flat_map(|(i, p)| {
+                    let last = i + 1 == pieces.len();
                     std::iter::once((p.s, p.a)).chain(last.then_some((p.s + p.length, p.b)))
                 });
                 for (s, x) in points {
@@ -419,6 +460,7 @@ impl LocalInteraction {
                     }
                 }
             }
+            timings.body += clock.elapsed().as_secs_f64() - t_body;
             // Hair-hair contacts of this strand (their impulses are not the tool's either).
             if hair_on {
                 resting.extend(self.hair_finder.constraints(k));

@@ -7,7 +7,7 @@ use crate::params::HapticParams;
 use crate::scene::Scene;
 use nalgebra::Vector3;
 use strand::{HairType, Strand};
-use tools::interaction::{ForceModel, LocalInteraction};
+use tools::interaction::{ForceModel, HairContact, LocalInteraction};
 
 /// `it` with the scene's body (head, neck, shoulders; the live head frame is the world frame) for its strands
 /// to rest on.
@@ -49,14 +49,29 @@ impl HapticCore {
         ForceModel::Constraint { friction: params.combing_friction(h.friction_coefficient(), ease), options: Default::default() }
     }
 
+    /// Hair-hair contact between the local strands (`tools::hair_contact`; None when
+    /// `HapticParams::hair_contact` is off): each guide a wisp of [`HapticCore::hairs_per_guide`] fibres
+    /// (`HairContact`'s defaults otherwise), its dry fibre-fibre friction raised by the wetness `wetness` (in
+    /// [0, 1]; the wetness model's one friction law) and lowered by the combing ease (the one combing-ease
+    /// law), as the tool's friction and as the tress scenarios' (`scenario::patch`).
+    pub(crate) fn hair_contact(&self, wetness: f64) -> Option<HairContact> {
+        if !self.params.haptic.hair_contact {
+            return None;
+        }
+        let d = HairContact::default();
+        let wet = self.wet_model.friction(d.friction, wetness.clamp(0.0, 1.0)).unwrap_or(d.friction);
+        Some(HairContact { fibres: self.hairs_per_guide(), friction: self.params.haptic.combing_friction(wet, self.combing_ease), ..d })
+    }
+
     /// A new local interaction over `strands` with the selected tool's shape (built once) and the current
-    /// hair's contact law; the body the strands rest on moves over from the previous interaction (it is
+    /// hair's contact laws (tool on hair, hair on hair); the body the strands rest on moves over from the previous interaction (it is
     /// not copied in the haptic loop).
     pub(crate) fn renew_interaction(&mut self, strands: Vec<Strand>) {
         let body = self.interaction.body.take();
         let model = Self::force_model(&self.params.haptic, &self.hair_type, self.combing_ease);
         let mut it = LocalInteraction::new(strands, self.shapes[self.tool as usize].clone(), self.interaction.pose, model);
         it.body = body;
+        it.hair_contact = self.hair_contact(0.0);
         self.interaction = it;
     }
 }

@@ -11,7 +11,7 @@ impl HapticCore {
     /// The wetness model's material and friction for the active strands, from the guides' wetness in the
     /// lattice snapshot (once per lattice version, and after the active set changes): a wet strand is
     /// heavier, softer, and the tool's friction grows (`tools::wetness::WetnessModel`). The friction of the
-    /// interaction follows the active guides' mean wetness.
+    /// interaction (the tool's and the hair-hair contact's) follows the active guides' mean wetness.
     pub(crate) fn apply_wetness(&mut self, lattice: &LatticeSnapshot) {
         if lattice.version == self.wet_version || lattice.wetness.len() != self.wetness.len() {
             return;
@@ -42,6 +42,7 @@ impl HapticCore {
         if let Ok(m) = self.wet_model.wet(&dry, h.friction_coefficient(), section.area(), mean) {
             self.interaction.model = ForceModel::Constraint { friction: self.params.haptic.combing_friction(m.friction, self.combing_ease), options: Default::default() };
         }
+        self.interaction.hair_contact = self.hair_contact(mean);
     }
 }
 

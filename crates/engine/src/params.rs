@@ -244,6 +244,63 @@ impl HapticParams {
     }
 }
 
+/// The lattice around the live hair (`Scene::builtin`, `Scene::from_curves`): soft, sag-free, its springs
+/// proportional to the hair it carries.
+///
+/// Each render strand is one hair, so the lattice carries the real hair's mass, and its springs stand for
+/// the hair's collective resistance, which grows with the number of hairs: every stiffness and damping is
+/// given per kilogram of the mean node mass m (the hair's mass over the nodes), k = rate x m, so the motion
+/// (sag before compensation, swing, settling) does not depend on how many strands are drawn. The rest is
+/// made sag-free (`lattice::sag_free`): the groomed shape is the equilibrium under gravity, with the weight
+/// carried by pre-stressed springs. The rates were chosen by measurement (`cargo run --release -p
+/// coiffure-engine --example global_motion`, docs/global.md "A soft lattice"): about 170 times softer than
+/// `LatticeParams::default` for the 20k-strand scene, so that a dryer, a comb and a head turn move the
+/// hairstyle by centimetres, with damping that settles it in about 2 s without oscillating. SI units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HairLatticeParams {
+    /// Stiffness of each 26-neighbour stiffener per kg of mean node mass, N/m/kg = 1/s^2. Default 3600.
+    pub stiffener_rate: f64,
+    /// Damping of each stiffener per kg of mean node mass, 1/s. Default 60.
+    pub stiffener_damping_rate: f64,
+    /// Stiffness of each bending stiffener (second neighbours) per kg of mean node mass, 1/s^2. Default 900.
+    pub bending_rate: f64,
+    /// Damping of each bending stiffener per kg of mean node mass, 1/s. Default 15.
+    pub bending_damping_rate: f64,
+    /// Stiffness of a fully attached node's spring to the head per kg of mean node mass, 1/s^2. Default 900.
+    pub attachment_rate: f64,
+    /// Damping of a fully attached node per kg of mean node mass (on its absolute velocity: it also stands
+    /// for the air's drag on the hair), 1/s. Default 90.
+    pub attachment_damping_rate: f64,
+    /// Attachment weight of the nodes farthest from the head (dimensionless, [0, 1]): the weight falls from 1
+    /// on the body over three head radii to this. Default 0.03 (the hair's own springs, not the head, hold
+    /// the far hair).
+    pub min_attachment: f64,
+    /// Make the rest sag-free. Default true.
+    pub sag_free: bool,
+}
+
+impl Default for HairLatticeParams {
+    fn default() -> Self {
+        Self { stiffener_rate: 3600.0, stiffener_damping_rate: 60.0, bending_rate: 900.0, bending_damping_rate: 15.0, attachment_rate: 900.0, attachment_damping_rate: 90.0, min_attachment: 0.03, sag_free: true }
+    }
+}
+
+impl HairLatticeParams {
+    /// The lattice parameters (the other fields `LatticeParams::default`'s) for a mean node mass `mean_mass`, kg.
+    pub fn lattice(&self, mean_mass: f64) -> lattice::lattice::LatticeParams {
+        let m = mean_mass;
+        lattice::lattice::LatticeParams {
+            stiffener_stiffness: self.stiffener_rate * m,
+            stiffener_damping: self.stiffener_damping_rate * m,
+            bending_stiffness: self.bending_rate * m,
+            bending_damping: self.bending_damping_rate * m,
+            attachment_stiffness: self.attachment_rate * m,
+            attachment_damping: self.attachment_damping_rate * m,
+            ..Default::default()
+        }
+    }
+}
+
 /// Constants of the global layer's step (`crate::global`) and of the tools as the global layer sees them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GlobalParams {

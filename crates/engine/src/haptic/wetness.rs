@@ -22,8 +22,11 @@ impl HapticCore {
         let (Ok(dry), Ok(section)) = (h.material(), h.section()) else { return };
         let mut mean = 0.0;
         let set_model = SetModel { hydrogen_share: self.params.haptic.hydrogen_share };
+        self.interaction.wetness.clear();
         for (slot, &g) in self.active.iter().enumerate() {
             let w = self.wetness[g] as f64;
+            // The capillary share of the tool's drag (`tools::entanglement`) follows each guide's wetness.
+            self.interaction.wetness.push(w);
             mean += w / self.active.len() as f64;
             let s = &mut self.interaction.strands[slot];
             if let Ok(m) = self.wet_model.wet(&dry, h.friction_coefficient(), section.area(), w) {

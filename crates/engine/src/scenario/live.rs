@@ -57,11 +57,14 @@ pub struct LiveSpec {
     pub combing_ease: f64,
     /// Initial wetness of every guide, in [0, 1]. Default 0.
     pub wetness: f64,
+    /// The simulated strands touch each other (`HapticParams::hair_contact`, the live session's own switch).
+    /// Default: the session's default.
+    pub hair_contact: bool,
 }
 
 impl Default for LiveSpec {
     fn default() -> Self {
-        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), curliness: 0.0, combing_ease: 0.0, wetness: 0.0 }
+        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), curliness: 0.0, combing_ease: 0.0, wetness: 0.0, hair_contact: crate::params::HapticParams::default().hair_contact }
     }
 }
 
@@ -198,7 +201,8 @@ impl LiveScenario {
     /// `coiffure serve --record`, replayable by [`crate::replay::replay`]).
     pub fn run_recorded(&self, scene: Arc<Scene>, record: bool) -> Result<(ForceTrace, LiveSummary, Option<Record>), ScenarioError> {
         let (profile, tool, hair) = self.validate()?;
-        let params = SessionParams { profile, ..SessionParams::default() };
+        let mut params = SessionParams { profile, ..SessionParams::default() };
+        params.haptic.hair_contact = self.live.hair_contact;
         let sim = |e: crate::error::SessionError| ScenarioError::Invalid(format!("live session: {e}"));
         let mut ls = Lockstep::new(scene.clone(), params, params.haptic_rate_hz).map_err(sim)?;
         ls.global.set_wetness(self.live.wetness);

@@ -54,7 +54,8 @@ pub struct StepResult {
     /// adds its compliant response `g = 1 / (h (W_nn + R))` (the strand point's mobility `W_nn` in the
     /// prepared step, [`Strand::point_mobility`], and the solver's force mixing `R`) along its normal,
     /// `g n n^T`, and the friction's share `mu g (I - n n^T)` across it. Coupling between contacts is left
-    /// out. Zero with the paper's model. Used to couple the tool proxy implicitly
+    /// out, and so are the entanglement drags ([`Entanglement`]: a sliding Coulomb drag does not change with
+    /// the speed). Zero with the paper's model. Used to couple the tool proxy implicitly
     /// (`haptics::coupling::HairReaction`).
     pub damping: Matrix3<f64>,
     /// Contacts found this step.
@@ -504,18 +505,21 @@ impl LocalInteraction {
                     let w = self.wetness.get(k).copied().unwrap_or(0.0);
                     // A wisp of many fibres parts around the capsule (the drag) instead of being pushed aside.
                     let parting = entanglement.is_some() && wisp_radius > radius;
-                    for c in &mine {
+                    for (i, c) in mine.iter().enumerate() {
                         let fibre_depth = c.depth - (reach - radius);
                         if fibre_depth > 0.0 && !parting {
                             cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Contact { normal: c.normal, depth: fibre_depth, friction }, velocity: c.tool_velocity });
                             levers.push(c.lever);
                             touching.push(Some(c));
                         }
-                        if let Some(e) = entanglement {
+                        // One drag per crossing of a capsule and the wisp: the deepest of the strand's contacts
+                        // with that capsule (neighbouring pieces near the crossing are found too).
+                        let deepest = || mine.iter().enumerate().all(|(j, o)| o.primitive != c.primitive || o.depth < c.depth || (o.depth == c.depth && j >= i));
+                        if let (Some(e), true) = (entanglement, deepest()) {
                             let r_t = self.shape.capsules.get(c.primitive).map_or(0.0, |cap| cap.radius);
                             let distance = r_t + reach - c.depth;
                             let share = crate::entanglement::parted_share(distance, wisp_radius, r_t + r_f);
-                            let max_force = friction * share * e.parting_load(ei, r_f, r_t, w);
+                            let max_force = friction * share * e.parting_load(ei, r_f, r_t, w, strand.model.length - c.s);
                             if max_force > 0.0 {
                                 cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Drag { max_force }, velocity: c.tool_velocity });
                                 levers.push(c.lever);

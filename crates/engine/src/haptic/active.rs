@@ -338,16 +338,21 @@ impl HapticCore {
         self.faded.retain(|f| f.weight > 0.0);
     }
 
-    /// The active strands' roots move with the head, which is rigid (and fixed in the scene's frame): each
-    /// root is held at its guide's root on the scalp, at rest. Not with the lattice: the tool's own
+    /// The active strands' roots move with the head, which is rigid (at the pose `HapticCore::head`): each
+    /// root is held at its guide's root on the scalp, moving and turning with the head. Not with the lattice: the tool's own
     /// repelling obstacle deforms the lattice, and roots following it sank into the head and were kicked out.
     pub(crate) fn roots_follow(&mut self, dt: f64) {
+        let head = self.head;
         for (slot, &g) in self.active.iter().enumerate() {
-            let target = self.scene.guides[g].state.root.position;
+            let groomed = &self.scene.guides[g].state.root;
+            let target = head * nalgebra::Point3::from(groomed.position);
+            let turn = head.rotation.to_rotation_matrix().into_inner() * groomed.rotation;
             let root = &mut self.interaction.strands[slot].state.root;
-            // A root that is elsewhere (a state from before) is brought back over one step.
-            root.velocity = (target - root.position) / dt;
-            root.angular_velocity = Vector3::zeros();
+            // A root that is elsewhere (a state from before, or a head that moved) is brought back over one
+            // step, turning with the head.
+            root.velocity = (target.coords - root.position) / dt;
+            let spin = nalgebra::Rotation3::from_matrix_unchecked(turn * root.rotation.transpose()).scaled_axis();
+            root.angular_velocity = if spin.iter().all(|x| x.is_finite()) { spin / dt } else { Vector3::zeros() };
             root.acceleration = Vector3::zeros();
         }
     }

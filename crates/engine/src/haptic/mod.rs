@@ -96,6 +96,9 @@ pub struct HapticCore {
     pub(crate) last_contacts: u32,
     pub(crate) last_select: Option<Vector3<f64>>,
     pub(crate) clipped: bool,
+    /// The head pose (head frame to world): the roots and the body follow it. Identity unless a scenario
+    /// or the viewer moves the head ([`HapticCore::set_head_pose`]).
+    pub(crate) head: nalgebra::Isometry3<f64>,
     /// Rejected device readings (NaN, teleport).
     pub rejected: u64,
     /// Strand steps that failed (state kept).
@@ -129,6 +132,27 @@ pub struct StepPhases {
 }
 
 impl HapticCore {
+    /// Moves the head to `head` (head frame to world): the simulated strands' roots follow it from the next
+    /// step (`roots_follow`), and the body they rest on and the tool keeps out of moves with it. A pose with
+    /// a non-finite part is ignored (returns false). The tool's device positions stay in the world frame.
+    pub fn set_head_pose(&mut self, head: nalgebra::Isometry3<f64>) -> bool {
+        let ok = head.translation.vector.iter().chain(head.rotation.coords.iter()).all(|x| x.is_finite());
+        if ok && head != self.head {
+            self.head = head;
+            if let Some((body, _)) = self.interaction.body.as_mut() {
+                for (b, rest) in body.balls.iter_mut().zip(&self.scene.head.balls) {
+                    b.centre = head * rest.centre;
+                }
+            }
+        }
+        ok
+    }
+
+    /// The head pose now (head frame to world).
+    pub fn head_pose(&self) -> nalgebra::Isometry3<f64> {
+        self.head
+    }
+
     /// At rest with the comb selected.
     pub fn new(scene: Arc<Scene>, params: SessionParams) -> Result<Self, SessionError> {
         params.validate()?;
@@ -143,7 +167,7 @@ impl HapticCore {
         let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
         Ok(Self {
             scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), choice: None, max_tip_speed: 0.0, interaction,
-            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, rejected: 0, failed: 0, timings: StepPhases::default(),
+            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, head: nalgebra::Isometry3::identity(), rejected: 0, failed: 0, timings: StepPhases::default(),
         })
     }
 
@@ -175,6 +199,12 @@ impl HapticCore {
                 self.curliness = c;
                 self.combing_ease = e;
                 self.renew_interaction(Vec::new());
+            }
+            Command::SetHead { position, rotation } => {
+                // Out of range or non-finite: ignored (the server checks and answers before).
+                if let Some(head) = crate::command::head_pose(&position, &rotation) {
+                    self.set_head_pose(head);
+                }
             }
             Command::Reset => {
                 if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, self.params.haptic.min_air_drag) {
@@ -285,7 +315,7 @@ impl HapticCore {
 
     /// What the global layer needs of the tool now.
     pub fn tool_input(&self) -> ToolInput {
-        ToolInput { tool: self.tool, present: self.device.is_some(), position: self.coupling.proxy, rotation: self.interaction.pose.rotation, pressed: self.was_pressed, cuts: self.cuts }
+        ToolInput { tool: self.tool, present: self.device.is_some(), position: self.coupling.proxy, rotation: self.interaction.pose.rotation, pressed: self.was_pressed, cuts: self.cuts, head: self.head }
     }
 
     /// Fills `out` with what the viewer needs.

@@ -7,7 +7,7 @@ use crate::params::HapticParams;
 use crate::scene::Scene;
 use nalgebra::Vector3;
 use strand::{HairType, Strand};
-use tools::interaction::{ForceModel, HairContact, LocalInteraction};
+use tools::interaction::{Entanglement, ForceModel, HairContact, LocalInteraction};
 
 /// `it` with the scene's body (head, neck, shoulders; the live head frame is the world frame) for its strands
 /// to rest on.
@@ -72,6 +72,9 @@ impl HapticCore {
         let mut it = LocalInteraction::new(strands, self.shapes[self.tool as usize].clone(), self.interaction.pose, model);
         it.body = body;
         it.hair_contact = self.hair_contact(0.0);
+        if self.params.haptic.entanglement {
+            it.entanglement = Some(Entanglement::default());
+        }
         self.interaction = it;
     }
 }

@@ -127,8 +127,10 @@ pub struct StepPhases {
     pub interaction: f64,
     /// 8: tracking, s.
     pub tracking: f64,
-    /// The local interaction's own self.timings.
+    /// The local interaction's own phases.
     pub local: tools::interaction::StepTimings,
+    /// Hair-hair contacts found (pairs of chords, before each strand keeps its deepest).
+    pub hair_pairs: usize,
 }
 
 impl HapticCore {
@@ -277,6 +279,7 @@ impl HapticCore {
         match self.interaction.step(dt, pose) {
             Ok(res) => {
                 self.timings.local = res.timings;
+                self.timings.hair_pairs = res.hair_pairs;
                 let n = self.hairs_per_guide();
                 self.hair_force = HairReaction { force: res.force * n, damping: res.damping * n, velocity: self.coupling.proxy_velocity };
                 self.last_contacts = res.contacts.len() as u32;

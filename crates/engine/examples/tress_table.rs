@@ -4,8 +4,8 @@
 //! Run from the repository root:
 //! `cargo run --release -p coiffure-engine --example tress_table [-- [ease] [key=value]...]`
 //! With `dump`, each run's force trace is written to `/tmp/tress-NAME-WETNESS.csv`. With `ease`, also H1 dry at combing ease 0, 0.5 and 1. `key=value` overrides a `[patch]` or
-//! `[tool]` number of every run (`packing=0.4`, `hair_friction=0.3`, `strands=32`, `segments=16`, ...), for
-//! calibration experiments.
+//! `[tool]` number of every run (`packing=0.4`, `hair_friction=0.3`, `strands=32`, `segments=16`,
+//! `entanglement_span=0.008`, `entanglement=0`, ...), for calibration experiments.
 
 use engine::scenario::{run, ScenarioFile, ScenarioSummary};
 
@@ -16,7 +16,9 @@ fn load(name: &str, overrides: &[(String, f64)], wetness: f64, ease: f64) -> Sce
     let patch = table.get_mut("patch").and_then(|p| p.as_table_mut()).expect("[patch]");
     patch.insert("wetness".into(), toml::Value::Float(wetness));
     for (k, v) in overrides {
-        if matches!(k.as_str(), "strands" | "segments") {
+        if matches!(k.as_str(), "entanglement" | "hair_contact") {
+            patch.insert(k.clone(), toml::Value::Boolean(*v != 0.0));
+        } else if matches!(k.as_str(), "strands" | "segments") {
             patch.insert(k.clone(), toml::Value::Integer(*v as i64));
         } else if !matches!(k.as_str(), "friction" | "combing_ease") {
             patch.insert(k.clone(), toml::Value::Float(*v));
@@ -34,8 +36,8 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let overrides: Vec<(String, f64)> = args.iter().filter_map(|a| a.split_once('=').map(|(k, v)| (k.to_string(), v.parse().expect("a number")))).collect();
     println!("overrides: {overrides:?}");
-    println!("| hair type | wetness | peak | median | p90 | continuity (> 2 % of peak) | largest step change (share of peak) | wet/dry peak | hair contact distance | wall time |");
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("| hair type | wetness | peak | median | p90 | continuity (> 2 % of peak) | largest step change (share of peak) | wet/dry peak | hair contact distance | clamped steps | wall time |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     let dump = args.iter().any(|a| a == "dump");
     let summary = |f: &ScenarioFile| {
         let o = run(f).unwrap();
@@ -58,7 +60,7 @@ fn main() {
                 dry_peak = m.peak_n;
             }
             println!(
-                "| {} | {w} | {:.3} N | {:.3} N | {:.3} N | {:.0} % | {:.3} N ({:.0} %) | {} | {:.2} mm | {:.1} s |",
+                "| {} | {w} | {:.3} N | {:.3} N | {:.3} N | {:.0} % | {:.3} N ({:.0} %) | {} | {:.2} mm | {} | {:.1} s |",
                 name.trim_start_matches("comb-").to_uppercase(),
                 m.peak_n,
                 m.median_n,
@@ -68,6 +70,7 @@ fn main() {
                 100.0 * m.max_step_change_rel,
                 if w > 0.0 { format!("{:.2}", m.peak_n / dry_peak) } else { "-".into() },
                 s.hair_contact_distance * 1e3,
+                s.clamped_steps,
                 s.wall_time_s
             );
         }

@@ -32,9 +32,13 @@ pub struct SessionParams {
     pub haptic_rate_hz: f64,
     /// Global (lattice) step rate, Hz. Default 100.
     pub global_rate_hz: f64,
-    /// Most guide strands simulated at once near the tool (the chosen ones and those still relaxing after
-    /// they left, `crate::haptic` active set). Default 48: enough strands around a comb for a continuous
-    /// force, within the 1 ms haptic step (bench/RESULTS.md).
+    /// Most guide strands chosen near the tool's path at once (`crate::haptic` active set). Default 48: enough
+    /// strands around a comb for a continuous force (issue 12).
+    pub max_chosen: usize,
+    /// Most guide strands simulated at once: the chosen ones and those still relaxing after they left (the
+    /// relaxing ones that left first are let go first beyond it; strands let go are no longer simulated while
+    /// their shown displacement fades out), >= `max_chosen`. Bounds the haptic step's cost. Default 64
+    /// (within the 1 ms haptic step: bench/RESULTS.md).
     pub max_active: usize,
     /// A guide joins the active set when its settled shape comes within this distance of the tool's shape
     /// (its capsules) on its way over the next `HapticParams::lookahead` s, m. Default 0.03.
@@ -76,7 +80,7 @@ pub struct SessionParams {
 
 impl Default for SessionParams {
     fn default() -> Self {
-        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_active: 48, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0 }, input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default() }
+        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 64, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0 }, input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default() }
     }
 }
 
@@ -90,8 +94,8 @@ impl SessionParams {
         if !(self.global_rate_hz > 0.0 && self.global_rate_hz <= 1000.0) {
             return p(format!("global_rate_hz must be in (0, 1000], got {}", self.global_rate_hz));
         }
-        if self.max_active == 0 {
-            return p("max_active must be > 0".into());
+        if self.max_chosen == 0 || self.max_active < self.max_chosen {
+            return p(format!("max_chosen must be > 0 and max_active >= max_chosen, got {} and {}", self.max_chosen, self.max_active));
         }
         if !(self.activation_radius > 0.0 && self.wetting_rate >= 0.0 && self.drying_rate >= 0.0 && self.wetting_rate.is_finite() && self.drying_rate.is_finite()) {
             return p(format!("activation_radius must be > 0 and wetting_rate, drying_rate finite and >= 0: {self:?}"));
@@ -121,6 +125,10 @@ pub struct HapticParams {
     /// The active set is chosen again when the tool has moved this far since the last choice, m.
     /// Default 0.01.
     pub reselect_distance: f64,
+    /// Haptic steps one choice of the active set is spread over (each step scans an equal share of the guides,
+    /// so that no step pays for the whole scan; `crate::haptic` active set), >= 1. Default 10 (10 ms at 1 kHz,
+    /// far less than `lookahead`).
+    pub choice_steps: usize,
     /// The clip pins the strand point nearest its jaws if it is within this distance, m. Default 0.01.
     pub clip_reach: f64,
     /// Displacements of the local strands from their references larger than this are not sent to the
@@ -167,11 +175,21 @@ pub struct HapticParams {
     /// Share of the rest shape a wet set holds once dry (`strand::styling::SetModel::hydrogen_share`),
     /// dimensionless in [0, 1]. Default 0.8.
     pub hydrogen_share: f64,
+    /// The local strands touch each other (contact and Coulomb friction, `tools::hair_contact`; each guide a
+    /// wisp of the real hairs it stands for, `HapticCore::hair_contact`). Default false (see bench/RESULTS.md).
+    pub hair_contact: bool,
+    /// The tool drags through the local strands against the fibres it parts (`tools::entanglement`, the tress
+    /// scenarios' law: bending of the parted fibres and, wet, the water bridges on the tooth; each guide's
+    /// drag times the real hairs it stands for). Default false: on, the `[live]` acceptance stroke
+    /// (examples/scenarios/live-comb.toml) gives 0.25 N peak, force above 5 mN in 99.5 % of its in-hair steps
+    /// and 0.027 N largest step, but carries guides 0.136 m from their settled place during the stroke (0.08 m
+    /// allowed; measured 2026-11-24, docs/scenarios.md).
+    pub entanglement: bool,
 }
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { reselect_distance: 0.01, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8 }
+        Self { reselect_distance: 0.01, choice_steps: 10, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: false, entanglement: false }
     }
 }
 
@@ -206,8 +224,8 @@ impl HapticParams {
         if !(0.0..1.0).contains(&self.combing_ease_reduction) {
             return p(format!("haptic.combing_ease_reduction must be in [0, 1), got {}", self.combing_ease_reduction));
         }
-        if self.dryer_pieces == 0 || self.cut_pieces == 0 {
-            return p("haptic.dryer_pieces and haptic.cut_pieces must be > 0".into());
+        if self.dryer_pieces == 0 || self.cut_pieces == 0 || self.choice_steps == 0 {
+            return p(format!("haptic.dryer_pieces, haptic.cut_pieces and haptic.choice_steps must be > 0, got {}, {}, {}", self.dryer_pieces, self.cut_pieces, self.choice_steps));
         }
         if !(0.0..=1.0).contains(&self.hydrogen_share) {
             return p(format!("haptic.hydrogen_share must be in [0, 1], got {}", self.hydrogen_share));
@@ -223,6 +241,63 @@ impl HapticParams {
     pub fn combing_friction(&self, mu: f64, ease: f64) -> f64 {
         let e = if ease.is_finite() { ease.clamp(0.0, 1.0) } else { 0.0 };
         mu * (1.0 - self.combing_ease_reduction * e)
+    }
+}
+
+/// The lattice around the live hair (`Scene::builtin`, `Scene::from_curves`): soft, sag-free, its springs
+/// proportional to the hair it carries.
+///
+/// Each render strand is one hair, so the lattice carries the real hair's mass, and its springs stand for
+/// the hair's collective resistance, which grows with the number of hairs: every stiffness and damping is
+/// given per kilogram of the mean node mass m (the hair's mass over the nodes), k = rate x m, so the motion
+/// (sag before compensation, swing, settling) does not depend on how many strands are drawn. The rest is
+/// made sag-free (`lattice::sag_free`): the groomed shape is the equilibrium under gravity, with the weight
+/// carried by pre-stressed springs. The rates were chosen by measurement (`cargo run --release -p
+/// coiffure-engine --example global_motion`, docs/global.md "A soft lattice"): about 170 times softer than
+/// `LatticeParams::default` for the 20k-strand scene, so that a dryer, a comb and a head turn move the
+/// hairstyle by centimetres, with damping that settles it in about 2 s without oscillating. SI units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HairLatticeParams {
+    /// Stiffness of each 26-neighbour stiffener per kg of mean node mass, N/m/kg = 1/s^2. Default 3600.
+    pub stiffener_rate: f64,
+    /// Damping of each stiffener per kg of mean node mass, 1/s. Default 60.
+    pub stiffener_damping_rate: f64,
+    /// Stiffness of each bending stiffener (second neighbours) per kg of mean node mass, 1/s^2. Default 900.
+    pub bending_rate: f64,
+    /// Damping of each bending stiffener per kg of mean node mass, 1/s. Default 15.
+    pub bending_damping_rate: f64,
+    /// Stiffness of a fully attached node's spring to the head per kg of mean node mass, 1/s^2. Default 900.
+    pub attachment_rate: f64,
+    /// Damping of a fully attached node per kg of mean node mass (on its absolute velocity: it also stands
+    /// for the air's drag on the hair), 1/s. Default 90.
+    pub attachment_damping_rate: f64,
+    /// Attachment weight of the nodes farthest from the head (dimensionless, [0, 1]): the weight falls from 1
+    /// on the body over three head radii to this. Default 0.03 (the hair's own springs, not the head, hold
+    /// the far hair).
+    pub min_attachment: f64,
+    /// Make the rest sag-free. Default true.
+    pub sag_free: bool,
+}
+
+impl Default for HairLatticeParams {
+    fn default() -> Self {
+        Self { stiffener_rate: 3600.0, stiffener_damping_rate: 60.0, bending_rate: 900.0, bending_damping_rate: 15.0, attachment_rate: 900.0, attachment_damping_rate: 90.0, min_attachment: 0.03, sag_free: true }
+    }
+}
+
+impl HairLatticeParams {
+    /// The lattice parameters (the other fields `LatticeParams::default`'s) for a mean node mass `mean_mass`, kg.
+    pub fn lattice(&self, mean_mass: f64) -> lattice::lattice::LatticeParams {
+        let m = mean_mass;
+        lattice::lattice::LatticeParams {
+            stiffener_stiffness: self.stiffener_rate * m,
+            stiffener_damping: self.stiffener_damping_rate * m,
+            bending_stiffness: self.bending_rate * m,
+            bending_damping: self.bending_damping_rate * m,
+            attachment_stiffness: self.attachment_rate * m,
+            attachment_damping: self.attachment_damping_rate * m,
+            ..Default::default()
+        }
     }
 }
 

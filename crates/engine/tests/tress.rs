@@ -1,7 +1,7 @@
 //! The shipped tress scenarios (`examples/scenarios/comb-*.toml`: a comb stroke down a 4.75 g tress of a Table 1
 //! hair type, hair-hair contact on), dry and wet, against what they must keep: the wetness key goes through the
-//! live session's wetness model and the quality figures land in the summary. (The acceptance figures of issue
-//! 12 against the tress measurements are not met yet: see docs/scenarios.md.)
+//! live session's wetness model and the quality figures land in the summary; and issue 12's acceptance against
+//! the tress measurements (J. Soc. Cosmet. Chem. 24, 1973, Table I: about 0.12 N dry, 0.9 N wet).
 
 use engine::scenario::{run, ScenarioFile, ScenarioSummary, Summary};
 use strand::HairType;
@@ -44,5 +44,44 @@ fn wetness_goes_through_the_live_sessions_wetness_model() {
         assert!(m.steps > 500 && m.peak_n >= m.p90_n && m.p90_n >= m.median_n && m.median_n >= 0.0, "{m:?}");
         assert!((0.0..=1.0).contains(&m.continuity));
         assert!((m.peak_n - s.peak_force).abs() <= 1e-12 * s.peak_force, "the stroke holds the run's peak");
+    }
+}
+
+#[test]
+fn the_tresses_meet_the_combing_acceptance() {
+    // Issue 12's acceptance on the four shipped tresses (4.75 g, Table 1 hair, combed at 0.25 m/s), dry and wet:
+    // - dry peak within [0.06, 0.24] N (the measured 0.12 N, within a factor 2);
+    // - wet/dry peak ratio within [4, 10] (measured about 7.5);
+    // - continuous: above 2 % of the peak in at least 70 % of the stroke's steps, no one-step change above 30 % of
+    //   the peak;
+    // - ordering by fibre stiffness and friction kept: H2 above GA1 (dry);
+    // - combing ease lowers the force monotonically (H1 dry at ease 0, 0.5, 1: peak and median).
+    // - the strands' safety net (velocity clamp) never acts dry, and in at most 2 % of the strand-steps wet.
+    // Measured 2026-11-24 (docs/scenarios.md): dry 0.083-0.117 N, wet/dry 5.0-6.7, continuity 99-100 %, largest
+    // step 5-24 % of the peak; clamped strand-steps 0 except GC3 wet, 361 of 33,360 (1.1 %; 2-9 % for every
+    // wet tress before the drag). The law: tools::entanglement (calibrated on H1 dry) and the wetness model's
+    // friction ratio (calibrated on the wet/dry ratios); everything else follows from the hair types.
+    let mut dry_peak = std::collections::HashMap::new();
+    for name in ["comb-h1", "comb-h2", "comb-ga1", "comb-gc3"] {
+        let dry = tress(name, 0.0, 0.0);
+        let wet = tress(name, 1.0, 0.0);
+        let ratio = wet.stroke.peak_n / dry.stroke.peak_n;
+        println!("{name}: dry {:?}\n  wet {:?}\n  wet/dry {ratio:.2}", dry.stroke, wet.stroke);
+        assert!((0.06..=0.24).contains(&dry.stroke.peak_n), "{name}: dry peak {} N", dry.stroke.peak_n);
+        assert!((4.0..=10.0).contains(&ratio), "{name}: wet/dry peak ratio {ratio}");
+        for (w, run) in [("dry", &dry), ("wet", &wet)] {
+            let m = &run.stroke;
+            assert!(m.continuity >= 0.7, "{name} {w}: force above 2 % of the peak in {} of the steps", m.continuity);
+            assert!(m.max_step_change_rel <= 0.3, "{name} {w}: one-step change {} of the peak", m.max_step_change_rel);
+            let allowed = if w == "dry" { 0.0 } else { 0.02 * (24 * (m.steps + 500)) as f64 };
+            assert!(run.clamped_steps as f64 <= allowed, "{name} {w}: velocities clamped in {} strand-steps", run.clamped_steps);
+        }
+        dry_peak.insert(name, dry.stroke.peak_n);
+    }
+    assert!(dry_peak["comb-h2"] > dry_peak["comb-ga1"], "H2 {} N not above GA1 {} N", dry_peak["comb-h2"], dry_peak["comb-ga1"]);
+    let eased: Vec<Summary> = [0.0, 0.5, 1.0].iter().map(|&e| tress("comb-h1", 0.0, e)).collect();
+    for pair in eased.windows(2) {
+        assert!(pair[1].stroke.peak_n < pair[0].stroke.peak_n, "peak {} then {}", pair[0].stroke.peak_n, pair[1].stroke.peak_n);
+        assert!(pair[1].stroke.median_n < pair[0].stroke.median_n, "median {} then {}", pair[0].stroke.median_n, pair[1].stroke.median_n);
     }
 }

@@ -8,9 +8,10 @@
 //! - stiffener (i, j) (26 neighbours; bending stiffeners to second neighbours along the axes),
 //!   rest length L, d = x_j - x_i, u = d/|d|:
 //!   f_i = k_s (|d| - L) u + c_s ((v_j - v_i) . u) u, f_j = -f_i;
-//! - attachment: f_i = -a_i (k_a (x_i - X_i) + c_a v_i), X_i = head * rest_i the head-fixed rest
-//!   position and a_i in [0, 1] the node's attachment weight (damping is on the absolute
-//!   velocity: exact for a still head, to be refined for a moving one);
+//! - attachment: f_i = -a_i (k_a (x_i - X_i) + c_a v_i), X_i = head * anchor_i the head-fixed
+//!   attachment target (the rest position, or above it for a sag-free rest, [`crate::sag_free`]) and
+//!   a_i in [0, 1] the node's attachment weight (damping is on the absolute velocity: exact for a
+//!   still head, to be refined for a moving one);
 //! - optionally a [`MetaballSet`] collision response ([`MetaballSet::response`]), whose penalty,
 //!   band attraction and normal damping are also linearised along the normal n (k n n^T,
 //!   c n n^T) in the implicit matrix (the attraction's slope only where it is positive).
@@ -263,8 +264,13 @@ pub struct Stiffener {
 pub struct LatticeModel {
     /// The lattice geometry (rest positions in the head frame, m).
     pub ffd: FfdLattice,
-    /// Rest positions of the nodes in the head frame (flat order), m.
+    /// Rest positions of the nodes in the head frame (flat order), m: the groomed shape, where a
+    /// state starts ([`LatticeModel::rest_state`]).
     pub rest: Vec<Point3<f64>>,
+    /// Attachment target of each node in the head frame, m. Equal to `rest` as built; a sag-free
+    /// rest ([`LatticeModel::make_sag_free`]) moves them (and the stiffeners' rest lengths) so that
+    /// `rest` is the equilibrium under gravity.
+    pub anchors: Vec<Point3<f64>>,
     /// Node masses, kg (> 0): the hair mass each node carries.
     pub masses: Vec<f64>,
     /// Attachment weight a_i of each node, dimensionless in [0, 1] (0: free, 1: fully attached).
@@ -375,6 +381,7 @@ impl LatticeModel {
         }
         Ok(Self {
             ffd,
+            anchors: rest.clone(),
             rest,
             masses,
             attachment,
@@ -509,7 +516,7 @@ impl LatticeModel {
         for (i, (x, v)) in state.positions.iter().zip(&state.velocities).enumerate() {
             let m = self.masses[i];
             e += 0.5 * m * v.norm_squared() - m * p.gravity.dot(&x.coords);
-            let target = head * self.rest[i];
+            let target = head * self.anchors[i];
             e += 0.5 * p.attachment_stiffness * self.attachment[i] * (x - target).norm_squared();
         }
         for s in &self.stiffeners {
@@ -600,7 +607,7 @@ impl LatticeModel {
             let v = &state.velocities;
             for i in 0..n {
                 let a = self.attachment[i];
-                let target = head * self.rest[i];
+                let target = head * self.anchors[i];
                 let f = self.masses[i] * p.gravity
                     - a * (p.attachment_stiffness * (x[i] - target) + p.attachment_damping * v[i]);
                 // force[i] holds f - dt K' v (K' v of the attachment: a k_a v_i)

@@ -14,5 +14,6 @@ pub mod cluster;
 pub mod ffd;
 pub mod lattice;
 pub mod metaball;
+pub mod sag_free;
 mod solver;
 pub mod workspace;

@@ -54,6 +54,13 @@ pub enum ConstraintKind {
         /// Where the point must be, m.
         target: Vector3<f64>,
     },
+    /// Coulomb drag without a normal direction: the point is carried along with the constraint's velocity by
+    /// a force of at most `max_force` (N), opposing the relative motion (e.g. a tooth passing through a wisp,
+    /// whose parted fibres press on it with a load of their own: `tools::entanglement`).
+    Drag {
+        /// Largest force, N (>= 0).
+        max_force: f64,
+    },
 }
 
 /// A constraint on the centreline point at arc length `s`.
@@ -153,6 +160,11 @@ impl PointConstraint {
             ConstraintKind::Pin { target } => {
                 if !target.iter().all(|x| x.is_finite()) {
                     return bad("non-finite pin target");
+                }
+            }
+            ConstraintKind::Drag { max_force } => {
+                if !(max_force.is_finite() && max_force >= 0.0) {
+                    return bad("drag force must be finite and >= 0");
                 }
             }
         }
@@ -276,15 +288,16 @@ impl Strand {
                     let wt2 = nalgebra::Matrix2::new(wt[(0, 0)] + mix, wt[(0, 1)], wt[(1, 0)], wt[(1, 1)] + mix);
                     Some((t1, t2, wnn, wt2.try_inverse().unwrap_or_else(nalgebra::Matrix2::zeros)))
                 }
-                ConstraintKind::Pin { .. } => None,
+                ConstraintKind::Pin { .. } | ConstraintKind::Drag { .. } => None,
             })
             .collect();
         // Inverses of the pins' regularized Delassus blocks `W + R I` (pseudo-inverses when rigid); the
         // post-stabilization uses the pseudo-inverses of the blocks themselves.
         let is_pin = |c: usize| matches!(constraints[c].kind, ConstraintKind::Pin { .. });
-        let pin_projection: Vec<Matrix3<f64>> = (0..n).map(|c| if is_pin(c) { pinv3(&w[c][c]) } else { Matrix3::zeros() }).collect();
+        let is_drag = |c: usize| matches!(constraints[c].kind, ConstraintKind::Drag { .. });
+        let pin_projection: Vec<Matrix3<f64>> = (0..n).map(|c| if is_pin(c) || is_drag(c) { pinv3(&w[c][c]) } else { Matrix3::zeros() }).collect();
         let pin_inverse: Vec<Matrix3<f64>> = (0..n)
-            .map(|c| match (is_pin(c), mix > 0.0) {
+            .map(|c| match (is_pin(c) || is_drag(c), mix > 0.0) {
                 (false, _) => Matrix3::zeros(),
                 (true, true) => (w[c][c] + Matrix3::identity() * mix).try_inverse().unwrap_or_else(|| pinv3(&w[c][c])),
                 (true, false) => pin_projection[c],
@@ -303,6 +316,15 @@ impl Strand {
                         let want = capped((target - position[c]) * beta);
                         let dp = pin_inverse[c] * (want - rel - p[c] * mix);
                         p[c] += dp;
+                    }
+                    ConstraintKind::Drag { max_force } => {
+                        // Aim for no relative motion, then clamp to the drag's largest impulse.
+                        let mut pc = p[c] + pin_inverse[c] * (-rel - p[c] * mix);
+                        let limit = max_force * h;
+                        if pc.norm() > limit {
+                            pc *= limit / pc.norm();
+                        }
+                        p[c] = pc;
                     }
                     ConstraintKind::Contact { normal, depth, friction } => {
                         let Some((t1, t2, wnn, wt2_inv)) = contact_frames[c] else { continue };
@@ -350,7 +372,7 @@ impl Strand {
                         // At most `v_max h` per step: a pin far from its target is drawn back, not teleported.
                         if e.norm() > v_max * h { e * (v_max * h / e.norm()) } else { e }
                     }
-                    ConstraintKind::Contact { .. } => Vector3::zeros(),
+                    ConstraintKind::Contact { .. } | ConstraintKind::Drag { .. } => Vector3::zeros(),
                 })
                 .collect();
             for _ in 0..opts.iterations.max(1) {

@@ -72,6 +72,11 @@ impl Bvh {
         id
     }
 
+    /// Margin the boxes are grown by, m.
+    pub fn margin(&self) -> f64 {
+        self.margin
+    }
+
     /// Number of pieces the tree was built over.
     pub fn len(&self) -> usize {
         self.order.len()

@@ -12,6 +12,7 @@
 //! brush torque), applied at the next step, and the tool feels the opposite torque.
 
 use crate::bvh::{Bvh, Piece};
+pub use crate::entanglement::Entanglement;
 pub use crate::hair_contact::HairContact;
 use crate::hair_contact::HairContactFinder;
 use crate::contact::{detect, Contact, DetectReport, ToolPose};
@@ -53,7 +54,8 @@ pub struct StepResult {
     /// adds its compliant response `g = 1 / (h (W_nn + R))` (the strand point's mobility `W_nn` in the
     /// prepared step, [`Strand::point_mobility`], and the solver's force mixing `R`) along its normal,
     /// `g n n^T`, and the friction's share `mu g (I - n n^T)` across it. Coupling between contacts is left
-    /// out. Zero with the paper's model. Used to couple the tool proxy implicitly
+    /// out, and so are the entanglement drags ([`Entanglement`]: a sliding Coulomb drag does not change with
+    /// the speed). Zero with the paper's model. Used to couple the tool proxy implicitly
     /// (`haptics::coupling::HairReaction`).
     pub damping: Matrix3<f64>,
     /// Contacts found this step.
@@ -84,6 +86,8 @@ pub struct StepTimings {
     pub free: f64,
     /// Strands that had contacts this step.
     pub touched_strands: usize,
+    /// Of `constrained` and `free`: finding the strands' body contacts, s.
+    pub body: f64,
 }
 
 /// A patch of strands, a tool, and the contact between them.
@@ -110,6 +114,14 @@ pub struct LocalInteraction {
     /// Constraint model: contact and friction between the simulated strands ([`HairContact`]). Default None
     /// (strands pass through each other).
     pub hair_contact: Option<HairContact>,
+    /// Constraint model: the drag of the tool's capsules through the wisps they pass through, against the
+    /// fibres they part ([`Entanglement`]; the wisp's radius is [`HairContact`]'s, the fibre's without hair
+    /// contact). Default None (a tool touches a strand only at the fibre's radius).
+    pub entanglement: Option<Entanglement>,
+    /// Wetness of each strand (dimensionless, 0..1; missing entries are dry), for the capillary share of the
+    /// entanglement drag. The strands' material and the friction take wetness through
+    /// [`crate::wetness::WetnessModel`] where they are built. Default empty (dry).
+    pub wetness: Vec<f64>,
     /// Workspace: hair-hair contact detection ([`crate::hair_contact`]).
     hair_finder: HairContactFinder,
     /// Workspaces of the batches, and each strand's (batch, lane) this step.
@@ -120,6 +132,8 @@ pub struct LocalInteraction {
     surface_torques: Vec<Vec<PointForce>>,
     pieces: Vec<Piece>,
     bvh: Bvh,
+    /// The strands were replaced: build the tree anew at the next step rather than refit it.
+    rebuild_tree: bool,
     /// Workspace: which strands' steps were prepared this step.
     prepared: Vec<bool>,
     /// Workspace: contacts of this step.
@@ -144,15 +158,43 @@ impl LocalInteraction {
             use_batches: true,
             body: None,
             hair_contact: None,
+            entanglement: None,
+            wetness: Vec::new(),
             hair_finder: HairContactFinder::new(),
             batches: Vec::new(),
             lane_of,
             surface_torques,
             pieces,
             bvh,
+            rebuild_tree: false,
             prepared,
             contacts: Vec::new(),
         }
+    }
+
+    /// Replaces the strands by `strands`, keeping the workspaces (the batches' solver storage, the contact
+    /// buffers): strand `i` of the new set was strand `from[i]` of the old one (its pending surface torques and
+    /// loads and its wetness move with it), or is new (`None`, dry). The pins are released (they name old strands). The collision
+    /// tree is rebuilt at the next step. Cheaper than a new interaction when a few strands join or leave.
+    pub fn set_strands(&mut self, strands: Vec<Strand>, from: &[Option<usize>]) {
+        let mut old = std::mem::take(&mut self.surface_torques);
+        self.surface_torques = (0..strands.len()).map(|i| match from.get(i).copied().flatten() {
+            Some(j) if j < old.len() => std::mem::take(&mut old[j]),
+            _ => Vec::new(),
+        }).collect();
+        if !self.wetness.is_empty() {
+            let wet = std::mem::take(&mut self.wetness);
+            self.wetness = (0..strands.len()).map(|i| from.get(i).copied().flatten().and_then(|j| wet.get(j).copied()).unwrap_or(0.0)).collect();
+        }
+        self.prepared.clear();
+        self.prepared.resize(strands.len(), false);
+        self.lane_of.clear();
+        self.lane_of.resize(strands.len(), None);
+        self.pins.clear();
+        self.strands = strands;
+        self.rebuild_tree = true;
+        // The hair-hair contacts' velocities come from the last step's chords of the same strands.
+        self.hair_finder = HairContactFinder::new();
     }
 
     /// Prepares the steps of the reduced, linearly implicit strands in batches of four strands of equal size
@@ -238,6 +280,22 @@ impl LocalInteraction {
     /// Largest semi-major axis of the strands, m (the contact distance added to the tool's radius).
     fn hair_radius(strands: &[Strand]) -> f64 {
         strands.iter().map(|s| s.model.section.semi_major).fold(0.0, f64::max)
+    }
+
+    /// Radius of the wisp each strand stands for, m: half the hair-hair contact distance, or the fibre's radius
+    /// without hair contact.
+    fn wisp_radius(&self, fibre_radius: f64) -> f64 {
+        self.hair_contact.map_or(fibre_radius, |hc| 0.5 * hc.distance(fibre_radius)).max(fibre_radius)
+    }
+
+    /// Distance from a strand's centreline within which the tool's capsules are looked for, m: the wisp's radius
+    /// with the entanglement drag, else the fibre's.
+    fn reach_radius(&self, fibre_radius: f64) -> f64 {
+        if self.entanglement.is_some() && matches!(self.model, ForceModel::Constraint { .. }) {
+            self.wisp_radius(fibre_radius)
+        } else {
+            fibre_radius
+        }
     }
 
     /// Arc lengths (m) at which a strand's centreline is sampled: every segment's start, its Gauss points (as
@@ -334,18 +392,21 @@ impl LocalInteraction {
                 Self::sample_strand(k, strand, &mut self.pieces);
             }
         }
-        if self.pieces.len() == self.bvh.len() {
+        let radius = Self::hair_radius(&self.strands);
+        let reach = self.reach_radius(radius);
+        if self.pieces.len() == self.bvh.len() && self.bvh.margin() == reach && !self.rebuild_tree {
             self.bvh.refit(&self.pieces);
         } else {
-            // A strand changed its number of pieces (cut by the scissors, or replaced): new tree.
-            self.bvh = Bvh::build(&self.pieces, Self::hair_radius(&self.strands));
+            // A strand changed its number of pieces (cut by the scissors, or replaced), or the reach changed: new
+            // tree.
+            self.bvh = Bvh::build(&self.pieces, reach);
+            self.rebuild_tree = false;
         }
         let t_sample = clock.elapsed().as_secs_f64();
         timings.sample = t_sample - t_dynamics;
         let mut contacts = std::mem::take(&mut self.contacts);
         contacts.clear();
-        let radius = Self::hair_radius(&self.strands);
-        let report = detect(&self.shape, &self.pose, &pose, dt, &self.pieces, &self.bvh, radius, &mut contacts);
+        let report = detect(&self.shape, &self.pose, &pose, dt, &self.pieces, &self.bvh, reach, &mut contacts);
         // Hair-hair contacts (constraint model): at most `max_per_strand` per strand, deepest first.
         let mut hair_pairs = 0;
         let hair_on = matches!(self.model, ForceModel::Constraint { .. }) && self.hair_contact.is_some();
@@ -359,6 +420,19 @@ impl LocalInteraction {
         let t_detect = clock.elapsed().as_secs_f64();
         timings.detect = t_detect - t_sample;
         let mut result = StepResult { report, hair_pairs, ..Default::default() };
+        // Where each strand's pieces start (they are contiguous per strand, in strand order).
+        let mut first_piece = vec![self.pieces.len(); self.strands.len() + 1];
+        for (i, p) in self.pieces.iter().enumerate().rev() {
+            first_piece[p.strand] = i;
+        }
+        for k in (0..self.strands.len()).rev() {
+            first_piece[k] = first_piece[k].min(first_piece[k + 1]);
+        }
+        let entanglement = if constraint { self.entanglement } else { None };
+        if let Some(e) = entanglement {
+            e.validate()?;
+        }
+        let wisp_radius = self.wisp_radius(radius);
         for (k, strand) in self.strands.iter_mut().enumerate() {
             let t_strand = clock.elapsed().as_secs_f64();
             // A clip's jaws hold the strands it pins rather than pushing them.
@@ -367,11 +441,13 @@ impl LocalInteraction {
             let pinned = self.pins.iter().any(|p| p.0 == k);
             // Body contacts (constraint model): sampled points inside the body or within a hair's radius of it.
             let mut resting: Vec<PointConstraint> = Vec::new();
+            let t_body = clock.elapsed().as_secs_f64();
             if let (Some((body, threshold)), ForceModel::Constraint { .. }) = (&self.body, &self.model) {
-                // Each piece's start, and the strand's last end (a piece's end is the next one's start).
-                let pieces = &self.pieces;
-                let points = pieces.iter().enumerate().filter(|(_, p)| p.strand == k).flat_map(|(i, p)| {
-                    let last = pieces.get(i + 1).map_or(true, |n| n.strand != k);
+                // Each piece's start, and the strand's last end (a piece's end is the next one's start). The
+                // pieces are contiguous per strand, in strand order.
+                let pieces = &self.pieces[first_piece[k]..first_piece[k + 1]];
+                let points = pieces.iter().enumerate().flat_map(|(i, p)| {
+                    let last = i + 1 == pieces.len();
                     std::iter::once((p.s, p.a)).chain(last.then_some((p.s + p.length, p.b)))
                 });
                 for (s, x) in points {
@@ -384,6 +460,7 @@ impl LocalInteraction {
                     }
                 }
             }
+            timings.body += clock.elapsed().as_secs_f64() - t_body;
             // Hair-hair contacts of this strand (their impulses are not the tool's either).
             if hair_on {
                 resting.extend(self.hair_finder.constraints(k));
@@ -417,15 +494,39 @@ impl LocalInteraction {
                     applied.iter().zip(&mine).map(|(f, c)| (f.force, c.lever)).collect()
                 }
                 ForceModel::Constraint { friction, options } => {
-                    let mut cons: Vec<PointConstraint> = mine
-                        .iter()
-                        .map(|c| PointConstraint {
-                            s: c.s,
-                            kind: ConstraintKind::Contact { normal: c.normal, depth: c.depth, friction },
-                            velocity: c.tool_velocity,
-                        })
-                        .collect();
-                    let mut levers: Vec<Vector3<f64>> = mine.iter().map(|c| c.lever).collect();
+                    // Each tool contact found within the wisp's reach: a non-penetration contact where the
+                    // capsule touches the centreline's fibre, and (with the entanglement) a drag against the
+                    // fibres it parts. `touching[i]`: the contact behind tool constraint i, if a contact.
+                    let mut cons: Vec<PointConstraint> = Vec::with_capacity(2 * mine.len());
+                    let mut levers: Vec<Vector3<f64>> = Vec::with_capacity(2 * mine.len());
+                    let mut touching: Vec<Option<&Contact>> = Vec::with_capacity(2 * mine.len());
+                    let r_f = strand.model.section.semi_major;
+                    let ei = strand.model.material.young_modulus * strand.model.section.i_soft();
+                    let w = self.wetness.get(k).copied().unwrap_or(0.0);
+                    // A wisp of many fibres parts around the capsule (the drag) instead of being pushed aside.
+                    let parting = entanglement.is_some() && wisp_radius > radius;
+                    for (i, c) in mine.iter().enumerate() {
+                        let fibre_depth = c.depth - (reach - radius);
+                        if fibre_depth > 0.0 && !parting {
+                            cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Contact { normal: c.normal, depth: fibre_depth, friction }, velocity: c.tool_velocity });
+                            levers.push(c.lever);
+                            touching.push(Some(c));
+                        }
+                        // One drag per crossing of a capsule and the wisp: the deepest of the strand's contacts
+                        // with that capsule (neighbouring pieces near the crossing are found too).
+                        let deepest = || mine.iter().enumerate().all(|(j, o)| o.primitive != c.primitive || o.depth < c.depth || (o.depth == c.depth && j >= i));
+                        if let (Some(e), true) = (entanglement, deepest()) {
+                            let r_t = self.shape.capsules.get(c.primitive).map_or(0.0, |cap| cap.radius);
+                            let distance = r_t + reach - c.depth;
+                            let share = crate::entanglement::parted_share(distance, wisp_radius, r_t + r_f);
+                            let max_force = friction * share * e.parting_load(ei, r_f, r_t, w, strand.model.length - c.s);
+                            if max_force > 0.0 {
+                                cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Drag { max_force }, velocity: c.tool_velocity });
+                                levers.push(c.lever);
+                                touching.push(None);
+                            }
+                        }
+                    }
                     for &(_, s, offset) in self.pins.iter().filter(|p| p.0 == k) {
                         let target = pose.position + pose.rotation * offset;
                         let before = self.pose.position + self.pose.rotation * offset;
@@ -435,7 +536,7 @@ impl LocalInteraction {
                     // After the tool's and the pins' constraints: their impulses are not the tool's (the
                     // reactions below pair impulses with `levers` and `mine` only).
                     cons.extend(resting.iter().cloned());
-                    let mut mobility = vec![0.0; mine.len()];
+                    let mut mobility = vec![0.0; touching.len()];
                     let outcome = if self.prepared[k] {
                         // A batched strand with constraints takes over its lane's solver workspace.
                         let handed = match (cons.is_empty(), self.lane_of[k]) {
@@ -445,8 +546,10 @@ impl LocalInteraction {
                         match handed {
                             Ok(()) => {
                                 // The contacts' mobilities in the prepared step, for the tool's damping.
-                                for (w, c) in mobility.iter_mut().zip(&mine) {
-                                    *w = strand.point_mobility(c.s, &c.normal).unwrap_or(0.0);
+                                for (w, c) in mobility.iter_mut().zip(&touching) {
+                                    if let Some(c) = c {
+                                        *w = strand.point_mobility(c.s, &c.normal).unwrap_or(0.0);
+                                    }
                                 }
                                 strand.finish_step(&cons, &options)
                             }
@@ -463,14 +566,16 @@ impl LocalInteraction {
                             // feels the opposite torque now.
                             let r = strand.model.section.semi_major;
                             let mix = options.force_mixing(dt);
-                            for ((impulse, c), w) in p.iter().zip(&mine).zip(&mobility) {
+                            for ((impulse, c), w) in p.iter().zip(&touching).zip(&mobility) {
+                                let Some(c) = c else { continue };
                                 if impulse.dot(&c.normal) > 0.0 {
                                     let g = 1.0 / (dt * (w + mix));
                                     let nn = c.normal * c.normal.transpose();
                                     result.damping += nn * g + (Matrix3::identity() - nn) * (friction * g);
                                 }
                             }
-                            for (impulse, c) in p.iter().zip(&mine) {
+                            for (impulse, c) in p.iter().zip(&touching) {
+                                let Some(c) = c else { continue };
                                 let f = impulse / dt;
                                 let tangential = f - c.normal * c.normal.dot(&f);
                                 let tau = (-c.normal * r).cross(&tangential);

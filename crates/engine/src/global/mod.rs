@@ -3,6 +3,7 @@
 //! ([`nozzle`]); the scissors' cuts of the render strands and the falling cut clusters ([`cut`]).
 //!
 //! One step of [`GlobalCore::step`], in order:
+//! 0. **Head**: the input's head pose (`ToolInput::head`) becomes the lattice's and the body's.
 //! 1. **Cuts**: a new scissors close (`ToolInput::cuts` went up) cuts the render strands now, or queues the
 //!    cut for a worker thread ([`GlobalCore::defer_cuts`]).
 //! 2. **Dryer jet**: the held dryer's drag on the hair each lattice node carries, as external node forces
@@ -192,12 +193,33 @@ impl GlobalCore {
     pub fn scene(&self) -> &Arc<Scene> {
         &self.scene
     }
+    /// The head pose now (head frame to world).
+    pub fn head_pose(&self) -> Isometry3<f64> {
+        self.head
+    }
+    /// Moves the head to `head` (head frame to world) for the next steps: the lattice's attachment follows
+    /// it and the body pushes the nodes out where it now is. A pose with a non-finite part is ignored
+    /// (returns false).
+    pub fn set_head_pose(&mut self, head: Isometry3<f64>) -> bool {
+        let ok = head.translation.vector.iter().chain(head.rotation.coords.iter()).all(|x| x.is_finite());
+        if ok {
+            self.head = head;
+        }
+        ok
+    }
+    /// The lattice model this core steps (the scene's, with the tool's attraction off).
+    pub fn model(&self) -> &LatticeModel {
+        &self.model
+    }
 
 
     /// One global step of `dt` s with the tool `input`; returns the new snapshot. A non-finite lattice is
     /// detected and put back to rest (reported by the flag).
     pub fn step(&mut self, dt: f64, input: &ToolInput) -> (LatticeSnapshot, bool) {
         let t0 = Instant::now();
+        if input.head != self.head {
+            self.set_head_pose(input.head);
+        }
         if input.cuts > self.cuts {
             self.cuts = input.cuts;
             if input.present {
@@ -238,7 +260,7 @@ impl GlobalCore {
         let wetness = (0..self.wet.values.len()).map(|g| self.wet.strand_mean(g) as f32).collect();
         let chains = self.clusters.iter().flat_map(|c| c.clusters.iter()).flat_map(|c| c.guides.iter())
             .map(|ch| ch.positions.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect()).collect();
-        LatticeSnapshot { version: self.version, positions: self.state.positions.clone(), step_seconds: 0.0, wetness, kept_version: self.kept_version, kept: self.kept.clone(), chains }
+        LatticeSnapshot { version: self.version, positions: self.state.positions.clone(), step_seconds: 0.0, wetness, kept_version: self.kept_version, kept: self.kept.clone(), chains, head: self.head }
     }
 
     /// Guide segment centres now (rest centres through the lattice), m.
@@ -279,7 +301,7 @@ mod tests {
         let p = SessionParams::default();
         let (mut free, mut pushed) = (GlobalCore::new(scene.clone(), &p), GlobalCore::new(scene.clone(), &p));
         let tool = Vector3::new(0.0, -0.13, 0.0);
-        let input = ToolInput { tool: Tool::Comb, present: true, position: tool, rotation: test_rot(), pressed: false, cuts: 0 };
+        let input = ToolInput { tool: Tool::Comb, present: true, position: tool, rotation: test_rot(), pressed: false, cuts: 0, ..ToolInput::default() };
         let balls = tool_metaballs(&Tool::Comb.shape(), &tool, &test_rot(), &GlobalParams::default());
         for _ in 0..30 {
             free.step(0.01, &ToolInput::default());
@@ -304,5 +326,46 @@ mod tests {
         let after = pushed.positions().iter().zip(free.positions()).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
         eprintln!("largest difference {after} m 2 s after the comb left");
         assert!(after < 0.2 * most, "the hair goes back: {after} m vs {most} m");
+    }
+
+    #[test]
+    fn the_hairstyle_keeps_its_groomed_shape_at_rest() {
+        // Issue 14: at rest, 5 s after the start, no render vertex (the lattice's FFD of every render strand's
+        // rest vertex) has moved more than 2 mm from the groomed shape: the soft lattice is sag-free.
+        let scene = small_scene();
+        let mut core = GlobalCore::new(scene.clone(), &SessionParams::default());
+        for _ in 0..500 {
+            core.step(0.01, &ToolInput::default());
+        }
+        let worst = scene.render.positions.iter().map(|p| {
+            let q = Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+            (ffd_map(&scene.lattice.ffd, core.positions(), &q) - q).norm()
+        }).fold(0.0, f64::max);
+        eprintln!("largest render-vertex drift after 5 s at rest: {worst:.2e} m");
+        assert!(worst <= 2e-3, "{worst} m");
+    }
+
+    #[test]
+    fn the_dryer_jet_moves_the_soft_lattice_and_it_falls_back() {
+        // The same dryer held at the side of the hair in two sessions, blowing in one of them for 2 s: the jet
+        // moves the lattice by >= 5 mm more than the nozzle's presence alone, and 2.3 s after it stops the two
+        // lattices are within 1 mm of each other.
+        let scene = small_scene();
+        let p = SessionParams::default();
+        let (mut blown, mut held) = (GlobalCore::new(scene.clone(), &p), GlobalCore::new(scene.clone(), &p));
+        let rot = nalgebra::Rotation3::new(Vector3::new(2.2214415, 0.0, 2.2214415)).into_inner();
+        let mut input = ToolInput { tool: Tool::Dryer, present: true, position: Vector3::new(0.13, 0.0, 0.0), rotation: rot, pressed: true, cuts: 0, ..ToolInput::default() };
+        let gap = |a: &GlobalCore, b: &GlobalCore| a.positions().iter().zip(b.positions()).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max);
+        let mut most = 0.0f64;
+        for k in 0..430 {
+            input.pressed = k < 200;
+            blown.step(0.01, &input);
+            held.step(0.01, &ToolInput { pressed: false, ..input });
+            most = most.max(gap(&blown, &held));
+        }
+        let after = gap(&blown, &held);
+        eprintln!("jet: largest difference {most:.4} m, 2.3 s after {after:.2e} m");
+        assert!(most >= 5e-3, "the jet moves the lattice: {most} m");
+        assert!(after <= 1e-3, "it falls back: {after} m");
     }
 }

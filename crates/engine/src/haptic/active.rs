@@ -3,24 +3,28 @@
 //!
 //! Each haptic step ([`HapticCore::update_active`] before the strands' step, [`HapticCore::track_active`]
 //! after it):
-//! 1. **Choice** (when the tool has moved `HapticParams::reselect_distance` since the last choice): the guides
-//!    whose settled shape (through the lattice) comes within `SessionParams::activation_radius` of the tool's
-//!    shape on its way over the next `HapticParams::lookahead` s (from the tool to where its velocity takes
-//!    it), nearest first, at most `SessionParams::max_active`.
+//! 1. **Choice** (started when the tool has moved `HapticParams::reselect_distance` since the last one): the
+//!    guides whose settled shape (through the lattice) comes within `SessionParams::activation_radius` of the
+//!    tool's shape on its way over the next `HapticParams::lookahead` s (from the tool to where its velocity
+//!    takes it), nearest first, at most `SessionParams::max_chosen`. The scan is spread over
+//!    `HapticParams::choice_steps` haptic steps (an equal share of the guides each step, [`Choice`]), so that
+//!    no step pays for all of it; the chosen set takes effect when the scan ends.
 //! 2. **Joining** guides start from their stored shape (groomed, or where they came to rest), at rest, their
 //!    roots on the head: no kick. The displacement the viewer shows fades in over `HapticParams::blend_time`.
 //! 3. **Leaving** guides (no longer chosen) are still simulated, and the tool may still touch them, until
 //!    they are at rest (tip slower than `HapticParams::rest_speed` for `HapticParams::rest_time`) or
-//!    `HapticParams::max_relax_time` has passed. Then their shown displacement fades out over `blend_time`
-//!    while they are still stepped, and they are let go: velocities zeroed, and a strand whose tip is farther
-//!    than `HapticParams::rest_distance` from its groomed tip returns to its groomed shape (what the viewer
-//!    shows of it once faded out). Nothing stays frozen where the tool left it.
+//!    `HapticParams::max_relax_time` has passed. Then they are let go: velocities zeroed, and a strand whose
+//!    tip is farther than `HapticParams::rest_distance` from its groomed tip returns to its groomed shape
+//!    (what the viewer shows of it once faded out); the displacement shown of where it was fades out over
+//!    `blend_time` ([`Faded`], no longer simulated). Nothing stays frozen where the tool left it.
 //! 4. When chosen and relaxing strands together exceed `max_active`, the relaxing ones that left first are
-//!    let go first.
+//!    let go first: at most `max_active` strands are simulated (the step's cost is bounded).
 //!
 //! A membership change moves the strands between the interaction and the guide store (no copy of the strands
-//! that stay), and never happens while the clip holds a strand.
+//! that stay; the interaction keeps its workspaces, [`tools::interaction::LocalInteraction::set_strands`]), and
+//! never happens while the clip holds a strand.
 
+use super::strands::samples_along;
 use super::HapticCore;
 use crate::scene::ffd_map;
 use tools::geometry::point_segment_distance;
@@ -34,7 +38,7 @@ pub(crate) enum Phase {
     Chosen,
     /// No longer chosen, still simulated until at rest: time since it left and time its tip has been slow, s.
     Relaxing { since: f64, still: f64 },
-    /// Being let go: its shown displacement fades out (still simulated).
+    /// To be let go at the next step (leaves the simulation; its display fades out as a [`Faded`]).
     Fading,
 }
 
@@ -56,6 +60,26 @@ impl Member {
     }
 }
 
+/// A strand let go, no longer simulated, whose shown displacement fades out: its guide, its centreline samples
+/// where it was let go (m, at the guide's sample arc lengths) and the weight left, in [0, 1].
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Faded {
+    pub guide: usize,
+    pub samples: Vec<Vector3<f64>>,
+    pub weight: f64,
+}
+
+/// A choice of the active set in progress: the tool's way it is made for (from `tool` to `ahead`, m, turned by
+/// `rotation`), the next guide to scan and the guides found near so far (distance in m, guide).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Choice {
+    tool: Vector3<f64>,
+    ahead: Vector3<f64>,
+    rotation: Matrix3<f64>,
+    next: usize,
+    near: Vec<(f64, usize)>,
+}
+
 /// The tip of a strand, m.
 fn tip(s: &Strand) -> Vector3<f64> {
     let frames = strand::kinematics::segment_frames(&s.model, &s.state);
@@ -72,93 +96,110 @@ impl HapticCore {
         }
     }
 
-    /// Empties the active set (the strands written back as they are).
+    /// Empties the active set (the strands written back as they are) and forgets the fading ones and any
+    /// choice in progress.
     pub(crate) fn clear_active(&mut self) {
         self.active.clear();
         self.members.clear();
+        self.faded.clear();
+        self.choice = None;
         self.last_select = None;
     }
 
     /// The guides whose settled shapes (through the lattice `nodes`) come within the activation radius of the
     /// tool's shape (its capsules, turned by `rotation`) anywhere on its way from `tool` to `ahead` (m; checked
-    /// at both ends and midway), nearest first, at most `max_active`. The shape, not the tool's point: a
+    /// at both ends and midway), nearest first, at most `max_chosen`. The shape, not the tool's point: a
     /// comb's outer teeth are 6.5 cm from it, and a strand chosen only once a tooth is inside it is kicked.
+    /// All at once ([`HapticCore::update_active`] spreads the same scan over steps).
+    #[cfg(test)]
     pub(crate) fn choose(&self, tool: &Vector3<f64>, ahead: &Vector3<f64>, rotation: &Matrix3<f64>, nodes: &[Point3<f64>]) -> Vec<usize> {
+        let mut c = Choice { tool: *tool, ahead: *ahead, rotation: *rotation, next: 0, near: Vec::new() };
+        self.scan(&mut c, self.scene.guides.len(), nodes);
+        self.chosen(c)
+    }
+
+    /// Scans the next `count` guides of the choice `c` (see [`HapticCore::choose`]).
+    fn scan(&self, c: &mut Choice, count: usize, nodes: &[Point3<f64>]) {
         let r = self.params.activation_radius;
         let shape = &self.shapes[self.tool as usize];
         let caps: Vec<(Vector3<f64>, Vector3<f64>, f64)> = shape.capsules.iter().map(|c| (Vector3::from(c.a), Vector3::from(c.b), c.radius)).collect();
         let reach = caps.iter().map(|(a, b, rad)| a.norm().max(b.norm()) + rad).fold(0.0, f64::max);
-        let poses = [*tool, (tool + ahead) * 0.5, *ahead];
-        let mut near: Vec<(f64, usize)> = Vec::new();
-        for (g, guide) in self.scene.guides.iter().enumerate() {
+        // The shape's box in its own frame: a point farther than d from it is farther than d from every capsule.
+        let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+        for (a, b, rad) in &caps {
+            lo = lo.inf(&(a.inf(b) - Vector3::repeat(*rad)));
+            hi = hi.sup(&(a.sup(b) + Vector3::repeat(*rad)));
+        }
+        let (tool, ahead, rotation) = (c.tool, c.ahead, c.rotation);
+        let poses = [tool, (tool + ahead) * 0.5, ahead];
+        let end = (c.next + count).min(self.scene.guides.len());
+        for g in c.next..end {
+            let guide = &self.scene.guides[g];
             let mut d = f64::INFINITY;
             for p in &guide.reference {
                 let x = ffd_map(&self.scene.lattice.ffd, nodes, p);
                 // Cheap rejection by the shape's bounding sphere swept along the way.
-                if point_segment_distance(&x, tool, ahead) - reach >= r.min(d) {
+                let limit = r.min(d);
+                if point_segment_distance(&x, &tool, &ahead) - reach >= limit {
                     continue;
                 }
-                for c in &poses {
-                    let q = rotation.transpose() * (x - c);
+                for o in &poses {
+                    let q = rotation.transpose() * (x - o);
+                    let outside = (lo - q).sup(&(q - hi)).sup(&Vector3::zeros());
+                    if outside.norm() >= r.min(d) {
+                        continue;
+                    }
                     for (a, b, rad) in &caps {
                         d = d.min(point_segment_distance(&q, a, b) - rad);
                     }
                 }
             }
             if d < r {
-                near.push((d, g));
+                c.near.push((d, g));
             }
         }
-        near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        near.iter().take(self.params.max_active).map(|x| x.1).collect()
+        c.next = end;
     }
 
-    /// Stage 3 of the step: the choice when the tool (the proxy at `proxy`, m, moving at `velocity`, m/s) has
-    /// moved far enough, and the membership changes (joining, let-go strands leaving the simulation). Never
-    /// while the clip holds a strand.
+    /// The chosen guides of a finished scan: nearest first, at most `max_chosen`.
+    fn chosen(&self, mut c: Choice) -> Vec<usize> {
+        c.near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        c.near.iter().take(self.params.max_chosen).map(|x| x.1).collect()
+    }
+
+    /// Stage 3 of the step: the choice (started when the tool, the proxy at `proxy`, m, moving at `velocity`,
+    /// m/s, has moved far enough; one share of its scan per step) and the membership changes (joining, let-go
+    /// strands leaving the simulation). Never while the clip holds a strand.
     pub(crate) fn update_active(&mut self, proxy: &Vector3<f64>, velocity: &Vector3<f64>, rotation: &Matrix3<f64>, nodes: &[Point3<f64>]) {
         if self.clipped || nodes.len() != self.scene.lattice.node_count() {
             return;
         }
         let moved = self.last_select.map_or(true, |p| (p - proxy).norm() > self.params.haptic.reselect_distance);
-        let mut guides = self.active.clone();
-        let mut members = self.members.clone();
-        if moved {
+        if self.choice.is_none() && moved {
             let ahead = proxy + velocity * self.params.haptic.lookahead;
-            let chosen = self.choose(proxy, &ahead, rotation, nodes);
-            for (g, m) in guides.iter().zip(members.iter_mut()) {
-                if chosen.contains(g) {
-                    m.phase = Phase::Chosen;
-                } else if m.phase == Phase::Chosen {
-                    m.phase = Phase::Relaxing { since: 0.0, still: 0.0 };
-                }
-            }
-            for &g in &chosen {
-                if !guides.contains(&g) {
-                    guides.push(g);
-                    members.push(Member::joining());
-                }
-            }
-            // Over capacity: the relaxing strands that left first are let go first.
-            let mut over = guides.len().saturating_sub(self.params.max_active);
-            let mut relaxing: Vec<(f64, usize)> = members.iter().enumerate().filter_map(|(i, m)| match m.phase {
-                Phase::Relaxing { since, .. } => Some((since, i)),
-                _ => None,
-            }).collect();
-            relaxing.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-            for (_, i) in relaxing {
-                if over == 0 {
-                    break;
-                }
-                members[i].phase = Phase::Fading;
-                over -= 1;
-            }
+            self.choice = Some(Choice { tool: *proxy, ahead, rotation: *rotation, next: 0, near: Vec::new() });
             self.last_select = Some(*proxy);
         }
-        // Let-go strands whose display has faded out leave the simulation.
+        let mut guides = self.active.clone();
+        let mut members = self.members.clone();
+        if let Some(mut c) = self.choice.take() {
+            let clock = std::time::Instant::now();
+            let n = self.scene.guides.len();
+            let share = n.div_ceil(self.params.haptic.choice_steps.max(1));
+            self.scan(&mut c, share, nodes);
+            let chosen = if c.next >= n { Some(self.chosen(c)) } else {
+                self.choice = Some(c);
+                None
+            };
+            self.timings.choose = clock.elapsed().as_secs_f64();
+            if let Some(chosen) = chosen {
+                self.join(&chosen, &mut guides, &mut members);
+            }
+        }
+        // Let-go strands leave the simulation.
         let mut k = 0;
         while k < guides.len() {
-            if members[k].phase == Phase::Fading && members[k].weight <= 0.0 {
+            if members[k].phase == Phase::Fading {
                 guides.remove(k);
                 members.remove(k);
             } else {
@@ -166,34 +207,78 @@ impl HapticCore {
             }
         }
         if guides != self.active {
+            let clock = std::time::Instant::now();
             self.rebuild(guides, members);
+            self.timings.rebuild = clock.elapsed().as_secs_f64();
         } else {
             self.members = members;
         }
     }
 
+    /// The membership after a choice: the `chosen` guides become (or stay) Chosen, the others that were
+    /// start relaxing, and the relaxing ones that left first are let go while there are more than `max_active`.
+    fn join(&mut self, chosen: &[usize], guides: &mut Vec<usize>, members: &mut Vec<Member>) {
+        for (g, m) in guides.iter().zip(members.iter_mut()) {
+            if chosen.contains(g) {
+                m.phase = Phase::Chosen;
+            } else if m.phase == Phase::Chosen {
+                m.phase = Phase::Relaxing { since: 0.0, still: 0.0 };
+            }
+        }
+        for &g in chosen {
+            if !guides.contains(&g) {
+                guides.push(g);
+                members.push(Member::joining());
+                // A guide fading out is simulated again from its stored state.
+                self.faded.retain(|f| f.guide != g);
+            }
+        }
+        let mut over = members.iter().filter(|m| m.phase != Phase::Fading).count().saturating_sub(self.params.max_active);
+        let mut relaxing: Vec<(f64, usize)> = members.iter().enumerate().filter_map(|(i, m)| match m.phase {
+            Phase::Relaxing { since, .. } => Some((since, i)),
+            _ => None,
+        }).collect();
+        relaxing.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        for (_, i) in relaxing {
+            if over == 0 {
+                break;
+            }
+            members[i].phase = Phase::Fading;
+            over -= 1;
+        }
+    }
+
     /// Moves the strands to the new membership `guides` (`members` parallel): the staying strands move over,
-    /// the joining ones come from the store at rest, the leaving ones go back to the store let go.
+    /// the joining ones come from the store at rest, the leaving ones go back to the store let go and their
+    /// shown displacement fades out from where they were.
     fn rebuild(&mut self, guides: Vec<usize>, members: Vec<Member>) {
         let old_guides = std::mem::take(&mut self.active);
+        let old_members = std::mem::take(&mut self.members);
         let mut old: Vec<Option<Strand>> = std::mem::take(&mut self.interaction.strands).into_iter().map(Some).collect();
         let mut strands = Vec::with_capacity(guides.len());
+        let mut from = Vec::with_capacity(guides.len());
         for &g in &guides {
-            let s = match old_guides.iter().position(|&o| o == g) {
+            let i = old_guides.iter().position(|&o| o == g);
+            strands.push(match i {
                 Some(i) => old[i].take().expect("each old strand is taken once"),
                 None => self.joining(g),
-            };
-            strands.push(s);
+            });
+            from.push(i);
         }
+        let samples = self.scene.samples();
         for (i, s) in old.into_iter().enumerate() {
             if let Some(s) = s {
                 let g = old_guides[i];
+                let weight = old_members.get(i).map_or(0.0, |m| m.weight);
+                if weight > 0.0 {
+                    self.faded.push(Faded { guide: g, samples: samples_along(&s, self.scene.guides[g].model.length, samples), weight });
+                }
                 self.strands[g] = self.let_go(g, s);
             }
         }
         self.active = guides;
         self.members = members;
-        self.renew_interaction(strands);
+        self.interaction.set_strands(strands, &from);
         self.wet_version = u64::MAX;
     }
 
@@ -225,7 +310,7 @@ impl HapticCore {
     }
 
     /// Stage 8 of the step: each simulated strand's tip speed over the step `dt` (s), the leaving strands'
-    /// rest, and the display weights (fading in and out over `blend_time`).
+    /// rest, and the display weights (fading in, and the let-go strands' out, over `blend_time`).
     pub(crate) fn track_active(&mut self, dt: f64) {
         let h = self.params.haptic;
         let fade = dt / h.blend_time;
@@ -244,22 +329,66 @@ impl HapticCore {
                     m.weight = (m.weight + fade).min(1.0);
                     m.phase = if still >= h.rest_time || since >= h.max_relax_time { Phase::Fading } else { Phase::Relaxing { since, still } };
                 }
-                Phase::Fading => m.weight = (m.weight - fade).max(0.0),
+                Phase::Fading => {}
             }
         }
+        for f in &mut self.faded {
+            f.weight -= fade;
+        }
+        self.faded.retain(|f| f.weight > 0.0);
     }
 
-    /// The active strands' roots move with the head, which is rigid (and fixed in the scene's frame): each
-    /// root is held at its guide's root on the scalp, at rest. Not with the lattice: the tool's own
+    /// The active strands' roots move with the head, which is rigid (at the pose `HapticCore::head`): each
+    /// root is held at its guide's root on the scalp, moving and turning with the head. Not with the lattice: the tool's own
     /// repelling obstacle deforms the lattice, and roots following it sank into the head and were kicked out.
     pub(crate) fn roots_follow(&mut self, dt: f64) {
+        let head = self.head;
         for (slot, &g) in self.active.iter().enumerate() {
-            let target = self.scene.guides[g].state.root.position;
+            let groomed = &self.scene.guides[g].state.root;
+            let target = head * nalgebra::Point3::from(groomed.position);
+            let turn = head.rotation.to_rotation_matrix().into_inner() * groomed.rotation;
             let root = &mut self.interaction.strands[slot].state.root;
-            // A root that is elsewhere (a state from before) is brought back over one step.
-            root.velocity = (target - root.position) / dt;
-            root.angular_velocity = Vector3::zeros();
+            // A root that is elsewhere (a state from before, or a head that moved) is brought back over one
+            // step, turning with the head.
+            root.velocity = (target.coords - root.position) / dt;
+            let spin = nalgebra::Rotation3::from_matrix_unchecked(turn * root.rotation.transpose()).scaled_axis();
+            root.angular_velocity = if spin.iter().all(|x| x.is_finite()) { spin / dt } else { Vector3::zeros() };
             root.acceleration = Vector3::zeros();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::global::GlobalCore;
+    use crate::params::SessionParams;
+    use crate::testing::{small_scene, test_rot};
+    use haptics::device::DeviceReading;
+
+    #[test]
+    fn the_choice_spread_over_steps_is_the_whole_scan() {
+        // The comb held still in the hair at the back of the head: after `choice_steps` steps the active set is
+        // exactly the guides the whole scan at once chooses (same set, nearest first), and not before (the scan
+        // is spread: the set is empty at step choice_steps - 1). Then at most `max_active` are simulated.
+        let scene = small_scene();
+        let params = SessionParams::default();
+        let mut core = HapticCore::new(scene.clone(), params).unwrap();
+        let snap = GlobalCore::new(scene, &params).snapshot();
+        let at = Vector3::new(0.0, -0.118, 0.0);
+        let reading = DeviceReading { time: 0.0, position: at, rotation: test_rot(), buttons: 0 };
+        let steps = params.haptic.choice_steps;
+        let mut way = None;
+        for n in 0..steps {
+            assert!(core.active().is_empty(), "chosen after {n} steps");
+            core.step(Some(reading), &snap, 1e-3);
+            // The way the choice is made for: the proxy (kept out of the body) and where its velocity takes it.
+            way.get_or_insert((core.coupling.proxy, core.coupling.proxy + core.coupling.proxy_velocity * params.haptic.lookahead));
+        }
+        let (from, to) = way.unwrap();
+        let want = core.choose(&from, &to, &test_rot(), &snap.positions);
+        assert!(want.len() >= 3, "the comb is in the hair: {want:?}");
+        assert_eq!(core.active(), &want[..]);
+        assert!(core.active().len() <= params.max_active);
     }
 }

@@ -71,6 +71,10 @@ pub struct HapticCore {
     /// move back to `strands` when they leave), and each one's membership.
     pub(crate) active: Vec<usize>,
     pub(crate) members: Vec<active::Member>,
+    /// Strands let go whose shown displacement is fading out (no longer simulated).
+    pub(crate) faded: Vec<active::Faded>,
+    /// The choice of the active set in progress, if any (spread over steps).
+    pub(crate) choice: Option<active::Choice>,
     /// Fastest tip of the simulated strands over the last step, m/s.
     pub(crate) max_tip_speed: f64,
     pub(crate) interaction: LocalInteraction,
@@ -92,13 +96,63 @@ pub struct HapticCore {
     pub(crate) last_contacts: u32,
     pub(crate) last_select: Option<Vector3<f64>>,
     pub(crate) clipped: bool,
+    /// The head pose (head frame to world): the roots and the body follow it. Identity unless a scenario
+    /// or the viewer moves the head ([`HapticCore::set_head_pose`]).
+    pub(crate) head: nalgebra::Isometry3<f64>,
     /// Rejected device readings (NaN, teleport).
     pub rejected: u64,
     /// Strand steps that failed (state kept).
     pub failed: u64,
+    /// Wall-clock time of the last step's stages.
+    pub(crate) timings: StepPhases,
+}
+
+/// Wall-clock time of the stages of one [`HapticCore::step`] (the numbered stages of the module
+/// documentation), s. For profiling (bench/RESULTS.md); no result depends on it.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StepPhases {
+    /// 1-2b: device, coupling, body, s.
+    pub coupling: f64,
+    /// 3-4: active set (choice and membership changes) and roots, s.
+    pub active: f64,
+    /// Of `active`: choosing the guides near the tool's path, s.
+    pub choose: f64,
+    /// Of `active`: moving the strands to a new membership, s.
+    pub rebuild: f64,
+    /// 5-6: wetness and tool actions, s.
+    pub actions: f64,
+    /// 7: the local interaction's step, s.
+    pub interaction: f64,
+    /// 8: tracking, s.
+    pub tracking: f64,
+    /// The local interaction's own phases.
+    pub local: tools::interaction::StepTimings,
+    /// Hair-hair contacts found (pairs of chords, before each strand keeps its deepest).
+    pub hair_pairs: usize,
 }
 
 impl HapticCore {
+    /// Moves the head to `head` (head frame to world): the simulated strands' roots follow it from the next
+    /// step (`roots_follow`), and the body they rest on and the tool keeps out of moves with it. A pose with
+    /// a non-finite part is ignored (returns false). The tool's device positions stay in the world frame.
+    pub fn set_head_pose(&mut self, head: nalgebra::Isometry3<f64>) -> bool {
+        let ok = head.translation.vector.iter().chain(head.rotation.coords.iter()).all(|x| x.is_finite());
+        if ok && head != self.head {
+            self.head = head;
+            if let Some((body, _)) = self.interaction.body.as_mut() {
+                for (b, rest) in body.balls.iter_mut().zip(&self.scene.head.balls) {
+                    b.centre = head * rest.centre;
+                }
+            }
+        }
+        ok
+    }
+
+    /// The head pose now (head frame to world).
+    pub fn head_pose(&self) -> nalgebra::Isometry3<f64> {
+        self.head
+    }
+
     /// At rest with the comb selected.
     pub fn new(scene: Arc<Scene>, params: SessionParams) -> Result<Self, SessionError> {
         params.validate()?;
@@ -112,8 +166,8 @@ impl HapticCore {
         let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape()).collect();
         let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
         Ok(Self {
-            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), max_tip_speed: 0.0, interaction,
-            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, rejected: 0, failed: 0,
+            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), choice: None, max_tip_speed: 0.0, interaction,
+            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, head: nalgebra::Isometry3::identity(), rejected: 0, failed: 0, timings: StepPhases::default(),
         })
     }
 
@@ -146,6 +200,12 @@ impl HapticCore {
                 self.combing_ease = e;
                 self.renew_interaction(Vec::new());
             }
+            Command::SetHead { position, rotation } => {
+                // Out of range or non-finite: ignored (the server checks and answers before).
+                if let Some(head) = crate::command::head_pose(&position, &rotation) {
+                    self.set_head_pose(head);
+                }
+            }
             Command::Reset => {
                 if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, self.params.haptic.min_air_drag) {
                     self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
@@ -162,6 +222,8 @@ impl HapticCore {
     /// snapshot `lattice`. Returns the command for the device.
     pub fn step(&mut self, reading: Option<DeviceReading>, lattice: &LatticeSnapshot, dt: f64) -> DeviceCommand {
         self.step += 1;
+        let clock = std::time::Instant::now();
+        self.timings = StepPhases::default();
         let Some(r) = reading else {
             // No reading: before the first, or a device's stream lost. Zero force; the next reading
             // re-anchors device, proxy and tool where the device is (`follow`).
@@ -184,10 +246,14 @@ impl HapticCore {
         // 2b. Body.
         self.keep_tool_out_of_body(&r.rotation);
         let proxy = self.coupling.proxy;
+        let t1 = clock.elapsed().as_secs_f64();
+        self.timings.coupling = t1;
         // 3. Active set; 4. roots.
         let velocity = self.coupling.proxy_velocity;
         self.update_active(&proxy, &velocity, &r.rotation, &lattice.positions);
         self.roots_follow(dt);
+        let t2 = clock.elapsed().as_secs_f64();
+        self.timings.active = t2 - t1;
         // 5. Wetness.
         self.apply_wetness(lattice);
         // 6. Tool actions (the primary button closes the scissors and the clip, blows the dryer).
@@ -195,8 +261,12 @@ impl HapticCore {
         self.act(pressed, &proxy, &r.rotation);
         // 7. Local strands.
         let pose = ToolPose { position: proxy, rotation: r.rotation };
+        let t3 = clock.elapsed().as_secs_f64();
+        self.timings.actions = t3 - t2;
         match self.interaction.step(dt, pose) {
             Ok(res) => {
+                self.timings.local = res.timings;
+                self.timings.hair_pairs = res.hair_pairs;
                 let n = self.hairs_per_guide();
                 self.hair_force = HairReaction { force: res.force * n, damping: res.damping * n, velocity: self.coupling.proxy_velocity };
                 self.last_contacts = res.contacts.len() as u32;
@@ -207,8 +277,11 @@ impl HapticCore {
                 self.last_contacts = 0;
             }
         }
+        let t4 = clock.elapsed().as_secs_f64();
+        self.timings.interaction = t4 - t3;
         // 8. Tracking.
         self.track_active(dt);
+        self.timings.tracking = clock.elapsed().as_secs_f64() - t4;
         DeviceCommand { force, torque: Vector3::zeros() }
     }
 
@@ -242,7 +315,7 @@ impl HapticCore {
 
     /// What the global layer needs of the tool now.
     pub fn tool_input(&self) -> ToolInput {
-        ToolInput { tool: self.tool, present: self.device.is_some(), position: self.coupling.proxy, rotation: self.interaction.pose.rotation, pressed: self.was_pressed, cuts: self.cuts }
+        ToolInput { tool: self.tool, present: self.device.is_some(), position: self.coupling.proxy, rotation: self.interaction.pose.rotation, pressed: self.was_pressed, cuts: self.cuts, head: self.head }
     }
 
     /// Fills `out` with what the viewer needs.
@@ -273,8 +346,26 @@ impl HapticCore {
                 out.displacement.push(if d.iter().all(|x| x.is_finite()) && d.norm() < self.params.haptic.max_displacement { d } else { Vector3::zeros() });
             }
         }
+        // The let-go strands fading out, from where they were let go.
+        for f in &self.faded {
+            out.active.push(f.guide as u32);
+            for (k, p) in f.samples.iter().enumerate() {
+                let reference = self.scene.guides[f.guide].reference[k];
+                let base = if ok { ffd_map(&self.scene.lattice.ffd, &lattice.positions, &reference) } else { reference };
+                let d = (p - base) * f.weight;
+                out.displacement.push(if d.iter().all(|x| x.is_finite()) && d.norm() < self.params.haptic.max_displacement { d } else { Vector3::zeros() });
+            }
+        }
     }
 
+    /// Tool contacts of the last step.
+    pub fn last_contacts(&self) -> u32 {
+        self.last_contacts
+    }
+    /// Wall-clock time of the last step's stages.
+    pub fn timings(&self) -> StepPhases {
+        self.timings
+    }
     /// Force last sent to the device, N.
     pub fn force(&self) -> Vector3<f64> {
         self.coupling.force

@@ -7,7 +7,7 @@ use crate::params::HapticParams;
 use crate::scene::Scene;
 use nalgebra::Vector3;
 use strand::{HairType, Strand};
-use tools::interaction::{ForceModel, LocalInteraction};
+use tools::interaction::{Entanglement, ForceModel, HairContact, LocalInteraction};
 
 /// `it` with the scene's body (head, neck, shoulders; the live head frame is the world frame) for its strands
 /// to rest on.
@@ -49,14 +49,32 @@ impl HapticCore {
         ForceModel::Constraint { friction: params.combing_friction(h.friction_coefficient(), ease), options: Default::default() }
     }
 
+    /// Hair-hair contact between the local strands (`tools::hair_contact`; None when
+    /// `HapticParams::hair_contact` is off): each guide a wisp of [`HapticCore::hairs_per_guide`] fibres
+    /// (`HairContact`'s defaults otherwise), its dry fibre-fibre friction raised by the wetness `wetness` (in
+    /// [0, 1]; the wetness model's one friction law) and lowered by the combing ease (the one combing-ease
+    /// law), as the tool's friction and as the tress scenarios' (`scenario::patch`).
+    pub(crate) fn hair_contact(&self, wetness: f64) -> Option<HairContact> {
+        if !self.params.haptic.hair_contact {
+            return None;
+        }
+        let d = HairContact::default();
+        let wet = self.wet_model.friction(d.friction, wetness.clamp(0.0, 1.0)).unwrap_or(d.friction);
+        Some(HairContact { fibres: self.hairs_per_guide(), friction: self.params.haptic.combing_friction(wet, self.combing_ease), ..d })
+    }
+
     /// A new local interaction over `strands` with the selected tool's shape (built once) and the current
-    /// hair's contact law; the body the strands rest on moves over from the previous interaction (it is
+    /// hair's contact laws (tool on hair, hair on hair); the body the strands rest on moves over from the previous interaction (it is
     /// not copied in the haptic loop).
     pub(crate) fn renew_interaction(&mut self, strands: Vec<Strand>) {
         let body = self.interaction.body.take();
         let model = Self::force_model(&self.params.haptic, &self.hair_type, self.combing_ease);
         let mut it = LocalInteraction::new(strands, self.shapes[self.tool as usize].clone(), self.interaction.pose, model);
         it.body = body;
+        it.hair_contact = self.hair_contact(0.0);
+        if self.params.haptic.entanglement {
+            it.entanglement = Some(Entanglement::default());
+        }
         self.interaction = it;
     }
 }
@@ -77,4 +95,34 @@ pub(crate) fn samples_along(s: &Strand, length: f64, samples: usize) -> Vec<Vect
         let at = (k as f64 / (samples - 1).max(1) as f64 * length).min(s.model.length);
         strand::kinematics::frame_at(&s.model, &s.state.q, &frames, at).position
     }).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::haptic::HapticCore;
+    use crate::params::SessionParams;
+    use crate::testing::small_scene;
+
+    #[test]
+    fn the_live_hair_contact_is_a_wisp_of_the_guides_hairs_with_the_wet_friction() {
+        // Off by default; on, each guide is a wisp of the real hairs it stands for, and its fibre-fibre friction
+        // follows the wetness by the wetness model's law (dry 0.25; soaked, times the model's friction ratio) and
+        // the combing ease by the one combing-ease law; the interaction takes it (and keeps it on a new one).
+        let scene = small_scene();
+        assert!(HapticCore::new(scene.clone(), SessionParams::default()).unwrap().interaction.hair_contact.is_none());
+        let mut params = SessionParams::default();
+        params.haptic.hair_contact = true;
+        let mut core = HapticCore::new(scene, params).unwrap();
+        let dry = core.hair_contact(0.0).unwrap();
+        assert_eq!(dry.fibres, core.hairs_per_guide());
+        assert!((dry.friction - 0.25).abs() < 1e-15, "{}", dry.friction);
+        let wet = core.hair_contact(1.0).unwrap();
+        let want = core.wet_model.friction(0.25, 1.0).unwrap();
+        assert!(want > 0.25 && (wet.friction - want).abs() < 1e-12, "{} vs {want}", wet.friction);
+        core.combing_ease = 1.0;
+        let eased = core.hair_contact(0.0).unwrap();
+        assert!((eased.friction - params.haptic.combing_friction(0.25, 1.0)).abs() < 1e-15);
+        core.renew_interaction(Vec::new());
+        assert_eq!(core.interaction.hair_contact, Some(eased));
+    }
 }

@@ -11,7 +11,7 @@ impl HapticCore {
     /// The wetness model's material and friction for the active strands, from the guides' wetness in the
     /// lattice snapshot (once per lattice version, and after the active set changes): a wet strand is
     /// heavier, softer, and the tool's friction grows (`tools::wetness::WetnessModel`). The friction of the
-    /// interaction follows the active guides' mean wetness.
+    /// interaction (the tool's and the hair-hair contact's) follows the active guides' mean wetness.
     pub(crate) fn apply_wetness(&mut self, lattice: &LatticeSnapshot) {
         if lattice.version == self.wet_version || lattice.wetness.len() != self.wetness.len() {
             return;
@@ -22,8 +22,11 @@ impl HapticCore {
         let (Ok(dry), Ok(section)) = (h.material(), h.section()) else { return };
         let mut mean = 0.0;
         let set_model = SetModel { hydrogen_share: self.params.haptic.hydrogen_share };
+        self.interaction.wetness.clear();
         for (slot, &g) in self.active.iter().enumerate() {
             let w = self.wetness[g] as f64;
+            // The capillary share of the tool's drag (`tools::entanglement`) follows each guide's wetness.
+            self.interaction.wetness.push(w);
             mean += w / self.active.len() as f64;
             let s = &mut self.interaction.strands[slot];
             if let Ok(m) = self.wet_model.wet(&dry, h.friction_coefficient(), section.area(), w) {
@@ -42,6 +45,7 @@ impl HapticCore {
         if let Ok(m) = self.wet_model.wet(&dry, h.friction_coefficient(), section.area(), mean) {
             self.interaction.model = ForceModel::Constraint { friction: self.params.haptic.combing_friction(m.friction, self.combing_ease), options: Default::default() };
         }
+        self.interaction.hair_contact = self.hair_contact(mean);
     }
 }
 
@@ -81,7 +85,7 @@ mod tests {
     #[test]
     fn wet_hair_gives_the_simulated_strands_the_wet_material_and_the_comb_the_wet_friction() {
         // Every guide wet (1) against dry (0): after the same stroke the interaction's friction is the wetness
-        // model's (7.5 x the dry coefficient) and every simulated strand has the wet material (heavier, softer).
+        // model's (`friction_ratio` x the dry coefficient) and every simulated strand has the wet material (heavier, softer).
         // (This test used to assert that the wet stroke's force was above the dry one's. With the active set
         // chosen by the comb's shape ahead of its motion and its strands stepped until at rest, the heavier and
         // softer wet strands sag out of the comb's fixed path: the mean force of this small scene's stroke is

@@ -12,7 +12,7 @@ use crate::record::Record;
 use crate::scene::{ffd_map, Scene, SceneOptions};
 use crate::tool::Tool;
 use haptics::device::{DeviceProfile, DeviceReading};
-use nalgebra::{Rotation3, Vector3};
+use nalgebra::{Isometry3, Point3, Rotation3, Vector3};
 use serde::Deserialize;
 use std::sync::Arc;
 use std::time::Instant;
@@ -57,11 +57,34 @@ pub struct LiveSpec {
     pub combing_ease: f64,
     /// Initial wetness of every guide, in [0, 1]. Default 0.
     pub wetness: f64,
+    /// The simulated strands touch each other (`HapticParams::hair_contact`, the live session's own switch).
+    /// Default: the session's default.
+    pub hair_contact: bool,
+    /// The head's motion (`[[live.head]]` tables): waypoints of the head frame's pose in the world, time
+    /// from the end of settling, interpolated linearly (position) and along the shortest arc (rotation);
+    /// before the first the head is at the first, after the last at the last. Default none (the head stays
+    /// at the world origin, unrotated). The tool path is in the world frame.
+    pub head: Vec<HeadWaypoint>,
+}
+
+/// One waypoint of the head's motion in a live scenario (`[[live.head]]`).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeadWaypoint {
+    /// Time from the end of settling, s.
+    pub t: f64,
+    /// Position of the head frame's origin (the cranium's centre) in the world, m. Default (0, 0, 0).
+    #[serde(default)]
+    pub position: [f64; 3],
+    /// Rotation of the head frame as a rotation vector (axis times angle, rad; z up, so [0, 0, 0.52] turns
+    /// the head 30 degrees to its left). Default none.
+    #[serde(default)]
+    pub rotation: [f64; 3],
 }
 
 impl Default for LiveSpec {
     fn default() -> Self {
-        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), curliness: 0.0, combing_ease: 0.0, wetness: 0.0 }
+        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), curliness: 0.0, combing_ease: 0.0, wetness: 0.0, hair_contact: crate::params::HapticParams::default().hair_contact, head: Vec::new() }
     }
 }
 
@@ -132,6 +155,17 @@ impl LiveScenario {
                 return bad(format!("live.{k} must be in [0, 1], got {v}"));
             }
         }
+        for (i, w) in l.head.iter().enumerate() {
+            if !(w.t.is_finite() && w.t >= 0.0 && w.position.iter().chain(&w.rotation).all(|x| x.is_finite())) {
+                return bad(format!("live.head[{i}]: t must be >= 0 and every value finite, got {w:?}"));
+            }
+            if Vector3::from(w.position).norm() > 1.0 || Vector3::from(w.rotation).norm() > std::f64::consts::PI {
+                return bad(format!("live.head[{i}]: the head may move at most 1 m and turn at most pi rad, got {w:?}"));
+            }
+            if i > 0 && w.t <= l.head[i - 1].t {
+                return bad(format!("live.head[{i}]: times must increase, got {} after {}", w.t, l.head[i - 1].t));
+            }
+        }
         let tool = tool_by_name(&self.tool.shape).ok_or_else(|| ScenarioError::Invalid(format!("tool.shape must be one of comb, brush, scissors, dryer, sprayer, clip, got {:?}", self.tool.shape)))?;
         let p = &self.tool.path;
         if p.is_empty() {
@@ -172,6 +206,23 @@ impl LiveScenario {
         DeviceReading { time: t, position: p, rotation: Rotation3::new(r).into_inner(), buttons: pressed as u32 }
     }
 
+    /// The head pose at path time `t` (s): the `[[live.head]]` waypoints interpolated (identity without any).
+    pub fn head_pose(&self, t: f64) -> Isometry3<f64> {
+        let w = &self.live.head;
+        let pose = |x: &HeadWaypoint| Isometry3::new(Vector3::from(x.position), Vector3::from(x.rotation));
+        let k = w.partition_point(|x| x.t <= t);
+        if w.is_empty() {
+            Isometry3::identity()
+        } else if k == 0 {
+            pose(&w[0])
+        } else if k == w.len() {
+            pose(&w[k - 1])
+        } else {
+            let (a, b) = (pose(&w[k - 1]), pose(&w[k]));
+            a.lerp_slerp(&b, (t - w[k - 1].t) / (w[k].t - w[k - 1].t))
+        }
+    }
+
     /// The scene options: the built-in scene of `coiffure serve` with this scenario's strands and hair.
     pub fn scene_options(&self) -> SceneOptions {
         let l = &self.live;
@@ -198,7 +249,8 @@ impl LiveScenario {
     /// `coiffure serve --record`, replayable by [`crate::replay::replay`]).
     pub fn run_recorded(&self, scene: Arc<Scene>, record: bool) -> Result<(ForceTrace, LiveSummary, Option<Record>), ScenarioError> {
         let (profile, tool, hair) = self.validate()?;
-        let params = SessionParams { profile, ..SessionParams::default() };
+        let mut params = SessionParams { profile, ..SessionParams::default() };
+        params.haptic.hair_contact = self.live.hair_contact;
         let sim = |e: crate::error::SessionError| ScenarioError::Invalid(format!("live session: {e}"));
         let mut ls = Lockstep::new(scene.clone(), params, params.haptic_rate_hz).map_err(sim)?;
         ls.global.set_wetness(self.live.wetness);
@@ -221,6 +273,11 @@ impl LiveScenario {
                 }
             }
             let t = (n as f64 - settle_steps as f64) * ls.dt;
+            if !self.live.head.is_empty() {
+                let head = self.head_pose(t);
+                ls.global.set_head_pose(head);
+                ls.haptic.set_head_pose(head);
+            }
             let reading = (n >= settle_steps).then(|| self.reading(t));
             if n == settle_steps {
                 meter.settle(&ls);
@@ -304,15 +361,25 @@ pub(crate) struct Meter {
     pub in_hair: Vec<bool>,
     /// Fastest strand tip over the run, m/s.
     pub max_tip_speed: f64,
+    /// Deepest sampled render vertex inside the body at a measure as the viewer shows it (the lattice's FFD,
+    /// then the push-out out of the body, `MetaballSet::push_out` with `PUSH_OUT_SKIN`), m; 0 if none.
+    pub max_depth: f64,
+    /// The same before the push-out (the FFD alone), m.
+    pub max_depth_raw: f64,
 }
+
+/// Every this many render strands one is sampled for the depth inside the body ([`Meter::max_depth`]).
+const DEPTH_SAMPLE_EVERY: usize = 25;
 
 impl Meter {
     fn new(scene: &Arc<Scene>) -> Self {
-        Self { scene: scene.clone(), settled: Vec::new(), params: ContinuityParams::default(), max: 0.0, last: 0.0, stroke_max: 0.0, in_hair: Vec::new(), max_tip_speed: 0.0 }
+        Self { scene: scene.clone(), settled: Vec::new(), params: ContinuityParams::default(), max: 0.0, last: 0.0, stroke_max: 0.0, in_hair: Vec::new(), max_tip_speed: 0.0, max_depth: 0.0, max_depth_raw: 0.0 }
     }
+    /// Guide points as shown, in the head frame (relative to the head), m.
     fn points(&self, ls: &Lockstep) -> Vec<Vector3<f64>> {
         let s = &self.scene;
         let n = s.samples();
+        let inv = ls.global.head_pose().inverse();
         let mut pts: Vec<Vector3<f64>> = s.guides.iter().flat_map(|g| g.reference.iter().map(|p| ffd_map(&s.lattice.ffd, &ls.lattice.positions, p))).collect();
         let mut snap = crate::snapshot::HapticSnapshot::default();
         ls.haptic.snapshot(&ls.lattice, ls.dt, &mut snap);
@@ -321,7 +388,29 @@ impl Meter {
                 pts[g as usize * n + k] += snap.displacement[a * n + k];
             }
         }
-        pts
+        pts.iter().map(|p| (inv * Point3::from(*p)).coords).collect()
+    }
+    /// Deepest sampled render vertex inside the body now (head frame; FFD of the lattice), as shown (after the
+    /// viewer's push-out) and before it, m (0: none).
+    fn depth(&self, ls: &Lockstep) -> (f64, f64) {
+        let s = &self.scene;
+        let (v, t) = (s.render.vertices_per_strand, s.lattice.params.metaball.threshold);
+        let inv = ls.global.head_pose().inverse();
+        let depth = |x: &Point3<f64>| {
+            let (f, g) = s.head.field_and_gradient(x);
+            let gn = g.norm();
+            if f > t && gn > 0.0 { (f - t) / gn } else { 0.0 }
+        };
+        let (mut shown, mut raw) = (0.0f64, 0.0f64);
+        for strand in (0..s.render.strands()).step_by(DEPTH_SAMPLE_EVERY) {
+            for p in &s.render.positions[strand * v..(strand + 1) * v] {
+                let rest = Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+                let x = inv * Point3::from(ffd_map(&s.lattice.ffd, &ls.lattice.positions, &rest));
+                raw = raw.max(depth(&x));
+                shown = shown.max(depth(&s.head.push_out(&x, t, lattice::metaball::PUSH_OUT_SKIN)));
+            }
+        }
+        (shown, raw)
     }
     fn settle(&mut self, ls: &Lockstep) {
         self.settled = self.points(ls);
@@ -336,6 +425,9 @@ impl Meter {
         }
         let d = self.points(ls).iter().zip(&self.settled).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
         self.max = self.max.max(d);
+        let (shown, raw) = self.depth(ls);
+        self.max_depth = self.max_depth.max(shown);
+        self.max_depth_raw = self.max_depth_raw.max(raw);
         if self.in_hair.last() == Some(&true) {
             self.stroke_max = self.stroke_max.max(d);
         }
@@ -415,6 +507,51 @@ mod tests {
         assert!(m.final_max_displacement_m <= 0.03, "displacement 1.2 s after the stroke {} m", m.final_max_displacement_m);
         assert!(m.in_hair_force_share >= 0.6, "share of in-hair steps above 5 mN {}", m.in_hair_force_share);
         assert!(m.max_force_change_n <= 0.1, "largest one-step change {} N", m.max_force_change_n);
+    }
+
+    #[test]
+    fn the_dryer_blows_the_hair_and_it_falls_back() {
+        // Issue 14's acceptance, examples/scenarios/live-dryer.toml: the dryer at the side of the hairstyle
+        // blowing for 2 s moves some guide point by >= 2 cm and, taken away, leaves every guide within 1 cm of
+        // its rest 2.3 s after it stops. The same path without blowing moves the hair less (the nozzle's
+        // 12 mm cursor sphere alone pushes a local strand aside): by at least 1 cm more with the jet.
+        let s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-dryer.toml")).unwrap();
+        let (_, m) = s.run().unwrap();
+        let mut still = s.clone();
+        still.tool.path.iter_mut().for_each(|w| w.pressed = false);
+        let (_, n) = still.run().unwrap();
+        eprintln!("blowing: largest {:.4} m, at the end {:.2e} m; not blowing: largest {:.4} m", m.max_displacement_m, m.final_max_displacement_m, n.max_displacement_m);
+        assert_eq!((m.rejected_readings, m.failed_steps), (0, 0));
+        assert!(m.max_displacement_m >= 0.02, "the jet moves the hair: {} m", m.max_displacement_m);
+        assert!(m.max_displacement_m >= n.max_displacement_m + 0.01, "the jet, not the nozzle: {} vs {} m", m.max_displacement_m, n.max_displacement_m);
+        assert!(m.final_max_displacement_m <= 0.01, "the hair falls back: {} m 2.3 s after", m.final_max_displacement_m);
+        assert!(m.max_depth_in_body_m <= 5e-4, "a vertex {} m inside the body", m.max_depth_in_body_m);
+    }
+
+    #[test]
+    fn a_head_turn_swings_the_hair_and_it_settles() {
+        // Issue 14's acceptance, examples/scenarios/live-head-turn.toml: a head turn of 30 degrees in 0.3 s
+        // makes the hair swing by >= 1 cm relative to the head, and 2 s after the turn every guide point is
+        // within 5 mm of its groomed place on the head (settled: under a tenth of the swing); no render vertex
+        // shown more than 0.5 mm inside the head or body at any global step.
+        let s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-head-turn.toml")).unwrap();
+        assert!((s.head_pose(0.15).rotation.angle() - 15f64.to_radians()).abs() < 1e-6, "halfway through the turn");
+        let (_, m) = s.run().unwrap();
+        eprintln!("{m:?}");
+        assert_eq!((m.rejected_readings, m.failed_steps), (0, 0));
+        assert!(m.max_displacement_m >= 0.01, "the hair swings: {} m", m.max_displacement_m);
+        assert!(m.final_max_displacement_m <= 0.005 && m.final_max_displacement_m < 0.1 * m.max_displacement_m, "settled 2 s after: {} m", m.final_max_displacement_m);
+        assert!(m.max_depth_in_body_m <= 5e-4, "a vertex {} m inside the body", m.max_depth_in_body_m);
+    }
+
+    #[test]
+    fn head_waypoints_are_checked() {
+        let mut s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-head-turn.toml")).unwrap();
+        s.live.head[1].t = 0.0;
+        assert!(s.validate().unwrap_err().to_string().contains("live.head[1]: times must increase"));
+        s.live.head[1].t = 0.3;
+        s.live.head[1].rotation = [f64::NAN, 0.0, 0.0];
+        assert!(s.validate().unwrap_err().to_string().contains("live.head[1]"));
     }
 
     #[test]

@@ -187,6 +187,12 @@ pub struct LiveSummary {
     pub max_force_change_n: f64,
     /// Fastest tip of a simulated strand over the run, m/s.
     pub max_strand_speed_m_s: f64,
+    /// Deepest render vertex inside the head and body at any measure as the viewer shows it (every 25th
+    /// strand sampled; the lattice's FFD, then the viewer's push-out), m; 0 if none.
+    pub max_depth_in_body_m: f64,
+    /// The same before the push-out (the lattice's FFD alone: 5 cm cells put vertices near the scalp a few
+    /// millimetres inside even at rest), m.
+    pub max_depth_before_push_out_m: f64,
     /// Median of the haptic step's wall time, microseconds (this machine, one thread).
     pub haptic_step_p50_us: f64,
     /// 99th percentile of the haptic step's wall time, microseconds.
@@ -235,6 +241,8 @@ impl LiveSummary {
             in_hair_force_share: if in_hair > 0 { felt as f64 / in_hair as f64 } else { 0.0 },
             max_force_change_n: change,
             max_strand_speed_m_s: meter.max_tip_speed,
+            max_depth_in_body_m: meter.max_depth,
+            max_depth_before_push_out_m: meter.max_depth_raw,
             haptic_step_p50_us: p50 * 1e6,
             haptic_step_p99_us: p99 * 1e6,
             haptic_step_p999_us: p999 * 1e6,

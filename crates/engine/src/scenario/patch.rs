@@ -6,6 +6,7 @@
 //! 2. wetness: the strands' material and the friction coefficients (tool-hair and hair-hair) from
 //!    [`tools::wetness::WetnessModel`] at `[patch] wetness`, the same law as the live session's; the combing
 //!    ease lowers both frictions by [`crate::params::HapticParams::combing_friction`], the live session's law;
+//!    the comb drags through the wisps against the fibres it parts ([`tools::entanglement`]);
 //! 3. settle the patch under gravity in the [`tools::interaction::LocalInteraction`] (hair-hair contacts on, the
 //!    tool held at its path's start);
 //! 4. every step move the tool along its path, step the interaction and record the force and torque on the
@@ -20,7 +21,7 @@ use nalgebra::Vector3;
 use serde::Deserialize;
 use strand::constraint::ConstraintOptions;
 use strand::{HairType, ModelKind, RootFrame, Strand, StrandError, StrandModel};
-use tools::interaction::{ForceModel, HairContact, LocalInteraction};
+use tools::interaction::{Entanglement, ForceModel, HairContact, LocalInteraction};
 use tools::shape::ToolShape;
 use tools::wetness::{check_wetness, WetnessModel};
 
@@ -100,6 +101,12 @@ pub struct PatchSpec {
     pub packing: Option<f64>,
     /// Dry fibre-fibre friction coefficient (dimensionless; default `HairContact`'s, 0.25).
     pub hair_friction: Option<f64>,
+    /// The drag of the tool through the wisps, against the fibres it parts (`tools::entanglement`; default
+    /// true).
+    #[serde(default = "default_true")]
+    pub entanglement: bool,
+    /// Free length of a fibre between its entanglement points, m (default `Entanglement`'s, 6 mm).
+    pub entanglement_span: Option<f64>,
 }
 
 fn default_true() -> bool {
@@ -267,6 +274,11 @@ impl Scenario {
                 return bad(format!("patch.packing must be in (0, 1], got {k}"));
             }
         }
+        if let Some(l) = p.entanglement_span {
+            if !(l.is_finite() && l > 0.0) {
+                return bad(format!("patch.entanglement_span must be > 0 m, got {l}"));
+            }
+        }
         if let Some(mu) = p.hair_friction {
             if !(mu.is_finite() && mu >= 0.0) {
                 return bad(format!("patch.hair_friction must be >= 0, got {mu}"));
@@ -346,6 +358,11 @@ impl Scenario {
             let hc = HairContact { fibres: k.max(1.0), packing: p.packing.unwrap_or(d.packing), friction: hair_friction, ..d };
             hair_contact_distance = hc.distance(hair.major_diameter / 2.0);
             it.hair_contact = Some(hc);
+        }
+        if p.entanglement {
+            let d = Entanglement::default();
+            it.entanglement = Some(Entanglement { span: p.entanglement_span.unwrap_or(d.span), ..d });
+            it.wetness = vec![p.wetness; it.strands.len()];
         }
         // Settle under gravity (and the strands' contacts), the tool held at its start.
         let settle_steps = (self.settle / self.dt).round() as usize;

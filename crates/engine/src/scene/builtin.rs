@@ -3,7 +3,9 @@
 use super::{Guide, Mesh, RenderHair, Scene, SceneOptions};
 use crate::error::SessionError;
 use lattice::ffd::FfdLattice;
-use lattice::lattice::{CarryParams, LatticeModel, LatticeParams};
+use crate::params::HairLatticeParams;
+use lattice::lattice::{CarryParams, LatticeModel};
+use lattice::sag_free::SagFreeParams;
 use lattice::metaball::MetaballSet;
 use nalgebra::Point3;
 use strand::HairType;
@@ -56,14 +58,25 @@ impl Scene {
 /// The lattice `ffd` carrying the render strands' vertices `positions` (m, head frame), `hair_mass` (kg)
 /// shared among them, with the body `head` (`LatticeModel::carrying_in`, the one law of a lattice around
 /// hair): each node a floor of 2 % of the mean node mass; nodes in or on the body fully attached, the
-/// weight falling over three head radii `r` (m) beyond to 0.35 (the hair's stiffness holds its far ends).
-/// Before issue 11 the live scene had its own copy of this law (each vertex's mass on its nearest node;
-/// distance to a sphere of radius `r` instead of to the body).
+/// weight falling over three head radii `r` (m) beyond to `HairLatticeParams::min_attachment`; springs from
+/// [`HairLatticeParams`] and the mean node mass; the rest made sag-free.
 pub(super) fn lattice_for_hair(ffd: FfdLattice, positions: &[[f32; 3]], hair_mass: f64, head: &MetaballSet, r: f64) -> Result<LatticeModel, SessionError> {
+    let hp = HairLatticeParams::default();
     let each = hair_mass / positions.len().max(1) as f64;
     let points = positions.iter().map(|p| (Point3::new(p[0] as f64, p[1] as f64, p[2] as f64), each));
-    let carry = CarryParams { cell: ffd.h, attach_distance: 0.0, attach_falloff: 3.0 * r, empty_node_mass: 0.02 * hair_mass / ffd.node_count() as f64, min_attachment: 0.35 };
-    LatticeModel::carrying_in(ffd, points, head, &carry, LatticeParams::default()).map_err(|e| SessionError::Scene(e.to_string()))
+    let floor = 0.02 * hair_mass / ffd.node_count() as f64;
+    let carry = CarryParams { cell: ffd.h, attach_distance: 0.0, attach_falloff: 3.0 * r, empty_node_mass: floor, min_attachment: hp.min_attachment };
+    let mean_mass = hair_mass / ffd.node_count() as f64 + floor;
+    let scene = |e: lattice::lattice::LatticeError| SessionError::Scene(e.to_string());
+    let mut model = LatticeModel::carrying_in(ffd, points, head, &carry, hp.lattice(mean_mass)).map_err(scene)?;
+    if hp.sag_free {
+        // Recover and report: a lattice that cannot be made sag-free (springs too soft for the weight) is
+        // kept as built; it then sags under gravity before it settles.
+        if let Err(e) = model.make_sag_free(&SagFreeParams::default(), None) {
+            tracing::warn!("the lattice is kept as built (it will sag): {e}");
+        }
+    }
+    Ok(model)
 }
 
 #[cfg(test)]

@@ -173,6 +173,21 @@ export class HairMaterial {
     dom.setHair(this.hairsPerStrand, this.diameter);
   }
 
+  /** The body's metaballs at rest (head frame), captured before the first head move. */
+  private restBalls: THREE.Vector4[] | null = null;
+
+  /** The head pose (head frame to world): the push-out's metaballs move with it (the lattice nodes already
+   * come in the world frame). */
+  setHead(p: THREE.Vector3, q: THREE.Quaternion): void {
+    const balls = this.material.uniforms.metaballs.value as THREE.Vector4[];
+    if (!this.restBalls) this.restBalls = balls.map((b) => b.clone());
+    const c = new THREE.Vector3();
+    this.restBalls.forEach((r, i) => {
+      c.set(r.x, r.y, r.z).applyQuaternion(q).add(p);
+      balls[i].set(c.x, c.y, c.z, r.w);
+    });
+  }
+
   /** Lattice node positions, 3 floats per node in flat order i + nx (j + ny k). */
   setLattice(nodes: Float32Array): void {
     const d = this.latticeTexture.image.data as Float32Array;

@@ -34,6 +34,13 @@ interface Status {
   strands: number;
   lastFile: { format: number; bytes: number } | null;
   fit: P.FitMsg | null; // how the last loaded hairstyle was placed on the head (FIT)
+  headPosition: [number, number, number]; // the head pose of the last FRAME (m; head frame to world)
+  headQuaternion: [number, number, number, number]; // x, y, z, w
+  headMode: boolean; // the mouse turns the head (key H) instead of driving the tool
+  /** Turns and nods the head (rad, about z then about the head's x) and moves it (m): sends HEAD. */
+  setHead: (yaw: number, pitch: number, position?: [number, number, number]) => void;
+  /** Largest lattice-node displacement relative to the head since the scene was loaded, now (m). */
+  latticeMotion: () => number;
   send: (b: ArrayBuffer) => void;
 }
 
@@ -50,6 +57,17 @@ const status: Status = {
   gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairColour: DEFAULT_HAIR_COLOUR,
   lastFile: null,
   fit: null,
+  headPosition: [0, 0, 0], headQuaternion: [0, 0, 0, 1], headMode: false,
+  latticeMotion: () => latticeMotion(),
+  setHead: (yaw, pitch, position = [0, 0, 0]) => {
+    const q = new THREE.Quaternion().setFromAxisAngle(new THREE.Vector3(0, 0, 1), yaw)
+      .multiply(new THREE.Quaternion().setFromAxisAngle(new THREE.Vector3(1, 0, 0), pitch));
+    const angle = 2 * Math.acos(Math.min(1, Math.abs(q.w)));
+    const s = Math.sqrt(Math.max(0, 1 - q.w * q.w));
+    const sign = q.w < 0 ? -1 : 1;
+    const rv: [number, number, number] = s < 1e-9 ? [0, 0, 0] : [sign * q.x / s * angle, sign * q.y / s * angle, sign * q.z / s * angle];
+    status.send(P.encodeHead(position, rv));
+  },
   send: (b) => { if (ws.readyState === WebSocket.OPEN) ws.send(b); },
 };
 (window as unknown as { coiffure: Status }).coiffure = status;
@@ -124,6 +142,7 @@ function onScene(msg: P.SceneMsg): void {
   view.setHairType(msg.hairTypes[msg.hairType]);
   hairTypes = msg.hairTypes;
   status.sceneLoaded = true;
+  restNodes = null;
 }
 
 // --- scissors (issue 5): shortened strands ---
@@ -137,8 +156,36 @@ function onStrands(kept: Uint16Array): void {
 }
 
 const scratch = new THREE.Vector3();
+// The lattice nodes of the first FRAME after a SCENE (head frame), to measure how far the hairstyle moved.
+let restNodes: Float32Array | null = null;
+let lastNodes: Float32Array | null = null;
+/** Largest distance of a lattice node from where it was at the first FRAME after the SCENE, relative to the
+ * head (m): how far the whole hairstyle moved. */
+function latticeMotion(): number {
+  if (!restNodes || !lastNodes) return 0;
+  const inv = new THREE.Quaternion(...status.headQuaternion).invert();
+  const p = new THREE.Vector3(...status.headPosition), x = new THREE.Vector3();
+  let worst = 0;
+  for (let i = 0; i + 2 < lastNodes.length; i += 3) {
+    x.set(lastNodes[i], lastNodes[i + 1], lastNodes[i + 2]).sub(p).applyQuaternion(inv);
+    worst = Math.max(worst, Math.hypot(x.x - restNodes[i], x.y - restNodes[i + 1], x.z - restNodes[i + 2]));
+  }
+  return worst;
+}
+
 function onFrame(f: P.FrameMsg): void {
   status.framesReceived++;
+  lastNodes = f.nodes;
+  if (!restNodes) {
+    // in the head frame
+    const inv = new THREE.Quaternion(...f.headQuaternion).invert();
+    const p = new THREE.Vector3(...f.headPosition), x = new THREE.Vector3();
+    restNodes = new Float32Array(f.nodes.length);
+    for (let i = 0; i + 2 < f.nodes.length; i += 3) {
+      x.set(f.nodes[i], f.nodes[i + 1], f.nodes[i + 2]).sub(p).applyQuaternion(inv);
+      restNodes.set([x.x, x.y, x.z], i);
+    }
+  }
   status.youControl = f.youControl;
   const hair = view.hair;
   if (hair) {
@@ -146,6 +193,12 @@ function onFrame(f: P.FrameMsg): void {
     hair.setGuides(f.active, f.samples, f.displacement, f.wetness);
   }
   view.setChains(f.chainCounts, f.chainPoints);
+  const hp = f.headPosition, hq = f.headQuaternion;
+  if (hp.some((x, i) => x !== status.headPosition[i]) || hq.some((x, i) => x !== status.headQuaternion[i])) {
+    view.setHead(hp, hq);
+    status.headPosition = hp;
+    status.headQuaternion = hq;
+  }
   status.keptVersion = f.keptVersion;
   status.chainPoints = f.chainPoints.length / 3;
   for (let i = 0; i < f.displacement.length; i += 3) {
@@ -232,9 +285,31 @@ canvas.addEventListener('contextmenu', (e) => e.preventDefault());
 // Each pointer event sends the pose at once (besides every drawn frame): the device's target must not wait
 // for a slow frame (software rendering draws a frame every second or two), or a stroke reaches the server as
 // a few large jumps.
-canvas.addEventListener('pointerdown', (e) => { if (e.button === 0) { canvas.setPointerCapture(e.pointerId); device.down(e); sendPose(); } });
-canvas.addEventListener('pointerup', (e) => { if (e.button === 0) { device.up(e); sendPose(); } });
-canvas.addEventListener('pointermove', (e) => { device.move(e); sendPose(); });
+// Head mode (key H, the paper's Spaceball): a left drag turns (sideways) and nods (up and down) the head.
+let headDrag: { x: number; y: number; yaw: number; pitch: number } | null = null;
+let headYaw = 0, headPitch = 0;
+const headEl = document.getElementById('headmode');
+window.addEventListener('keydown', (e) => {
+  if (e.key !== 'h' && e.key !== 'H') return;
+  status.headMode = !status.headMode;
+  if (headEl) headEl.textContent = status.headMode ? 'head mode (H): drag to turn and nod the head' : '';
+});
+canvas.addEventListener('pointerdown', (e) => {
+  if (e.button !== 0) return;
+  canvas.setPointerCapture(e.pointerId);
+  if (status.headMode) { headDrag = { x: e.clientX, y: e.clientY, yaw: headYaw, pitch: headPitch }; return; }
+  device.down(e); sendPose();
+});
+canvas.addEventListener('pointerup', (e) => { if (e.button !== 0) return; if (headDrag) { headDrag = null; return; } device.up(e); sendPose(); });
+canvas.addEventListener('pointermove', (e) => {
+  if (headDrag) {
+    headYaw = Math.max(-1.2, Math.min(1.2, headDrag.yaw + 0.005 * (e.clientX - headDrag.x)));
+    headPitch = Math.max(-0.5, Math.min(0.5, headDrag.pitch + 0.005 * (e.clientY - headDrag.y)));
+    if (status.youControl) status.setHead(headYaw, headPitch);
+    return;
+  }
+  device.move(e); sendPose();
+});
 
 function sendPose(): void {
   if (!status.youControl || ws.readyState !== WebSocket.OPEN) return;

@@ -11,6 +11,7 @@ export const Client = {
   LOAD: 0x06,
   SAVE: 0x07,
   PING: 0x08,
+  HEAD: 0x09,
 } as const;
 
 export const Server = {
@@ -120,6 +121,9 @@ export interface FrameMsg {
   keptVersion: number; // changes of the strands' kept points (cuts, resets); STRANDS follows each
   chainCounts: Uint32Array; // points of each falling chain
   chainPoints: Float32Array; // 3 per point, chain after chain (world, m)
+  // --- the head pose (issue 14): head frame to world ---
+  headPosition: [number, number, number]; // m
+  headQuaternion: [number, number, number, number]; // x, y, z, w
 }
 
 export interface ErrorMsg { code: number; message: string }
@@ -199,7 +203,10 @@ export function decodeFrame(buf: ArrayBuffer): FrameMsg {
   const chainCounts = u32s(buf, o, nChains); o += 4 * nChains;
   const nPoints = chainCounts.reduce((a, b) => a + b, 0);
   const chainPoints = f32s(buf, o, 3 * nPoints); o += 12 * nPoints;
-  return { seq, time, tool, youControl, contacts, toolPosition, toolQuaternion, devicePosition, force, latticeVersion, nodes, active, samples, displacement, wetness, keptVersion, chainCounts, chainPoints };
+  // --- the head pose (issue 14) ---
+  const headPosition: [number, number, number] = [f32(), f32(), f32()];
+  const headQuaternion: [number, number, number, number] = [f32(), f32(), f32(), f32()];
+  return { seq, time, tool, youControl, contacts, toolPosition, toolQuaternion, devicePosition, force, latticeVersion, nodes, active, samples, displacement, wetness, keptVersion, chainCounts, chainPoints, headPosition, headQuaternion };
 }
 
 // --- STRANDS (issue 5: scissors) ---
@@ -228,6 +235,13 @@ export function encodePose(p: { x: number; y: number; z: number }, q: { x: numbe
   const [b, v] = header(Client.POSE, 32);
   [p.x, p.y, p.z, q.x, q.y, q.z, q.w].forEach((x, i) => v.setFloat32(2 + 4 * i, x, true));
   v.setUint32(30, buttons, true);
+  return b;
+}
+
+/** HEAD: the head frame's origin (m) and its rotation vector (axis times angle, rad). */
+export function encodeHead(p: [number, number, number], rotation: [number, number, number]): ArrayBuffer {
+  const [b, v] = header(Client.HEAD, 24);
+  [...p, ...rotation].forEach((x, i) => v.setFloat32(2 + 4 * i, x, true));
   return b;
 }
 

@@ -116,6 +116,21 @@ export class View {
     this.sun.position.copy(this.lighting.lightDirection.value);
   }
 
+  /** The head pose from FRAME (head frame to world): the person, its shadow-pass bodies and the hair's push-out
+   * out of the body follow it. */
+  setHead(p: [number, number, number], q: [number, number, number, number]): void {
+    this.headPosition.set(...p);
+    this.headQuaternion.set(...q);
+    for (const o of [this.person?.group, this.person?.depthBody, this.person?.opacityBody]) {
+      if (!o) continue;
+      o.position.copy(this.headPosition);
+      o.quaternion.copy(this.headQuaternion);
+    }
+    this.hair?.setHead(this.headPosition, this.headQuaternion);
+  }
+  readonly headPosition = new THREE.Vector3();
+  readonly headQuaternion = new THREE.Quaternion();
+
   /** Builds the person and the hair from the SCENE message (replacing earlier ones). */
   load(msg: SceneMsg): void {
     if (this.hairMesh) { this.scene.remove(this.hairMesh); this.hairMesh.geometry.dispose(); }

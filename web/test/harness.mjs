@@ -79,7 +79,7 @@ export async function dragWorld(page, a, b, steps = 40, pause = 30, onStep = nul
   for (let i = 1; i <= steps; i++) {
     const t = i / steps;
     await page.mouse.move(pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1]));
-    if (onStep) onStep(i);
+    if (onStep) await onStep(i);
     await page.waitForTimeout(pause);
   }
   await page.mouse.up();

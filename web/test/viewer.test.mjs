@@ -150,6 +150,47 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     assert.ok(dried < wet, `wetness after drying ${dried} < ${wet}`);
   });
 
+  test('the dryer blows the hairstyle and it falls back; a head turn swings it and it settles (issue 14)', async () => {
+    const motion = () => page.evaluate(() => window.coiffure.latticeMotion());
+    // Dryer: selected and brought to the hair at the back of the head (the nozzle aims into the screen), blowing
+    // for 2 s while it moves 1 cm down, then taken away.
+    await page.evaluate(() => document.querySelector('button[data-tool="3"]').click());
+    await page.waitForFunction(() => window.coiffure.tool === 3);
+    await page.waitForTimeout(1500);
+    const rest = await motion();
+    await page.screenshot({ path: join(artifacts, 'dryer-before.png') });
+    let during = 0;
+    await dragWorld(page, [0.0, -0.11, 0.0], [0.0, -0.11, -0.01], 40, 50, async (k) => {
+      if (k % 10 === 9) during = Math.max(during, await motion());
+      if (k === 35) await page.screenshot({ path: join(artifacts, 'dryer-during.png') });
+    });
+    await page.mouse.move(5, 5);
+    await page.waitForTimeout(2300);
+    const after = await motion();
+    await page.screenshot({ path: join(artifacts, 'dryer-after.png') });
+    console.log('dryer blast: lattice motion relative to the head (m)', { rest, during, after });
+    assert.ok(during > rest + 0.005, `the jet moves the hairstyle: ${during} m (before ${rest} m)`);
+    assert.ok(after < 0.5 * during, `it falls back: ${after} m after, ${during} m during`);
+    // Head turn of 30 degrees (key H's drag sends the same HEAD message), then back.
+    await page.evaluate(() => window.coiffure.setHead(0.5236, 0));
+    await page.waitForFunction(() => Math.abs(window.coiffure.headQuaternion[2] - Math.sin(0.2618)) < 1e-3, null, { timeout: 10_000 });
+    let swing = 0;
+    for (let k = 0; k < 4; k++) {
+      swing = Math.max(swing, await motion());
+      if (k === 1) await page.screenshot({ path: join(artifacts, 'head-turn-during.png') });
+      await page.waitForTimeout(100);
+    }
+    await page.waitForTimeout(2000);
+    const settled = await motion();
+    await page.screenshot({ path: join(artifacts, 'head-turn-after.png') });
+    console.log('head turn 30 deg: lattice motion relative to the head (m)', { swing, settled });
+    assert.ok(swing > 0.01, `the hair swings: ${swing} m`);
+    assert.ok(settled < 0.5 * swing, `it settles: ${settled} m after 2 s, ${swing} m swing`);
+    await page.evaluate(() => window.coiffure.setHead(0, 0));
+    await page.waitForFunction(() => Math.abs(window.coiffure.headQuaternion[2]) < 1e-6, null, { timeout: 10_000 });
+    await page.waitForTimeout(1500);
+  });
+
   test('loading a hairstyle file replaces the live hairstyle; a malformed one is answered with an error', async () => {
     // A Cem Yuksel .hair file written here from its specification: 2000 strands of 12 points hanging
     // down from the back of the scalp (points only, default segment count 11).

@@ -34,7 +34,7 @@ fn main() {
     let mut core = GlobalCore::new(scene.clone(), &params);
     let side = std::env::var("SIDE").is_ok();
     let rot = if side { Rotation3::new(Vector3::new(2.2214415, 0.0, 2.2214415)).into_inner() } else { Rotation3::new(Vector3::new(0.0, 2.2214415, -2.2214415)).into_inner() };
-    let mut input = ToolInput { tool: Tool::Dryer, present: true, position: if side { Vector3::new(0.118, 0.0, 0.0) } else { Vector3::new(0.0, -0.118, 0.0) }, rotation: rot, pressed: true, cuts: 0 };
+    let mut input = ToolInput { tool: Tool::Dryer, present: true, position: if side { Vector3::new(0.118, 0.0, 0.0) } else { Vector3::new(0.0, -0.118, 0.0) }, rotation: rot, pressed: true, cuts: 0, ..ToolInput::default() };
     let (mut peak, mut line) = (0.0f64, String::new());
     for k in 0..(4.3 / dt) as usize {
         input.pressed = (k as f64) * dt < 2.0;
@@ -53,8 +53,8 @@ fn main() {
         let t = (k + 1) as f64 * dt;
         let u = (t / 0.3).min(1.0);
         let s = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
-        core.set_head_pose(Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_axis_angle(&Vector3::z_axis(), s * 30f64.to_radians())));
-        core.step(dt, &ToolInput::default());
+        let head = Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_axis_angle(&Vector3::z_axis(), s * 30f64.to_radians()));
+        core.step(dt, &ToolInput { head, ..ToolInput::default() });
         let d = displacement(&core, &settled);
         peak = peak.max(d);
         if k % 10 == 9 {

@@ -28,7 +28,7 @@ fn main() {
     let rot = Matrix3::from_columns(&[Vector3::new(-1.0, 0.0, 0.0), Vector3::new(0.0, 0.0, -1.0), Vector3::new(0.0, -1.0, 0.0)]);
     let params = SessionParams::default();
     let dt = 0.01;
-    let at = |tool: Tool, pressed: bool, y: f64| ToolInput { tool, present: true, position: Vector3::new(0.0, y, -0.02), rotation: rot, pressed, cuts: 0 };
+    let at = |tool: Tool, pressed: bool, y: f64| ToolInput { tool, present: true, position: Vector3::new(0.0, y, -0.02), rotation: rot, pressed, cuts: 0, ..ToolInput::default() };
     let cases = [
         ("lattice only (no tool)", ToolInput::default()),
         ("comb in the hair (lattice obstacle)", at(Tool::Comb, false, -0.13)),
@@ -52,7 +52,7 @@ fn main() {
     for _ in 0..20 {
         g.step(dt, &ToolInput::default());
     }
-    let cut = ToolInput { tool: Tool::Scissors, present: true, position: Vector3::new(0.0, -0.12, -0.06), rotation: rot, pressed: true, cuts: 1 };
+    let cut = ToolInput { tool: Tool::Scissors, present: true, position: Vector3::new(0.0, -0.12, -0.06), rotation: rot, pressed: true, cuts: 1, ..ToolInput::default() };
     let s = Instant::now();
     let _ = g.step(dt, &cut);
     let with_cut = s.elapsed().as_secs_f64();

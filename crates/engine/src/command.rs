@@ -1,6 +1,7 @@
 //! Viewer commands, applied by the haptic thread before its next step (and recorded).
 
 use crate::tool::Tool;
+use nalgebra::{Isometry3, Vector3};
 
 /// A command from the viewer, applied by the haptic thread before its next step (and recorded).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -18,4 +19,19 @@ pub enum Command {
     },
     /// Put every strand, the lattice, the cuts and the wetness back to the start.
     Reset,
+    /// Move the head (the paper's Spaceball): the head frame's pose in the world, its origin at `position`
+    /// (m, at most 1 m from the world origin) turned by the rotation vector `rotation` (axis times angle, rad,
+    /// at most pi). The lattice's attachment, the body and the local strands' roots follow it.
+    SetHead {
+        /// Position of the head frame's origin (the cranium's centre), m.
+        position: Vector3<f64>,
+        /// Rotation of the head frame, rotation vector, rad.
+        rotation: Vector3<f64>,
+    },
+}
+
+/// The head pose of a [`Command::SetHead`], if its values are finite and within range (1 m, pi rad).
+pub fn head_pose(position: &Vector3<f64>, rotation: &Vector3<f64>) -> Option<Isometry3<f64>> {
+    let finite = position.iter().chain(rotation.iter()).all(|x| x.is_finite());
+    (finite && position.norm() <= 1.0 && rotation.norm() <= std::f64::consts::PI + 1e-9).then(|| Isometry3::new(*position, *rotation))
 }

@@ -21,6 +21,8 @@ pub struct LatticeSnapshot {
     pub kept: Arc<Vec<u16>>,
     /// The falling cut clusters' chains: node positions (world, m), one list per chain.
     pub chains: Vec<Vec<[f32; 3]>>,
+    /// The head pose of this step (head frame to world).
+    pub head: nalgebra::Isometry3<f64>,
 }
 
 /// What the haptic thread publishes for the viewer.

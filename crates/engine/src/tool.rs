@@ -75,11 +75,14 @@ pub struct ToolInput {
     /// Scissors closes so far: the global layer cuts the render strands once per increment, with the blade
     /// of [`ToolInput::blade`].
     pub cuts: u64,
+    /// The head pose (head frame to world) the haptic thread has (`Command::SetHead`): the global layer
+    /// takes it for its next step. Default identity.
+    pub head: nalgebra::Isometry3<f64>,
 }
 
 impl Default for ToolInput {
     fn default() -> Self {
-        Self { tool: Tool::Comb, present: false, position: Vector3::zeros(), rotation: Matrix3::identity(), pressed: false, cuts: 0 }
+        Self { tool: Tool::Comb, present: false, position: Vector3::zeros(), rotation: Matrix3::identity(), pressed: false, cuts: 0, head: nalgebra::Isometry3::identity() }
     }
 }
 

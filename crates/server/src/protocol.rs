@@ -28,6 +28,9 @@ pub mod client {
     pub const SAVE: u8 = 0x07;
     /// u32 token: answered by PONG with the same token.
     pub const PING: u8 = 0x08;
+    /// Move the head: 3 f32 position of the head frame's origin (m, at most 1 m from the origin), 3 f32
+    /// rotation vector (axis times angle, rad, at most pi).
+    pub const HEAD: u8 = 0x09;
 }
 
 /// Server -> client message types.
@@ -197,6 +200,15 @@ pub fn parse_client(b: &[u8]) -> Result<ClientMessage, WireError> {
                 return Err(err(code::MALFORMED, format!("format {} unknown (0-3)", p[0])));
             }
             Ok(ClientMessage::Save(p[0] as usize))
+        }
+        client::HEAD => {
+            need(24, "HEAD")?;
+            let v: Vec<f64> = (0..6).map(|k| f32_at(p, 4 * k) as f64).collect();
+            let (position, rotation) = (Vector3::new(v[0], v[1], v[2]), Vector3::new(v[3], v[4], v[5]));
+            if engine::command::head_pose(&position, &rotation).is_none() {
+                return Err(err(code::MALFORMED, format!("HEAD pose out of range (finite, position within 1 m, rotation within pi rad): {v:?}")));
+            }
+            Ok(ClientMessage::Command(Command::SetHead { position, rotation }))
         }
         client::PING => {
             need(4, "PING")?;
@@ -425,6 +437,12 @@ pub fn encode_frame(seq: u32, lat: &LatticeSnapshot, h: &HapticSnapshot) -> Vec<
     for p in lat.chains.iter().flatten() {
         p.iter().for_each(|&x| w.0.extend_from_slice(&x.to_le_bytes()));
     }
+    // --- the head pose (issue 14): head frame to world ---
+    w.v3(&lat.head.translation.vector);
+    let q = lat.head.rotation;
+    for x in [q.i, q.j, q.k, q.w] {
+        w.f32(x);
+    }
     w.0
 }
 
@@ -490,7 +508,21 @@ mod tests {
         assert_eq!((f32_at(4), f32_at(8)), (0.5, 0.25));
         assert_eq!((u32_at(12), u32_at(16), u32_at(20), u32_at(24)), (2, 2, 2, 1));
         assert_eq!((f32_at(28), f32_at(28 + 8 * 4)), (1.0, 9.0));
-        assert_eq!(tail.len(), 28 + 9 * 4);
+        assert_eq!(tail.len(), 28 + 9 * 4 + 28, "chains, then the head pose");
+        // The head pose closes FRAME: 3 f32 position, 4 f32 quaternion (x, y, z, w).
+        let lat = LatticeSnapshot { head: nalgebra::Isometry3::new(Vector3::new(0.01, 0.02, 0.03), Vector3::new(0.0, 0.0, 0.5)), ..lat };
+        let f = encode_frame(1, &lat, &h);
+        let end: Vec<f32> = (0..7).map(|k| f32::from_le_bytes(f[f.len() - 28 + 4 * k..f.len() - 24 + 4 * k].try_into().unwrap())).collect();
+        let want = [0.01, 0.02, 0.03, 0.0, 0.0, (0.25f64).sin(), (0.25f64).cos()];
+        assert!(end.iter().zip(want).all(|(a, b)| (*a as f64 - b).abs() < 1e-6), "{end:?}");
+        // HEAD: 6 f32; a turn of more than pi or a NaN is refused.
+        let head = |v: [f32; 6]| { let mut m = vec![client::HEAD, VERSION]; v.iter().for_each(|x| m.extend_from_slice(&x.to_le_bytes())); parse_client(&m) };
+        match head([0.0, 0.0, 0.01, 0.0, 0.0, 0.5]).unwrap() {
+            ClientMessage::Command(Command::SetHead { position, rotation }) => assert!((position.z - 0.01).abs() < 1e-7 && (rotation.z - 0.5).abs() < 1e-7),
+            m => panic!("{m:?}"),
+        }
+        assert_eq!(head([0.0, 0.0, 0.0, 0.0, 0.0, 4.0]).unwrap_err().code, code::MALFORMED);
+        assert_eq!(head([f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap_err().code, code::MALFORMED);
     }
 
     #[test]

@@ -238,8 +238,10 @@ fn scissors_scenario_cuts_conserves_mass_and_the_pieces_rest_outside_the_body() 
         let x = nalgebra::Point3::new(p[0] as f64, p[1] as f64, p[2] as f64);
         assert!(head.field(&x) <= head.params.threshold * (1.0 + 1e-4), "piece point inside the body: {x:?}");
     }
-    // What stays on the head is above the blade (z = -0.08) within f32 rounding.
-    let below = style.strands.iter().flatten().filter(|p| p[2] < -0.08 - 1e-5).count();
+    // What stays on the head is above the blade (z = -0.08) within 0.1 mm: the new tips lie on the blade's
+    // plane, and the soft sag-free lattice holds the groomed shape to its solve's tolerance (10 um) plus the
+    // drift of its dynamics (measured 30 um after 5 s, `the_hairstyle_keeps_its_groomed_shape_at_rest`).
+    let below = style.strands.iter().flatten().filter(|p| p[2] < -0.08 - 1e-4).count();
     assert_eq!(below, 0, "{below} render vertices below the cut");
 }
 

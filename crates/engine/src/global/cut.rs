@@ -229,7 +229,7 @@ mod tests {
         // The lattice is deformed first (the comb held in the hair for 0.2 s), so the cut is of the FFD's shape.
         let scene = small_scene();
         let mut g = GlobalCore::new(scene.clone(), &SessionParams::default());
-        let comb = ToolInput { tool: Tool::Comb, present: true, position: Vector3::new(0.0, -0.13, 0.0), rotation: test_rot(), pressed: false, cuts: 0 };
+        let comb = ToolInput { tool: Tool::Comb, present: true, position: Vector3::new(0.0, -0.13, 0.0), rotation: test_rot(), pressed: false, cuts: 0, ..ToolInput::default() };
         for _ in 0..20 {
             g.step(0.01, &comb);
         }
@@ -268,7 +268,7 @@ mod tests {
         let p = SessionParams::default();
         let (mut now, mut later) = (GlobalCore::new(scene.clone(), &p), GlobalCore::new(scene.clone(), &p));
         later.defer_cuts(true);
-        let input = ToolInput { tool: Tool::Scissors, present: true, position: Vector3::new(0.0, -0.12, -0.05), rotation: test_rot(), pressed: true, cuts: 1 };
+        let input = ToolInput { tool: Tool::Scissors, present: true, position: Vector3::new(0.0, -0.12, -0.05), rotation: test_rot(), pressed: true, cuts: 1, ..ToolInput::default() };
         now.step(0.01, &ToolInput { cuts: 0, ..input });
         later.step(0.01, &input);
         let v0 = later.kept_version();

@@ -3,6 +3,7 @@
 //! ([`nozzle`]); the scissors' cuts of the render strands and the falling cut clusters ([`cut`]).
 //!
 //! One step of [`GlobalCore::step`], in order:
+//! 0. **Head**: the input's head pose (`ToolInput::head`) becomes the lattice's and the body's.
 //! 1. **Cuts**: a new scissors close (`ToolInput::cuts` went up) cuts the render strands now, or queues the
 //!    cut for a worker thread ([`GlobalCore::defer_cuts`]).
 //! 2. **Dryer jet**: the held dryer's drag on the hair each lattice node carries, as external node forces
@@ -216,6 +217,9 @@ impl GlobalCore {
     /// detected and put back to rest (reported by the flag).
     pub fn step(&mut self, dt: f64, input: &ToolInput) -> (LatticeSnapshot, bool) {
         let t0 = Instant::now();
+        if input.head != self.head {
+            self.set_head_pose(input.head);
+        }
         if input.cuts > self.cuts {
             self.cuts = input.cuts;
             if input.present {
@@ -256,7 +260,7 @@ impl GlobalCore {
         let wetness = (0..self.wet.values.len()).map(|g| self.wet.strand_mean(g) as f32).collect();
         let chains = self.clusters.iter().flat_map(|c| c.clusters.iter()).flat_map(|c| c.guides.iter())
             .map(|ch| ch.positions.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect()).collect();
-        LatticeSnapshot { version: self.version, positions: self.state.positions.clone(), step_seconds: 0.0, wetness, kept_version: self.kept_version, kept: self.kept.clone(), chains }
+        LatticeSnapshot { version: self.version, positions: self.state.positions.clone(), step_seconds: 0.0, wetness, kept_version: self.kept_version, kept: self.kept.clone(), chains, head: self.head }
     }
 
     /// Guide segment centres now (rest centres through the lattice), m.
@@ -297,7 +301,7 @@ mod tests {
         let p = SessionParams::default();
         let (mut free, mut pushed) = (GlobalCore::new(scene.clone(), &p), GlobalCore::new(scene.clone(), &p));
         let tool = Vector3::new(0.0, -0.13, 0.0);
-        let input = ToolInput { tool: Tool::Comb, present: true, position: tool, rotation: test_rot(), pressed: false, cuts: 0 };
+        let input = ToolInput { tool: Tool::Comb, present: true, position: tool, rotation: test_rot(), pressed: false, cuts: 0, ..ToolInput::default() };
         let balls = tool_metaballs(&Tool::Comb.shape(), &tool, &test_rot(), &GlobalParams::default());
         for _ in 0..30 {
             free.step(0.01, &ToolInput::default());
@@ -350,7 +354,7 @@ mod tests {
         let p = SessionParams::default();
         let (mut blown, mut held) = (GlobalCore::new(scene.clone(), &p), GlobalCore::new(scene.clone(), &p));
         let rot = nalgebra::Rotation3::new(Vector3::new(2.2214415, 0.0, 2.2214415)).into_inner();
-        let mut input = ToolInput { tool: Tool::Dryer, present: true, position: Vector3::new(0.13, 0.0, 0.0), rotation: rot, pressed: true, cuts: 0 };
+        let mut input = ToolInput { tool: Tool::Dryer, present: true, position: Vector3::new(0.13, 0.0, 0.0), rotation: rot, pressed: true, cuts: 0, ..ToolInput::default() };
         let gap = |a: &GlobalCore, b: &GlobalCore| a.positions().iter().zip(b.positions()).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max);
         let mut most = 0.0f64;
         for k in 0..430 {

@@ -64,7 +64,7 @@ mod tests {
         // 0.15 rad keeps its wetness exactly (the lattice moves a little meanwhile, hence the margin).
         let scene = small_scene();
         let params = SessionParams::default();
-        let spray = ToolInput { tool: Tool::Sprayer, present: true, position: Vector3::new(0.0, -0.2, 0.0), rotation: test_rot(), pressed: true, cuts: 0 };
+        let spray = ToolInput { tool: Tool::Sprayer, present: true, position: Vector3::new(0.0, -0.2, 0.0), rotation: test_rot(), pressed: true, cuts: 0, ..ToolInput::default() };
         for (tool, start) in [(Tool::Sprayer, 0.0), (Tool::Dryer, 0.5)] {
             let mut g = GlobalCore::new(scene.clone(), &params);
             g.set_wetness(start);
@@ -108,7 +108,7 @@ mod tests {
         // as the linear drag used live before did. Zero when the dryer is not pressed.
         let scene = small_scene();
         let params = SessionParams::default();
-        let input = ToolInput { tool: Tool::Dryer, present: true, position: Vector3::new(0.0, -0.2, 0.0), rotation: test_rot(), pressed: true, cuts: 0 };
+        let input = ToolInput { tool: Tool::Dryer, present: true, position: Vector3::new(0.0, -0.2, 0.0), rotation: test_rot(), pressed: true, cuts: 0, ..ToolInput::default() };
         let force = |u: f64, pressed: bool| {
             let mut g = GlobalCore::new(scene.clone(), &params);
             let mut t = *g.tools();

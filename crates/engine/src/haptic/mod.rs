@@ -198,6 +198,12 @@ impl HapticCore {
                 self.combing_ease = e;
                 self.renew_interaction(Vec::new());
             }
+            Command::SetHead { position, rotation } => {
+                // Out of range or non-finite: ignored (the server checks and answers before).
+                if let Some(head) = crate::command::head_pose(&position, &rotation) {
+                    self.set_head_pose(head);
+                }
+            }
             Command::Reset => {
                 if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, self.params.haptic.min_air_drag) {
                     self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
@@ -306,7 +312,7 @@ impl HapticCore {
 
     /// What the global layer needs of the tool now.
     pub fn tool_input(&self) -> ToolInput {
-        ToolInput { tool: self.tool, present: self.device.is_some(), position: self.coupling.proxy, rotation: self.interaction.pose.rotation, pressed: self.was_pressed, cuts: self.cuts }
+        ToolInput { tool: self.tool, present: self.device.is_some(), position: self.coupling.proxy, rotation: self.interaction.pose.rotation, pressed: self.was_pressed, cuts: self.cuts, head: self.head }
     }
 
     /// Fills `out` with what the viewer needs.

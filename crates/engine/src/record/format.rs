@@ -24,10 +24,16 @@ impl Record {
         b.extend_from_slice(&(self.global_inputs.len() as u64).to_le_bytes());
         for g in &self.global_inputs {
             b.push(g.tool as u8);
-            b.push(g.present as u8 | (g.pressed as u8) << 1);
+            let moved = g.head != nalgebra::Isometry3::identity();
+            b.push(g.present as u8 | (g.pressed as u8) << 1 | (moved as u8) << 2);
             g.position.iter().for_each(|&x| f(&mut b, x));
             g.rotation.iter().for_each(|&x| f(&mut b, x));
             b.extend_from_slice(&g.cuts.to_le_bytes());
+            if moved {
+                // flag bit 2: the head pose follows (translation x y z, unit quaternion i j k w)
+                g.head.translation.vector.iter().for_each(|&x| f(&mut b, x));
+                g.head.rotation.coords.iter().for_each(|&x| f(&mut b, x));
+            }
         }
         b.extend_from_slice(&(self.steps.len() as u64).to_le_bytes());
         for s in &self.steps {
@@ -53,6 +59,10 @@ impl Record {
                         f(&mut b, combing_ease);
                     }
                     Command::Reset => b.push(2),
+                    Command::SetHead { position, rotation } => {
+                        b.push(3);
+                        position.iter().chain(rotation.iter()).for_each(|&x| f(&mut b, x));
+                    }
                 }
             }
         }
@@ -85,8 +95,8 @@ impl Record {
                 let id = r.u8()?;
                 let tool = Tool::from_id(id).ok_or(RecordError::Bad { offset: at, what: format!("tool id {id}") })?;
                 let flags = r.u8()?;
-                if flags > 3 {
-                    return Err(RecordError::Bad { offset: at + 1, what: format!("tool flags {flags} (0-3)") });
+                if flags > 7 {
+                    return Err(RecordError::Bad { offset: at + 1, what: format!("tool flags {flags} (0-7)") });
                 }
                 let position = Vector3::new(r.f64()?, r.f64()?, r.f64()?);
                 let mut m = [0.0; 9];
@@ -94,7 +104,18 @@ impl Record {
                     *x = r.f64()?;
                 }
                 let cuts = r.u64()?;
-                global_inputs.push(ToolInput { tool, present: flags & 1 != 0, pressed: flags & 2 != 0, position, rotation: Matrix3::from_column_slice(&m), cuts });
+                let mut head = nalgebra::Isometry3::identity();
+                if flags & 4 != 0 {
+                    let at = r.at();
+                    let t = Vector3::new(r.f64()?, r.f64()?, r.f64()?);
+                    let (i, j, k, w) = (r.f64()?, r.f64()?, r.f64()?, r.f64()?);
+                    let q = nalgebra::Quaternion::new(w, i, j, k);
+                    if !(t.iter().all(|x| x.is_finite()) && (q.norm() - 1.0).abs() < 1e-6) {
+                        return Err(RecordError::Bad { offset: at, what: "head pose: non-finite or not a unit quaternion".into() });
+                    }
+                    head = nalgebra::Isometry3::from_parts(t.into(), nalgebra::UnitQuaternion::new_unchecked(q));
+                }
+                global_inputs.push(ToolInput { tool, present: flags & 1 != 0, pressed: flags & 2 != 0, position, rotation: Matrix3::from_column_slice(&m), cuts, head });
             }
         }
         let n = r.u64()? as usize;
@@ -127,6 +148,7 @@ impl Record {
                     }
                     1 => Command::SetHair { hair_type: r.u8()?, curliness: r.f64()?, combing_ease: r.f64()? },
                     2 => Command::Reset,
+                    3 => Command::SetHead { position: Vector3::new(r.f64()?, r.f64()?, r.f64()?), rotation: Vector3::new(r.f64()?, r.f64()?, r.f64()?) },
                     k => return Err(RecordError::Bad { offset: at, what: format!("command kind {k}") }),
                 });
             }
@@ -185,6 +207,9 @@ mod tests {
         v1.extend_from_slice(&b[32 + 8 * r.global_resets.len()..]);
         assert_eq!(Record::from_bytes(&v1).unwrap(), r);
         r.global_inputs.push(ToolInput { tool: Tool::Scissors, present: true, pressed: true, cuts: 3, ..ToolInput::default() });
+        // A moved head (flag bit 2 and the pose) and a head command round-trip exactly.
+        r.global_inputs.push(ToolInput { head: nalgebra::Isometry3::new(Vector3::new(0.01, 0.0, 0.02), Vector3::new(0.0, 0.1, 0.5)), ..ToolInput::default() });
+        r.steps.push(crate::record::StepRecord { reading: None, lattice_version: 4, commands: vec![Command::SetHead { position: Vector3::new(0.01, 0.0, 0.02), rotation: Vector3::new(0.0, 0.1, 0.5) }], force: Vector3::zeros() });
         let b = r.to_bytes();
         assert_eq!(Record::from_bytes(&b).unwrap(), r);
         let mut bad = b.clone();

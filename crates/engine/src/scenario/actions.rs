@@ -166,7 +166,7 @@ impl ToolScript {
                     self.cuts += 1;
                     settings.blade_radius = c.radius;
                     let rotation = frame_with_axis(1, &Vector3::from(c.normal));
-                    let input = ToolInput { tool: Tool::Scissors, present: true, position: c.point.into(), rotation, pressed: true, cuts: self.cuts };
+                    let input = ToolInput { tool: Tool::Scissors, present: true, position: c.point.into(), rotation, pressed: true, cuts: self.cuts, ..ToolInput::default() };
                     return (input, settings);
                 }
             }
@@ -182,7 +182,7 @@ impl ToolScript {
             settings.dryer = c.dryer(t0);
             settings.sprayer = c.sprayer(t0);
             let rotation = frame_with_axis(2, &-jet);
-            let input = ToolInput { tool, present: true, position: apex + jet * self.standoff, rotation, pressed: true, cuts: self.cuts };
+            let input = ToolInput { tool, present: true, position: apex + jet * self.standoff, rotation, pressed: true, cuts: self.cuts, ..ToolInput::default() };
             return (input, settings);
         }
         (ToolInput { cuts: self.cuts, ..ToolInput::default() }, settings)

@@ -82,6 +82,9 @@ const ghost = new THREE.Mesh(new THREE.SphereGeometry(0.003, 12, 8), new THREE.M
 view.scene.add(ghost);
 
 const url = new URL('/ws', window.location.href);
+// The access token the server printed with the page's URL (required when it listens off loopback).
+const token = new URLSearchParams(window.location.search).get('token');
+if (token) url.searchParams.set('token', token);
 url.protocol = url.protocol === 'https:' ? 'wss:' : 'ws:';
 const ws = new WebSocket(url);
 ws.binaryType = 'arraybuffer';

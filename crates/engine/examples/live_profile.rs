@@ -2,8 +2,9 @@
 //! `coiffure run` runs it (both cores in lockstep on one thread, `LiveScenario`'s schedule), with the wall time
 //! of each stage of `HapticCore::step` (`haptic::StepPhases`) for every traced step. Prints the step-time
 //! percentiles, the mean of each stage, and the stages of the slowest steps. Run:
-//! `cargo run --release -p coiffure-engine --example live_profile [-- [FILE.toml] [rt] [slowest=N]]`
-//! (`rt`: SCHED_FIFO priority 10 for this thread, needs root or CAP_SYS_NICE).
+//! `cargo run --release -p coiffure-engine --example live_profile [-- [FILE.toml] [rt] [slowest=N] [hair=on|off] [max_active=N]]`
+//! (`rt`: SCHED_FIFO priority 10 for this thread, needs root or CAP_SYS_NICE; `hair=`: `HapticParams::hair_contact`,
+//! default the scenario's `[live] hair_contact`; `max_active=`: `SessionParams::max_active`).
 
 use engine::command::Command;
 use engine::haptic::StepPhases;
@@ -28,7 +29,15 @@ fn main() {
     let s: LiveScenario = toml::from_str(&text).unwrap_or_else(|e| panic!("{file}: {e}"));
     let (profile, tool, hair) = s.validate().expect("a valid scenario");
     let scene = Arc::new(Scene::builtin(&s.scene_options()).expect("the built-in scene"));
-    let params = SessionParams { profile, ..SessionParams::default() };
+    let mut params = SessionParams { profile, ..SessionParams::default() };
+    params.haptic.hair_contact = s.live.hair_contact;
+    if let Some(on) = args.iter().find_map(|a| a.strip_prefix("hair=")) {
+        params.haptic.hair_contact = on == "on";
+    }
+    if let Some(n) = args.iter().find_map(|a| a.strip_prefix("max_active=").and_then(|v| v.parse().ok())) {
+        params.max_active = n;
+        params.max_chosen = params.max_chosen.min(n);
+    }
     let mut ls = Lockstep::new(scene, params, params.haptic_rate_hz).expect("the session");
     ls.global.set_wetness(s.live.wetness);
     let hair_index = HairType::ALL.iter().position(|h| *h == hair).unwrap_or(0) as u8;
@@ -38,6 +47,7 @@ fn main() {
     let steps = settle + (s.run_time() / ls.dt).round() as u64;
     // (step, wall time, stages, active strands, contacts)
     let mut rows: Vec<(u64, f64, StepPhases, usize, u32)> = Vec::new();
+    let (mut tip, mut peak, mut jump, mut last) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for n in 0..steps {
         if n % every == 0 {
             ls.global_step_live();
@@ -45,7 +55,11 @@ fn main() {
         let t = (n as f64 - settle as f64) * ls.dt;
         let reading = (n >= settle).then(|| s.reading(t));
         let t0 = Instant::now();
-        ls.haptic_step(&std::mem::take(&mut commands), reading);
+        let cmd = ls.haptic_step(&std::mem::take(&mut commands), reading);
+        tip = tip.max(ls.haptic.max_tip_speed());
+        peak = peak.max(cmd.force.norm());
+        jump = jump.max((cmd.force.norm() - last).abs());
+        last = cmd.force.norm();
         let wall = t0.elapsed().as_secs_f64();
         if n >= settle {
             rows.push((n - settle, wall, ls.haptic.timings(), ls.haptic.active().len(), ls.haptic.last_contacts()));
@@ -55,7 +69,8 @@ fn main() {
     times.sort_by(f64::total_cmp);
     let q = |p: f64| times[((p * times.len() as f64).ceil() as usize).clamp(1, times.len()) - 1] * 1e6;
     let misses = times.iter().filter(|&&t| t > 1e-3).count();
-    println!("{file}: {} traced steps, real-time priority: {}", times.len(), haptics::realtime::is_realtime());
+    println!("{file}: {} traced steps, real-time priority: {}, hair-hair contact: {}, at most {} strands simulated", times.len(), haptics::realtime::is_realtime(), params.haptic.hair_contact, params.max_active);
+    println!("peak force {peak:.3} N, largest one-step change of |F| {jump:.3} N, fastest strand tip {tip:.2} m/s");
     println!("step: p50 {:.0} us, p99 {:.0} us, p99.9 {:.0} us, max {:.0} us, mean {:.0} us, {misses} steps over 1 ms", q(0.5), q(0.99), q(0.999), q(1.0), times.iter().sum::<f64>() / times.len() as f64 * 1e6);
     let n = rows.len() as f64;
     let mean = |f: &dyn Fn(&StepPhases) -> f64| rows.iter().map(|r| f(&r.2)).sum::<f64>() / n * 1e6;

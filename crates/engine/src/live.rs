@@ -37,6 +37,10 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 use triple_buffer::{triple_buffer, Output};
 
+/// Most viewer commands the haptic thread applies in one step; more wait for the next steps (a RESET or a
+/// hair change rebuilds strands: a burst of them in one step stalled the 1 kHz loop for 0.45 s).
+pub const MAX_COMMANDS_PER_STEP: usize = 2;
+
 /// The viewer side's handles: device input, commands, and the latest snapshots.
 pub struct SessionIo {
     /// Push mouse readings here (the haptic thread reads the newest; unused when the session was started
@@ -165,7 +169,10 @@ impl Session {
         let publish_every = params.publish_every;
         let step = move |reading: Option<DeviceReading>, _t: f64, dt: f64| -> DeviceCommand {
             let mut cmds = Vec::new();
-            while let Ok(c) = cmd_rx.try_recv() {
+            // At most MAX_COMMANDS_PER_STEP viewer commands per haptic step (the rest wait for the next steps):
+            // a burst (1,000 RESETs) must not stall the loop.
+            while cmds.len() < MAX_COMMANDS_PER_STEP {
+                let Ok(c) = cmd_rx.try_recv() else { break };
                 if c == Command::Reset {
                     epoch_h.fetch_add(1, Ordering::Release);
                 }

@@ -122,6 +122,11 @@ impl SessionParams {
 /// Constants of the haptic layer's step (`crate::haptic`), each with its meaning, unit and default.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HapticParams {
+    /// Runaway guard: a tool proxy farther than this from the device point (or non-finite) is put back on
+    /// the device at rest with zero force, and counted (`HapticCore::runaways`), m. Far more than the
+    /// coupling ever stretches in use (the proxy held on the scalp while the pointer's target is at the
+    /// head's centre: 9 cm); the audit saw proxies at 65 km and 1e38 m. Default 0.2.
+    pub max_proxy_lag: f64,
     /// The active set is chosen again when the tool has moved this far since the last choice, m.
     /// Default 0.01.
     pub reselect_distance: f64,
@@ -189,7 +194,7 @@ pub struct HapticParams {
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { reselect_distance: 0.01, choice_steps: 10, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: false, entanglement: false }
+        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: false, entanglement: false }
     }
 }
 
@@ -197,7 +202,7 @@ impl HapticParams {
     /// Checks every field; the error names the bad one.
     pub fn validate(&self) -> Result<(), SessionError> {
         let p = |m: String| Err(SessionError::Param(m));
-        for (k, v) in [("reselect_distance", self.reselect_distance), ("clip_reach", self.clip_reach), ("max_displacement", self.max_displacement), ("snip_distance", self.snip_distance), ("rest_distance", self.rest_distance)] {
+        for (k, v) in [("max_proxy_lag", self.max_proxy_lag), ("reselect_distance", self.reselect_distance), ("clip_reach", self.clip_reach), ("max_displacement", self.max_displacement), ("snip_distance", self.snip_distance), ("rest_distance", self.rest_distance)] {
             if !(v > 0.0 && v.is_finite()) {
                 return p(format!("haptic.{k} must be > 0 m, got {v}"));
             }

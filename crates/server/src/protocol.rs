@@ -73,6 +73,9 @@ pub mod code {
 }
 
 /// File formats by wire id (the server's formats).
+/// A POSE farther than this from the head frame's origin is out of range (error 1), m.
+pub const MAX_POSE_DISTANCE: f64 = 10.0;
+
 pub const FORMATS: [&str; 4] = ["hair", "data", "tfx", "usda"];
 
 /// A parsed client message.
@@ -138,6 +141,9 @@ pub fn parse_client(b: &[u8]) -> Result<ClientMessage, WireError> {
             let v: Vec<f64> = (0..7).map(|k| f32_at(p, 4 * k) as f64).collect();
             if v.iter().any(|x| !x.is_finite()) {
                 return Err(err(code::MALFORMED, "POSE holds a non-finite number".into()));
+            }
+            if Vector3::new(v[0], v[1], v[2]).norm() > MAX_POSE_DISTANCE {
+                return Err(err(code::MALFORMED, format!("POSE position {:?} m is farther than {MAX_POSE_DISTANCE} m from the head", &v[..3])));
             }
             let q = Quaternion::new(v[6], v[3], v[4], v[5]);
             if q.norm() < 1e-6 {
@@ -523,6 +529,12 @@ mod tests {
         }
         assert_eq!(head([0.0, 0.0, 0.0, 0.0, 0.0, 4.0]).unwrap_err().code, code::MALFORMED);
         assert_eq!(head([f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap_err().code, code::MALFORMED);
+        // A finite but absurd POSE (1e30 m) is out of range.
+        let mut pose = vec![client::POSE, VERSION];
+        [1e30f32, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0].iter().for_each(|x| pose.extend_from_slice(&x.to_le_bytes()));
+        pose.extend_from_slice(&0u32.to_le_bytes());
+        let e = parse_client(&pose).unwrap_err();
+        assert!(e.code == code::MALFORMED && e.message.contains("farther than"), "{}", e.message);
     }
 
     #[test]

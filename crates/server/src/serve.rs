@@ -79,7 +79,20 @@ pub struct ServeArgs {
     /// Default per profile: scale 2, the workspace's centre 13 cm behind the head's centre (0,-0.13,0).
     #[arg(long)]
     pub device_workspace: Option<String>,
+    /// Other web origins allowed to open the WebSocket (e.g. `http://localhost:3000`), besides the page this
+    /// server serves (same origin). Repeatable. Clients that send no Origin (scripts) are not browsers and
+    /// are let through (with the token, when one is required).
+    #[arg(long)]
+    pub allow_origin: Vec<String>,
+    /// Access token required on `/ws` (`?token=...`, which the viewer takes from its own URL). Binding to a
+    /// non-loopback address without one generates one and prints the URL with it.
+    #[arg(long)]
+    pub token: Option<String>,
 }
+
+/// Messages a viewer's outgoing queue holds (STRANDS, CONTROL, FIT, ERROR, PONG, FILE; FRAMEs are not queued:
+/// each viewer takes the latest). A viewer that lets it fill up (it does not read) is disconnected.
+pub const OUTBOX_CAPACITY: usize = 256;
 
 /// The UDP address of `--device`: `udp:PORT` (127.0.0.1) or `udp:ADDR:PORT`.
 pub fn parse_device(spec: &str) -> anyhow::Result<SocketAddr> {
@@ -114,7 +127,24 @@ fn viewer_dir(arg: &Option<PathBuf>) -> anyhow::Result<PathBuf> {
 
 struct Control {
     controller: Option<u64>,
-    viewers: Vec<(u64, mpsc::UnboundedSender<Vec<u8>>)>,
+    viewers: Vec<Outbox>,
+}
+
+/// One viewer's outgoing queue (bounded) and the signal that disconnects it when the queue is full.
+struct Outbox {
+    id: u64,
+    tx: mpsc::Sender<Vec<u8>>,
+    kick: Arc<tokio::sync::Notify>,
+}
+
+impl Outbox {
+    /// Queues `msg`; a full queue (a viewer that does not read) disconnects the viewer, and is counted.
+    fn post(&self, msg: Vec<u8>) {
+        if let Err(mpsc::error::TrySendError::Full(_)) = self.tx.try_send(msg) {
+            tracing::warn!("viewer {}: its outgoing queue is full ({OUTBOX_CAPACITY} messages): disconnected", self.id);
+            self.kick.notify_one();
+        }
+    }
 }
 
 struct App {
@@ -139,6 +169,8 @@ struct App {
     swap: Mutex<Option<(Output<LatticeSnapshot>, Output<HapticSnapshot>)>>,
     /// `--device`: the UDP device each session reads (a clone on the same socket), and its counters.
     udp: Option<(UdpDevice, Arc<UdpStatus>)>,
+    /// Who may open `/ws`.
+    access: Access,
 }
 
 impl App {
@@ -152,16 +184,16 @@ impl App {
 
     fn broadcast(&self, msg: &[u8]) {
         let c = self.control.lock().unwrap();
-        for (_, tx) in &c.viewers {
-            let _ = tx.send(msg.to_vec());
+        for v in &c.viewers {
+            v.post(msg.to_vec());
         }
     }
 
     fn broadcast_control(&self) {
         let c = self.control.lock().unwrap();
         let n = c.viewers.len() as u32;
-        for (id, tx) in &c.viewers {
-            let _ = tx.send(protocol::encode_control(c.controller == Some(*id), n));
+        for v in &c.viewers {
+            v.post(protocol::encode_control(c.controller == Some(v.id), n));
         }
     }
 }
@@ -180,6 +212,16 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     if !(args.fps > 0.0 && args.fps <= 240.0) {
         return Err(anyhow!("--fps must be in (0, 240], got {}", args.fps));
     }
+    // Access: a token is required off loopback (generated unless given).
+    let token = match (&args.token, args.addr.is_loopback()) {
+        (Some(t), _) if t.len() < 8 || !t.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_') => {
+            return Err(anyhow!("--token must be at least 8 characters of letters, digits, '-' or '_'"));
+        }
+        (Some(t), _) => Some(t.clone()),
+        (None, false) => Some(new_token()?),
+        (None, true) => None,
+    };
+    let access = Access { allow_origins: args.allow_origin.clone(), token };
     let t0 = Instant::now();
     let opts = SceneOptions { render_strands: args.render_strands, guides: args.guides, ..SceneOptions::default() };
     let scene = Arc::new(Scene::builtin(&opts).context("building the built-in scene")?);
@@ -230,6 +272,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         opts,
         params,
         session: Mutex::new(Some(session)),
+        access,
         swap: Mutex::new(None),
         udp,
     });
@@ -258,8 +301,8 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
                 kept_sent = lat.kept_version;
                 let s = protocol::encode_strands(&lat.kept);
                 if let Ok(c) = app_p.control.lock() {
-                    for (_, tx) in &c.viewers {
-                        let _ = tx.send(s.clone());
+                    for v in &c.viewers {
+                        v.post(s.clone());
                     }
                 }
             }
@@ -296,11 +339,15 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build()?;
     let addr = SocketAddr::new(args.addr, args.port);
     let duration = args.duration;
+    let app_token = app.access.token.clone();
     let served = rt.block_on(async move {
         let router = Router::new().route("/ws", get(ws_handler)).fallback_service(ServeDir::new(&web)).with_state(app.clone());
         let listener = tokio::net::TcpListener::bind(addr).await.with_context(|| format!("cannot bind {addr}"))?;
         let local = listener.local_addr()?;
-        println!("coiffure serve: listening on http://{local}/ (viewer from {})", web.display());
+        match &app_token {
+            Some(t) => println!("coiffure serve: listening on http://{local}/?token={t} (viewer from {}; the token is required)", web.display()),
+            None => println!("coiffure serve: listening on http://{local}/ (viewer from {})", web.display()),
+        }
         use std::io::Write;
         let _ = std::io::stdout().flush();
         let shutdown = async move {
@@ -350,18 +397,63 @@ fn cpu_time() -> Option<f64> {
     (rc == 0).then(|| ts.tv_sec as f64 + 1e-9 * ts.tv_nsec as f64)
 }
 
-async fn ws_handler(ws: WebSocketUpgrade, State(app): State<Arc<App>>) -> impl IntoResponse {
-    ws.max_message_size(64 << 20).on_upgrade(move |socket| viewer(socket, app))
+/// The WebSocket upgrade, after the access checks ([`check_access`]); messages and frames up to 64 MiB.
+async fn ws_handler(ws: WebSocketUpgrade, headers: axum::http::HeaderMap, query: axum::extract::Query<std::collections::HashMap<String, String>>, State(app): State<Arc<App>>) -> axum::response::Response {
+    if let Err(why) = check_access(&headers, query.get("token").map(String::as_str), &app.access) {
+        tracing::warn!("refused a WebSocket: {why}");
+        return (axum::http::StatusCode::FORBIDDEN, why).into_response();
+    }
+    ws.max_message_size(64 << 20).max_frame_size(64 << 20).on_upgrade(move |socket| viewer(socket, app)).into_response()
+}
+
+/// Who may open `/ws`: the allowed origins besides the served one, and the token if one is required.
+#[derive(Debug, Clone, Default)]
+pub struct Access {
+    /// Origins allowed besides the page's own (`--allow-origin`), e.g. `http://localhost:3000`.
+    pub allow_origins: Vec<String>,
+    /// The token `/ws?token=` must carry (`--token`, or generated for a non-loopback address).
+    pub token: Option<String>,
+}
+
+/// Checks a WebSocket upgrade: a browser's Origin must be this server's own (scheme-less host:port equal to
+/// the Host header) or allowed, so that another web page open in the user's browser cannot drive the app;
+/// and the token must match when one is required. Err says why (sent back with 403).
+pub fn check_access(headers: &axum::http::HeaderMap, token: Option<&str>, access: &Access) -> Result<(), String> {
+    if let Some(origin) = headers.get(axum::http::header::ORIGIN) {
+        let origin = origin.to_str().map_err(|_| "the Origin header is not text".to_string())?;
+        let host = headers.get(axum::http::header::HOST).and_then(|h| h.to_str().ok()).unwrap_or("");
+        let origin_host = origin.split_once("://").map_or(origin, |(_, rest)| rest).trim_end_matches('/');
+        let same = !host.is_empty() && origin_host.eq_ignore_ascii_case(host);
+        if !same && !access.allow_origins.iter().any(|a| a.trim_end_matches('/').eq_ignore_ascii_case(origin)) {
+            return Err(format!("origin {origin} is not this server ({host}); start the server with --allow-origin {origin} to allow it"));
+        }
+    }
+    if let Some(want) = &access.token {
+        if token != Some(want.as_str()) {
+            return Err("a valid access token is required (open the URL the server printed, with ?token=...)".into());
+        }
+    }
+    Ok(())
+}
+
+/// A random access token (128 bits from the OS, hex).
+fn new_token() -> anyhow::Result<String> {
+    use std::io::Read;
+    let mut b = [0u8; 16];
+    std::fs::File::open("/dev/urandom").and_then(|mut f| f.read_exact(&mut b)).context("cannot read /dev/urandom for an access token")?;
+    Ok(b.iter().map(|x| format!("{x:02x}")).collect())
 }
 
 /// One viewer: sends the scene, then frames; handles its messages.
 async fn viewer(socket: WebSocket, app: Arc<App>) {
     let id = app.next_id.fetch_add(1, Ordering::Relaxed);
     let (mut sink, mut stream) = socket.split();
-    let (tx, mut rx) = mpsc::unbounded_channel::<Vec<u8>>();
+    let (tx, mut rx) = mpsc::channel::<Vec<u8>>(OUTBOX_CAPACITY);
+    let kick = Arc::new(tokio::sync::Notify::new());
+    let outbox = Outbox { id, tx: tx.clone(), kick: kick.clone() };
     {
         let mut c = app.control.lock().unwrap();
-        c.viewers.push((id, tx.clone()));
+        c.viewers.push(Outbox { id, tx: tx.clone(), kick: kick.clone() });
         if c.controller.is_none() {
             c.controller = Some(id);
         }
@@ -378,12 +470,12 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
         return;
     }
     if let Some((_, status)) = &app.udp {
-        let _ = tx.send(protocol::encode_device(&status.counts()));
+        outbox.post(protocol::encode_device(&status.counts()));
     }
     app.broadcast_control();
     let mut frames = app.frames.clone();
     let app_w = app.clone();
-    let writer = tokio::spawn(async move {
+    let mut writer = tokio::spawn(async move {
         loop {
             tokio::select! {
                 changed = frames.changed() => {
@@ -404,17 +496,28 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
             }
         }
     });
-    while let Some(Ok(msg)) = stream.next().await {
+    loop {
+        // Stop when the socket fails (the writer ends) or the viewer is disconnected because its queue is full
+        // (the kick; the writer, maybe blocked on a socket the viewer does not read, is aborted below).
+        let msg = tokio::select! {
+            m = stream.next() => match m { Some(Ok(m)) => m, _ => break },
+            _ = &mut writer => break,
+            _ = kick.notified() => break,
+        };
         let reply = match msg {
+            // LOAD and SAVE parse, fit and build scenes for up to seconds: on a blocking thread, so that the
+            // runtime's workers keep serving the other viewers.
+            Message::Binary(b) if matches!(b.first(), Some(&protocol::client::LOAD) | Some(&protocol::client::SAVE)) => {
+                let app = app.clone();
+                tokio::task::spawn_blocking(move || handle(&app, id, &b)).await.unwrap_or_else(|_| Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message: "the file operation failed".into() })))
+            }
             Message::Binary(b) => handle(&app, id, &b),
             Message::Text(_) => Some(protocol::encode_error(&WireError { code: protocol::code::TEXT, message: "text frames are not part of the protocol; send binary messages (docs/protocol.md)".into() })),
             Message::Close(_) => break,
             _ => None,
         };
         if let Some(r) = reply {
-            if tx.send(r).is_err() {
-                break;
-            }
+            outbox.post(r);
         }
     }
     writer.abort();
@@ -424,9 +527,9 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
 fn leave(app: &App, id: u64) {
     {
         let mut c = app.control.lock().unwrap();
-        c.viewers.retain(|v| v.0 != id);
+        c.viewers.retain(|v| v.id != id);
         if c.controller == Some(id) {
-            c.controller = c.viewers.first().map(|v| v.0);
+            c.controller = c.viewers.first().map(|v| v.id);
         }
     }
     app.broadcast_control();
@@ -486,8 +589,8 @@ fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
                         Ok(()) => {
                             let msg = protocol::encode_fit(&report);
                             let c = app.control.lock().unwrap();
-                            for (_, tx) in &c.viewers {
-                                let _ = tx.send(msg.clone());
+                            for v in &c.viewers {
+                                v.post(msg.clone());
                             }
                             None
                         }
@@ -522,8 +625,8 @@ fn load(app: &App, curves: &hairstyle::HairCurves) -> Result<(), String> {
     app.latest_guides.lock().unwrap().0 = Arc::new(Vec::new());
     {
         let c = app.control.lock().unwrap();
-        for (_, tx) in &c.viewers {
-            let _ = tx.send((*msg).clone());
+        for v in &c.viewers {
+            v.post((*msg).clone());
         }
     }
     *app.swap.lock().unwrap() = Some((lattice, haptic));

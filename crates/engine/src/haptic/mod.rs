@@ -101,6 +101,8 @@ pub struct HapticCore {
     pub(crate) head: nalgebra::Isometry3<f64>,
     /// Rejected device readings (NaN, teleport).
     pub rejected: u64,
+    /// Steps in which the runaway guard put the proxy back on the device (`HapticParams::max_proxy_lag`).
+    pub runaways: u64,
     /// Strand steps that failed (state kept).
     pub failed: u64,
     /// Wall-clock time of the last step's stages.
@@ -125,8 +127,10 @@ pub struct StepPhases {
     pub interaction: f64,
     /// 8: tracking, s.
     pub tracking: f64,
-    /// The local interaction's own self.timings.
+    /// The local interaction's own phases.
     pub local: tools::interaction::StepTimings,
+    /// Hair-hair contacts found (pairs of chords, before each strand keeps its deepest).
+    pub hair_pairs: usize,
 }
 
 impl HapticCore {
@@ -165,7 +169,7 @@ impl HapticCore {
         let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
         Ok(Self {
             scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), choice: None, max_tip_speed: 0.0, interaction,
-            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, head: nalgebra::Isometry3::identity(), rejected: 0, failed: 0, timings: StepPhases::default(),
+            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, head: nalgebra::Isometry3::identity(), rejected: 0, runaways: 0, failed: 0, timings: StepPhases::default(),
         })
     }
 
@@ -243,6 +247,17 @@ impl HapticCore {
         };
         // 2b. Body.
         self.keep_tool_out_of_body(&r.rotation);
+        // 2c. Runaway guard: a proxy that is non-finite or too far from the device goes back on it, at rest,
+        // with zero force (counted). It never should; if the physics ever throws it, the hand feels nothing.
+        let lag = (self.coupling.proxy - reading.position).norm();
+        if !(lag <= self.params.haptic.max_proxy_lag) {
+            self.runaways += 1;
+            self.coupling.proxy = reading.position;
+            self.coupling.proxy_velocity = Vector3::zeros();
+            self.coupling.force = Vector3::zeros();
+            self.hair_force = HairReaction::none();
+            return DeviceCommand::default();
+        }
         let proxy = self.coupling.proxy;
         let t1 = clock.elapsed().as_secs_f64();
         self.timings.coupling = t1;
@@ -264,6 +279,7 @@ impl HapticCore {
         match self.interaction.step(dt, pose) {
             Ok(res) => {
                 self.timings.local = res.timings;
+                self.timings.hair_pairs = res.hair_pairs;
                 let n = self.hairs_per_guide();
                 self.hair_force = HairReaction { force: res.force * n, damping: res.damping * n, velocity: self.coupling.proxy_velocity };
                 self.last_contacts = res.contacts.len() as u32;
@@ -409,6 +425,32 @@ mod tests {
         assert_eq!(forces[80], Vector3::zeros());
         assert!(forces.iter().all(|f| f.iter().all(|x| x.is_finite())));
         assert!(forces[100..].iter().any(|f| f.norm() > 0.0), "the stroke goes on");
+    }
+
+    #[test]
+    fn a_runaway_proxy_is_put_back_on_the_device_with_zero_force() {
+        // Issue 16's guard: whatever throws the proxy (here set by hand to 65 km, then to NaN) the next step
+        // puts it back on the device at rest, sends zero force and counts it; the stroke then goes on.
+        let scene = small_scene();
+        let mut core = HapticCore::new(scene.clone(), SessionParams::default()).unwrap();
+        let snap = GlobalCore::new(scene, &SessionParams::default()).snapshot();
+        let reading = |n: usize| DeviceReading { time: n as f64 * 1e-3, position: Vector3::new(0.0, -0.118, 0.05 - 1e-4 * n as f64), rotation: test_rot(), buttons: 0 };
+        for n in 0..200 {
+            if n == 100 {
+                core.coupling.proxy = Vector3::new(6.5e4, 0.0, 0.0);
+            }
+            if n == 150 {
+                core.coupling.proxy = Vector3::new(f64::NAN, 0.0, 0.0);
+            }
+            let f = core.step(Some(reading(n)), &snap, 1e-3).force;
+            if n == 100 || n == 150 {
+                assert_eq!(f, Vector3::zeros(), "step {n}");
+                let device = core.device.as_ref().unwrap().point;
+                assert!((core.coupling.proxy - device).norm() < 1e-12, "back on the device point at step {n}");
+            }
+            assert!(f.iter().all(|x| x.is_finite()) && f.norm() <= 3.3 + 1e-9);
+        }
+        assert_eq!(core.runaways, 2);
     }
 
     #[test]

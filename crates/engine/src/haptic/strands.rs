@@ -96,3 +96,33 @@ pub(crate) fn samples_along(s: &Strand, length: f64, samples: usize) -> Vec<Vect
         strand::kinematics::frame_at(&s.model, &s.state.q, &frames, at).position
     }).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::haptic::HapticCore;
+    use crate::params::SessionParams;
+    use crate::testing::small_scene;
+
+    #[test]
+    fn the_live_hair_contact_is_a_wisp_of_the_guides_hairs_with_the_wet_friction() {
+        // Off by default; on, each guide is a wisp of the real hairs it stands for, and its fibre-fibre friction
+        // follows the wetness by the wetness model's law (dry 0.25; soaked, times the model's friction ratio) and
+        // the combing ease by the one combing-ease law; the interaction takes it (and keeps it on a new one).
+        let scene = small_scene();
+        assert!(HapticCore::new(scene.clone(), SessionParams::default()).unwrap().interaction.hair_contact.is_none());
+        let mut params = SessionParams::default();
+        params.haptic.hair_contact = true;
+        let mut core = HapticCore::new(scene, params).unwrap();
+        let dry = core.hair_contact(0.0).unwrap();
+        assert_eq!(dry.fibres, core.hairs_per_guide());
+        assert!((dry.friction - 0.25).abs() < 1e-15, "{}", dry.friction);
+        let wet = core.hair_contact(1.0).unwrap();
+        let want = core.wet_model.friction(0.25, 1.0).unwrap();
+        assert!(want > 0.25 && (wet.friction - want).abs() < 1e-12, "{} vs {want}", wet.friction);
+        core.combing_ease = 1.0;
+        let eased = core.hair_contact(0.0).unwrap();
+        assert!((eased.friction - params.haptic.combing_friction(0.25, 1.0)).abs() < 1e-15);
+        core.renew_interaction(Vec::new());
+        assert_eq!(core.interaction.hair_contact, Some(eased));
+    }
+}

@@ -57,6 +57,9 @@ pub struct LiveSpec {
     pub combing_ease: f64,
     /// Initial wetness of every guide, in [0, 1]. Default 0.
     pub wetness: f64,
+    /// The simulated strands touch each other (`HapticParams::hair_contact`, the live session's own switch).
+    /// Default: the session's default.
+    pub hair_contact: bool,
     /// The head's motion (`[[live.head]]` tables): waypoints of the head frame's pose in the world, time
     /// from the end of settling, interpolated linearly (position) and along the shortest arc (rotation);
     /// before the first the head is at the first, after the last at the last. Default none (the head stays
@@ -81,7 +84,7 @@ pub struct HeadWaypoint {
 
 impl Default for LiveSpec {
     fn default() -> Self {
-        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), curliness: 0.0, combing_ease: 0.0, wetness: 0.0, head: Vec::new() }
+        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), curliness: 0.0, combing_ease: 0.0, wetness: 0.0, hair_contact: crate::params::HapticParams::default().hair_contact, head: Vec::new() }
     }
 }
 
@@ -246,7 +249,8 @@ impl LiveScenario {
     /// `coiffure serve --record`, replayable by [`crate::replay::replay`]).
     pub fn run_recorded(&self, scene: Arc<Scene>, record: bool) -> Result<(ForceTrace, LiveSummary, Option<Record>), ScenarioError> {
         let (profile, tool, hair) = self.validate()?;
-        let params = SessionParams { profile, ..SessionParams::default() };
+        let mut params = SessionParams { profile, ..SessionParams::default() };
+        params.haptic.hair_contact = self.live.hair_contact;
         let sim = |e: crate::error::SessionError| ScenarioError::Invalid(format!("live session: {e}"));
         let mut ls = Lockstep::new(scene.clone(), params, params.haptic_rate_hz).map_err(sim)?;
         ls.global.set_wetness(self.live.wetness);

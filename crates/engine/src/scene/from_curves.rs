@@ -4,6 +4,9 @@ use super::builtin::lattice_for_hair;
 use super::{RenderHair, Scene, SceneOptions};
 use crate::error::SessionError;
 use lattice::ffd::FfdLattice;
+
+/// Most lattice nodes a loaded hairstyle may need (about a 1.35 m box at 5 cm cells).
+pub const MAX_LATTICE_NODES: usize = 20_000;
 use nalgebra::Point3;
 
 impl Scene {
@@ -57,7 +60,9 @@ impl Scene {
             hi = hi.sup(&p);
         }
         let ffd = FfdLattice::enclosing(lo, hi, opts.cell).map_err(|e| bad(e.to_string()))?;
-        if ffd.node_count() > 200_000 {
+        // A hairstyle on a head fits in a metre-sized box (8,000 nodes at 5 cm); more is a malformed or hostile file
+        // (a 60-byte file with one 2.3 m strand asked for 185,193 nodes, 2.2 MB per FRAME).
+        if ffd.node_count() > MAX_LATTICE_NODES {
             return Err(bad(format!("the strands span {:?} to {:?} m: a lattice of {} nodes at {} m cells is too large", lo, hi, ffd.node_count(), opts.cell)));
         }
         let radius = hairstyle::HeadParams::default().head_radius;
@@ -114,5 +119,14 @@ mod tests {
         nan[7][1][2] = f32::NAN;
         let e = Scene::from_curves(&hairstyle::HairCurves::from_strands(nan), &opts).unwrap_err().to_string();
         assert!(e.contains("strand 7 point 1"), "{e}");
+    }
+
+    #[test]
+    fn a_hairstyle_too_large_for_a_head_is_refused() {
+        // Issue 16: one strand across a 2.7 m box (a 60-byte file) asked for a lattice of 185,193 nodes.
+        let opts = SceneOptions { render_strands: 100, guides: 20, ..SceneOptions::default() };
+        let huge = hairstyle::HairCurves::from_strands(vec![vec![[-1.35; 3], [1.35; 3]]]);
+        let e = Scene::from_curves(&huge, &opts).unwrap_err().to_string();
+        assert!(e.contains("too large"), "{e}");
     }
 }

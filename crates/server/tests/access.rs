@@ -1,0 +1,144 @@
+//! Who may drive `coiffure serve` (issue 16): a real server, real WebSocket clients on loopback.
+//! Another web page's Origin is refused; the served page's own Origin and non-browser clients (no Origin)
+//! are let in; off loopback a token is required; a viewer that never reads is disconnected instead of
+//! growing the server; a finite but absurd POSE is an error.
+
+use std::io::{BufRead, BufReader};
+use std::net::TcpStream;
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+use tungstenite::client::IntoClientRequest;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("coiffure-access-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A running `coiffure serve` (killed when dropped) and the URL it printed.
+struct Server {
+    child: Child,
+    /// host:port
+    http: String,
+    /// The printed token, if any.
+    token: Option<String>,
+    _lines: mpsc::Receiver<String>,
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn serve(extra: &[&str]) -> Server {
+    let web = scratch("web");
+    std::fs::write(web.join("index.html"), "<!doctype html><title>stub</title>").unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_coiffure"))
+        .args(["serve", "--port", "0", "--render-strands", "2000", "--haptic-priority", "0", "--duration", "60", "--web"])
+        .arg(&web)
+        .args(extra)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let out = child.stdout.take().unwrap();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for l in BufReader::new(out).lines().map_while(Result::ok) {
+            if tx.send(l).is_err() {
+                break;
+            }
+        }
+    });
+    let deadline = Instant::now() + Duration::from_secs(120);
+    loop {
+        let l = rx.recv_timeout(deadline.saturating_duration_since(Instant::now())).expect("serve printed its URL");
+        if let Some(rest) = l.split("listening on http://").nth(1) {
+            let url = rest.split_whitespace().next().unwrap();
+            let http = url.split('/').next().unwrap().to_string();
+            let token = url.split("?token=").nth(1).map(str::to_string);
+            return Server { child, http, token, _lines: rx };
+        }
+    }
+}
+
+/// Opens `/ws` on `http` (host:port) with an optional Origin and query; the HTTP status of a refusal.
+fn open(http: &str, origin: Option<&str>, query: &str) -> Result<tungstenite::WebSocket<TcpStream>, u16> {
+    let mut req = format!("ws://{http}/ws{query}").into_client_request().unwrap();
+    if let Some(o) = origin {
+        req.headers_mut().insert("Origin", o.parse().unwrap());
+    }
+    let stream = TcpStream::connect(http).unwrap();
+    match tungstenite::client(req, stream) {
+        Ok((ws, _)) => Ok(ws),
+        Err(tungstenite::HandshakeError::Failure(tungstenite::Error::Http(r))) => Err(r.status().as_u16()),
+        Err(e) => panic!("handshake: {e}"),
+    }
+}
+
+/// The first binary message of type `kind`, within 20 s.
+fn first_of(ws: &mut tungstenite::WebSocket<TcpStream>, kind: u8) -> Vec<u8> {
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while Instant::now() < deadline {
+        if let tungstenite::Message::Binary(b) = ws.read().unwrap() {
+            if b[0] == kind {
+                return b.to_vec();
+            }
+        }
+    }
+    panic!("no message 0x{kind:02x}");
+}
+
+#[test]
+fn only_the_served_page_and_scripts_may_connect_and_absurd_poses_are_errors() {
+    let s = serve(&["--allow-origin", "http://localhost:3000"]);
+    assert!(s.token.is_none(), "no token on loopback by default");
+    assert_eq!(open(&s.http, Some("http://evil.example"), "").err(), Some(403), "another page's origin");
+    assert!(open(&s.http, Some(&format!("http://{}", s.http)), "").is_ok(), "the served page's own origin");
+    assert!(open(&s.http, Some("http://localhost:3000"), "").is_ok(), "an allowed origin");
+    let mut ws = open(&s.http, None, "").expect("a script (no Origin)");
+    // 0x84 CONTROL comes to every new viewer; then a POSE 1e30 m away is ERROR 1.
+    first_of(&mut ws, 0x84);
+    let mut pose = vec![0x01, 1];
+    [1e30f32, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0].iter().for_each(|x| pose.extend_from_slice(&x.to_le_bytes()));
+    pose.extend_from_slice(&0u32.to_le_bytes());
+    ws.send(tungstenite::Message::Binary(pose.into())).unwrap();
+    let e = first_of(&mut ws, 0x83);
+    assert_eq!(u16::from_le_bytes([e[2], e[3]]), 1, "error 1 (out of range)");
+}
+
+#[test]
+fn off_loopback_a_token_is_required() {
+    let s = serve(&["--addr", "0.0.0.0"]);
+    let token = s.token.clone().expect("a generated token is printed with the URL");
+    assert_eq!(token.len(), 32, "{token}");
+    let http = s.http.replace("0.0.0.0", "127.0.0.1");
+    assert_eq!(open(&http, None, "").err(), Some(403), "no token");
+    assert_eq!(open(&http, None, "?token=wrong-token").err(), Some(403), "a wrong token");
+    assert!(open(&http, None, &format!("?token={token}")).is_ok(), "the printed token");
+}
+
+#[test]
+fn a_viewer_that_never_reads_is_disconnected() {
+    // The viewer sends PINGs and never reads: the server's answers (PONG) and frames back up in the socket,
+    // then in its bounded outgoing queue (serve::OUTBOX_CAPACITY = 256), and the server drops it. Before, the
+    // queue grew without limit (1.9 MB/s).
+    let s = serve(&[]);
+    let mut ws = open(&s.http, None, "").unwrap();
+    ws.get_mut().set_write_timeout(Some(Duration::from_secs(5))).unwrap();
+    let ping = [0x08u8, 1, 1, 2, 3, 4];
+    let t0 = Instant::now();
+    let mut closed = false;
+    while t0.elapsed() < Duration::from_secs(40) {
+        if ws.send(tungstenite::Message::Binary(ping.to_vec().into())).is_err() {
+            closed = true;
+            break;
+        }
+    }
+    assert!(closed, "the server kept a viewer that never reads for {:?}", t0.elapsed());
+    eprintln!("disconnected after {:?}", t0.elapsed());
+}

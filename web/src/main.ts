@@ -34,6 +34,8 @@ interface Status {
   strands: number;
   lastFile: { format: number; bytes: number } | null;
   fit: P.FitMsg | null; // how the last loaded hairstyle was placed on the head (FIT)
+  device: P.DeviceMsg | null; // the haptic device's stream (DEVICE; null without `serve --device`)
+  toolPosition: [number, number, number]; // the tool proxy of the last FRAME (m, world)
   headPosition: [number, number, number]; // the head pose of the last FRAME (m; head frame to world)
   headQuaternion: [number, number, number, number]; // x, y, z, w
   headMode: boolean; // the mouse turns the head (key H) instead of driving the tool
@@ -57,6 +59,8 @@ const status: Status = {
   gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairColour: DEFAULT_HAIR_COLOUR,
   lastFile: null,
   fit: null,
+  device: null,
+  toolPosition: [0, 0, 0],
   headPosition: [0, 0, 0], headQuaternion: [0, 0, 0, 1], headMode: false,
   latticeMotion: () => latticeMotion(),
   setHead: (yaw, pitch, position = [0, 0, 0]) => {
@@ -97,6 +101,17 @@ ws.onmessage = (ev) => {
     case P.Server.SCENE: onScene(P.decodeScene(buf)); break;
     case P.Server.FRAME: onFrame(P.decodeFrame(buf)); break;
     case P.Server.STRANDS: onStrands(P.decodeStrands(buf)); break;
+    case P.Server.DEVICE: {
+      const d = P.decodeDevice(buf);
+      status.device = d;
+      const el = document.getElementById('device');
+      if (el) {
+        el.textContent = `device: ${d.state}${d.rejected ? `, ${d.rejected} rejected` : ''}${d.malformed ? `, ${d.malformed} malformed` : ''}${d.lost ? `, lost ${d.lost}x` : ''}`;
+        el.className = d.state;
+        el.title = `haptic device (UDP): ${d.accepted} poses accepted, ${d.rejected} rejected (NaN, out of range, teleport, out of order, duplicate), ${d.malformed} malformed packets dropped, ${d.foreign} poses from another sender dropped, lost ${d.lost} times, ${d.answered} forces sent`;
+      }
+      break;
+    }
     case P.Server.FIT: {
       const f = P.decodeFit(buf);
       status.fit = f;
@@ -178,6 +193,7 @@ function latticeMotion(): number {
 
 function onFrame(f: P.FrameMsg): void {
   status.framesReceived++;
+  status.toolPosition = f.toolPosition;
   lastNodes = f.nodes;
   if (!restNodes) {
     // in the head frame

@@ -24,7 +24,26 @@ export const Server = {
   // --- STRANDS (issue 5: scissors) ---
   STRANDS: 0x87,
   FIT: 0x88,
+  DEVICE: 0x89,
 } as const;
+
+/** DEVICE (`coiffure serve --device`): the haptic device's stream (docs/protocol.md). */
+export interface DeviceMsg {
+  state: 'waiting' | 'connected' | 'lost';
+  accepted: number; // poses accepted
+  rejected: number; // poses rejected (non-finite or out of range, teleport, out of order, duplicate)
+  malformed: number; // datagrams of the wrong size or magic
+  foreign: number; // poses from another sender, dropped
+  lost: number; // times the stream was lost (no pose for 50 ms)
+  answered: number; // force packets sent
+}
+
+export function decodeDevice(buf: ArrayBuffer): DeviceMsg {
+  const v = new DataView(buf);
+  const u = (i: number): number => v.getUint32(3 + 4 * i, true);
+  const states = ['waiting', 'connected', 'lost'] as const;
+  return { state: states[v.getUint8(2)] ?? 'lost', accepted: u(0), rejected: u(1), malformed: u(2), foreign: u(3), lost: u(4), answered: u(5) };
+}
 
 /** Axis names of LOAD's options and FIT (index 1-6; 0 = detect). */
 export const AXES = ['detect', '+x', '-x', '+y', '-y', '+z', '-z'];

@@ -18,6 +18,8 @@ pub struct LoopStats {
     pub steps: u64,
     /// Mean time spent in the step function, s.
     pub step_mean: f64,
+    /// Median step time, s (1 us resolution).
+    pub step_p50: f64,
     /// 99th percentile of the step time, s (1 us resolution).
     pub step_p99: f64,
     /// 99.9th percentile of the step time, s.
@@ -162,6 +164,7 @@ impl<D: HapticDevice + 'static> HapticLoop<D> {
                 let stats = LoopStats {
                     steps: n,
                     step_mean: steps_h.mean(),
+                    step_p50: steps_h.quantile(0.5),
                     step_p99: steps_h.quantile(0.99),
                     step_p999: steps_h.quantile(0.999),
                     step_max: steps_h.max,

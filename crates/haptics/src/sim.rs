@@ -151,6 +151,21 @@ pub fn to_csv(rows: &[SimRow]) -> String {
     s
 }
 
+/// Records an answer: on the earliest unanswered packet with its sequence number among the last 1024 (a
+/// duplicate has its own row after the original's); its force becomes the one felt.
+fn answer(rows: &mut [SimRow], sent_at: &[Instant], seq: u32, c: &crate::device::DeviceCommand, flags: u32, force: &mut Vector3<f64>, force_at: &mut Option<Instant>) {
+    let now = Instant::now();
+    let from = rows.len().saturating_sub(1024);
+    if let Some(i) = (from..rows.len()).find(|&i| rows[i].seq == seq && !rows[i].answered()) {
+        let r = &mut rows[i];
+        r.force = c.force;
+        r.flags = flags;
+        r.latency = (now - sent_at[i]).as_secs_f64();
+    }
+    *force = if c.force.iter().all(|x| x.is_finite()) { c.force } else { Vector3::zeros() };
+    *force_at = Some(now);
+}
+
 fn due(times: &[f64], t0: f64, t1: f64) -> bool {
     times.iter().any(|&x| x >= t0 && x < t1)
 }
@@ -177,18 +192,7 @@ pub fn run(server: SocketAddr, path: &dyn Fn(f64) -> DeviceReading, p: &SimParam
     let start = Instant::now();
     let take = |client: &mut UdpClient, rows: &mut Vec<SimRow>, sent_at: &[Instant], force: &mut Vector3<f64>, force_at: &mut Option<Instant>| {
         while let Ok((seq, c, flags)) = client.receive() {
-            let now = Instant::now();
-            // The earliest unanswered packet with this sequence number among the last 1024 (a duplicate has
-            // its own row after the original's).
-            let from = rows.len().saturating_sub(1024);
-            if let Some(i) = (from..rows.len()).find(|&i| rows[i].seq == seq && !rows[i].answered()) {
-                let r = &mut rows[i];
-                r.force = c.force;
-                r.flags = flags;
-                r.latency = (now - sent_at[i]).as_secs_f64();
-            }
-            *force = if c.force.iter().all(|x| x.is_finite()) { c.force } else { Vector3::zeros() };
-            *force_at = Some(now);
+            answer(rows, sent_at, seq, &c, flags, force, force_at);
         }
     };
     let mut k = 0u64;
@@ -197,8 +201,16 @@ pub fn run(server: SocketAddr, path: &dyn Fn(f64) -> DeviceReading, p: &SimParam
         if nominal > p.duration {
             break;
         }
-        if let Some(w) = (start + Duration::from_secs_f64(nominal)).checked_duration_since(Instant::now()) {
-            std::thread::sleep(w);
+        // Wait for the tick on the socket, so that answers are timed when they arrive.
+        let tick = start + Duration::from_secs_f64(nominal);
+        take(&mut client, &mut rows, &sent_at, &mut force, &mut force_at);
+        while let Some(w) = tick.checked_duration_since(Instant::now()).filter(|w| *w > Duration::from_micros(20)) {
+            client.set_nonblocking(false).map_err(|e| e.to_string())?;
+            client.set_timeout(Some(w)).map_err(|e| e.to_string())?;
+            if let Ok((seq, c, flags)) = client.receive() {
+                answer(&mut rows, &sent_at, seq, &c, flags, &mut force, &mut force_at);
+            }
+            client.set_nonblocking(true).map_err(|e| e.to_string())?;
         }
         take(&mut client, &mut rows, &sent_at, &mut force, &mut force_at);
         let t = start.elapsed().as_secs_f64();

@@ -123,12 +123,16 @@ pub struct UdpParams {
     pub rotation_tolerance: f64,
     /// Device workspace to head frame. Default [`Workspace::for_profile`] of the Phantom Omni.
     pub workspace: Workspace,
+    /// Clock of the lost timer: the wall clock (true, the default: a loop catching up after a stall runs
+    /// steps faster than real time and must not find the device lost), or the loop's clock, the `time`
+    /// given to [`HapticDevice::read`] (false: for tests that step the device by hand).
+    pub wall_clock: bool,
 }
 
 impl UdpParams {
     /// Defaults for a device profile (its speed limit and default workspace).
     pub fn for_profile(p: &DeviceProfile) -> Self {
-        Self { lost_after: 0.05, max_packets_per_step: 16, max_speed: p.max_speed, teleport_slack: 0.002, max_reach: 1.0, rotation_tolerance: 0.01, workspace: Workspace::for_profile(p) }
+        Self { lost_after: 0.05, max_packets_per_step: 16, max_speed: p.max_speed, teleport_slack: 0.002, max_reach: 1.0, rotation_tolerance: 0.01, workspace: Workspace::for_profile(p), wall_clock: true }
     }
 
     /// Checks every field; the error names the bad one.
@@ -238,6 +242,8 @@ pub struct UdpDevice {
     last_valid: Option<f64>,
     /// Poses read this step and not answered yet: (sender, sequence, rejected).
     pending: Vec<(SocketAddr, u32, bool)>,
+    /// Origin of the wall clock.
+    epoch: std::time::Instant,
 }
 
 impl UdpDevice {
@@ -256,7 +262,7 @@ impl UdpDevice {
 
     fn on(socket: UdpSocket, params: UdpParams, status: Arc<UdpStatus>) -> Self {
         let pending = Vec::with_capacity(params.max_packets_per_step);
-        Self { socket, params, status, owner: None, last: None, last_valid: None, pending }
+        Self { socket, params, status, owner: None, last: None, last_valid: None, pending, epoch: std::time::Instant::now() }
     }
 
     /// A second device on the same socket and counters, with a fresh stream state (no owner, no pose): for
@@ -337,8 +343,9 @@ impl UdpDevice {
 }
 
 impl HapticDevice for UdpDevice {
-    /// `time`: the loop's clock, s (the lost timer runs on it).
+    /// `time`: the loop's clock, s (the lost timer runs on it if `UdpParams::wall_clock` is false).
     fn read(&mut self, time: f64) -> Option<DeviceReading> {
+        let time = if self.params.wall_clock { self.epoch.elapsed().as_secs_f64() } else { time };
         if self.last_valid.is_some_and(|t| time - t > self.params.lost_after) {
             self.owner = None;
             self.last = None;
@@ -458,7 +465,7 @@ mod tests {
         // A client streams poses to the UDP device over 127.0.0.1; the device answers each with the force
         // computed from it (here: a spring towards the origin), echoing the sequence number. A malformed
         // packet is dropped and counted, and the stream goes on.
-        let identity = UdpParams { workspace: Workspace { scale: 1.0, offset: Vector3::zeros() }, ..UdpParams::for_profile(&DeviceProfile::PHANTOM_OMNI) };
+        let identity = UdpParams { workspace: Workspace { scale: 1.0, offset: Vector3::zeros() }, wall_clock: false, ..UdpParams::for_profile(&DeviceProfile::PHANTOM_OMNI) };
         let mut dev = UdpDevice::bind_with("127.0.0.1:0", identity).unwrap();
         let mut client = UdpClient::connect(dev.local_addr().unwrap()).unwrap();
         for i in 0..50 {

@@ -15,7 +15,7 @@ const OMNI: DeviceProfile = DeviceProfile::PHANTOM_OMNI;
 
 /// A device with the identity workspace (head frame = device frame) and a client connected to it.
 fn pair() -> (UdpDevice, UdpClient) {
-    let params = UdpParams { workspace: Workspace { scale: 1.0, offset: Vector3::zeros() }, ..UdpParams::for_profile(&OMNI) };
+    let params = UdpParams { workspace: Workspace { scale: 1.0, offset: Vector3::zeros() }, wall_clock: false, ..UdpParams::for_profile(&OMNI) };
     let dev = UdpDevice::bind_with("127.0.0.1:0", params).unwrap();
     let client = UdpClient::connect(dev.local_addr().unwrap()).unwrap();
     (dev, client)

@@ -367,8 +367,8 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let report = session.stop();
     let f = st.frames.max(1) as f64;
     println!(
-        "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame); haptic loop: {} steps, step mean {:.1} us, p99 {:.0} us, p99.9 {:.0} us, {} misses, {} step panics, real-time priority: {}; global: {} steps, mean {:.2} ms",
-        st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, report.haptic.steps, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, report.haptic.misses, report.haptic.panics, report.haptic.realtime, report.global_steps, 1e3 * report.global_step_mean
+        "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame); haptic loop: {} steps at {} Hz, step mean {:.1} us, p50 {:.0} us, p99 {:.0} us, p99.9 {:.0} us, {} misses, {} step panics, real-time priority: {}; global: {} steps, mean {:.2} ms",
+        st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, report.haptic.steps, args.haptic_rate, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p50, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, report.haptic.misses, report.haptic.panics, report.haptic.realtime, report.global_steps, 1e3 * report.global_step_mean
     );
     if let Some((_, status)) = &app_end.udp {
         let c = status.counts();

@@ -175,6 +175,8 @@ fn a_simulated_device_combs_the_live_hair_and_faults_are_handled() {
     assert!(state_in(2.05, 2.2).contains(&2), "lost during the pause");
     assert!(state_in(2.25, 2.6).contains(&1), "connected after the pause");
     let last = status.last().unwrap().2;
-    assert_eq!(last[4], 2, "lost twice: the pause and the end of the stream: {last:?}");
+    // Lost at the pause and at the end of the stream (more if the loaded machine stalled the simulator for
+    // over 50 ms: that is a real loss as the server sees it).
+    assert!(last[4] >= 2, "lost at the pause and at the end of the stream: {last:?}");
     assert_eq!(last[1], 3, "three rejected poses: {last:?}");
 }

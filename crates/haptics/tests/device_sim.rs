@@ -75,7 +75,8 @@ fn the_rigid_hand_follows_the_path_and_faults_are_flagged() {
         assert!(r.answered() && r.flags & FLAG_REJECTED != 0 && r.force == Vector3::zeros(), "{kind:?}: {r:?}");
     }
     assert_eq!(s.rejected, 3);
-    assert!(rows.iter().all(|r| !(r.t >= 0.355 && r.t < 0.445)), "nothing sent during the pause");
+    // (A row's t is when it was sent: a tick just before the pause may go out a little late on a busy machine.)
+    assert!(rows.iter().all(|r| !(r.t >= 0.375 && r.t < 0.445)), "nothing sent during the pause");
     // 250 ticks less the 50 paused, all answered.
     assert!(s.sent >= 195 && s.sent <= 205, "{}", s.sent);
     assert_eq!(s.answered, s.sent);

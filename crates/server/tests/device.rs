@@ -152,9 +152,10 @@ fn a_simulated_device_combs_the_live_hair_and_faults_are_handled() {
     assert!(answered.iter().all(|r| r[4].is_finite() && r[5].is_finite() && r[6].is_finite()), "finite forces");
     assert!(largest <= 3.3 + 1e-9, "within the Omni's 3.3 N: {largest} N");
     assert!(in_hair > 0.05, "the comb in the hair is felt: {in_hair} N");
-    // A loose bound: answers are fresh, not queued (the 2 ms p99 figure on an idle machine is in
-    // bench/RESULTS.md; timing targets are not asserted in tests on a shared machine).
-    assert!(p99 < 0.05, "round trip p99 {p99} s");
+    // Loose bounds: answers are fresh, not queued (a backlog would put the median at seconds). The 2 ms p99
+    // figure on an idle machine is in bench/RESULTS.md; timing targets are not asserted in tests on a shared
+    // machine (under a parallel build the p99 reached 140 ms while the median stayed at a few ms).
+    assert!(p50 < 0.05 && p99 < 0.5, "round trip p50 {p50} s, p99 {p99} s");
 
     // The NaN pose, the 10 m teleport and the duplicate: answered with the rejected flag and zero force (a row's
     // t is when it was sent: a stalled simulator sends a scheduled fault a few ms late).

@@ -467,6 +467,20 @@ mod tests {
     use super::*;
 
     #[test]
+    fn device_status_has_its_documented_layout() {
+        // docs/protocol.md: type, version, u8 state, then six u32 counters, 27 bytes.
+        let mut c = haptics::udp::UdpCounts { connected: true, accepted: 7, rejected: [1, 2, 3, 4], malformed: 5, foreign: 6, lost: 8, answered: 9, deferred: 0 };
+        let b = encode_device(&c);
+        assert_eq!(b.len(), 27);
+        assert_eq!((b[0], b[1], b[2]), (server::DEVICE, VERSION, device_state::CONNECTED));
+        let u = |i: usize| u32::from_le_bytes(b[3 + 4 * i..7 + 4 * i].try_into().unwrap());
+        assert_eq!([u(0), u(1), u(2), u(3), u(4), u(5)], [7, 10, 5, 6, 8, 9]);
+        c.connected = false;
+        assert_eq!(encode_device(&c)[2], device_state::LOST);
+        assert_eq!(encode_device(&haptics::udp::UdpCounts::default())[2], device_state::WAITING);
+    }
+
+    #[test]
     fn malformed_and_unknown_messages_are_errors_not_panics() {
         assert_eq!(parse_client(&[]).unwrap_err().code, code::MALFORMED);
         assert_eq!(parse_client(&[0x01]).unwrap_err().code, code::MALFORMED);

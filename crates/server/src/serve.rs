@@ -171,7 +171,12 @@ struct App {
     udp: Option<(UdpDevice, Arc<UdpStatus>)>,
     /// Who may open `/ws`.
     access: Access,
+    /// When the last SAVE was served.
+    last_save: Mutex<Option<Instant>>,
 }
+
+/// Shortest time between two SAVEs (each writes the whole hairstyle).
+pub const SAVE_INTERVAL: Duration = Duration::from_secs(1);
 
 impl App {
     /// The device a new session reads: the UDP device's clone with `--device`, else None (the mouse).
@@ -273,6 +278,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         params,
         session: Mutex::new(Some(session)),
         access,
+        last_save: Mutex::new(None),
         swap: Mutex::new(None),
         udp,
     });
@@ -572,10 +578,24 @@ fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
             let _ = app.commands.lock().unwrap().send(c);
             None
         }
-        ClientMessage::Save(format) => match save(app, format) {
-            Ok(b) => Some(protocol::encode_file(format, &b)),
-            Err(e) => Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message: e })),
-        },
+        ClientMessage::Save(format) => {
+            // A SAVE writes the whole hairstyle (up to a second of work at 100k strands): only the viewer in
+            // control, at most one per `SAVE_INTERVAL`.
+            if !controls {
+                return not_controller();
+            }
+            {
+                let mut last = app.last_save.lock().unwrap();
+                if last.is_some_and(|t| t.elapsed() < SAVE_INTERVAL) {
+                    return Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message: format!("SAVE at most once every {} s; try again", SAVE_INTERVAL.as_secs_f64()) }));
+                }
+                *last = Some(Instant::now());
+            }
+            match save(app, format) {
+                Ok(b) => Some(protocol::encode_file(format, &b)),
+                Err(e) => Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message: e })),
+            }
+        }
         ClientMessage::Load(format, opts, bytes) => {
             if !controls {
                 return not_controller();

@@ -109,6 +109,18 @@ fn only_the_served_page_and_scripts_may_connect_and_absurd_poses_are_errors() {
     ws.send(tungstenite::Message::Binary(pose.into())).unwrap();
     let e = first_of(&mut ws, 0x83);
     assert_eq!(u16::from_le_bytes([e[2], e[3]]), 1, "error 1 (out of range)");
+    // SAVE: the viewer in control gets the file, a second SAVE within a second is refused (error 5); a viewer
+    // not in control is refused (error 4).
+    ws.send(tungstenite::Message::Binary(vec![0x07, 1, 0].into())).unwrap();
+    assert!(first_of(&mut ws, 0x85).len() > 1000, "FILE");
+    ws.send(tungstenite::Message::Binary(vec![0x07, 1, 0].into())).unwrap();
+    let e = first_of(&mut ws, 0x83);
+    assert_eq!(u16::from_le_bytes([e[2], e[3]]), 5, "rate-limited: {}", String::from_utf8_lossy(&e[6..]));
+    let mut other = open(&s.http, None, "").unwrap();
+    first_of(&mut other, 0x84);
+    other.send(tungstenite::Message::Binary(vec![0x07, 1, 0].into())).unwrap();
+    let e = first_of(&mut other, 0x83);
+    assert_eq!(u16::from_le_bytes([e[2], e[3]]), 4, "not in control");
 }
 
 #[test]

@@ -114,7 +114,7 @@ fn a_simulated_device_combs_the_live_hair_and_faults_are_handled() {
     // The comb stroke of examples/scenarios/live-comb.toml (in the back hair from 0.3 s to 1.05 s, out by
     // 1.45 s) streamed at 1 kHz by a rigid simulated Phantom Omni through the default workspace mapping; then,
     // out of the hair, a NaN pose at 1.6 s, a 10 m teleport at 1.7 s, a duplicate at 1.8 s, and no poses
-    // from 2.0 s for 0.15 s. A viewer watches the DEVICE status.
+    // from 2.0 s for 0.3 s. A viewer watches the DEVICE status.
     let server = serve(&[]);
     let dir = scratch("sim");
     let csv = dir.join("trace.csv");
@@ -126,7 +126,7 @@ fn a_simulated_device_combs_the_live_hair_and_faults_are_handled() {
         .args(["device-sim", "--server", &format!("udp:{}", server.udp), "--rate", "1000", "--duration", "2.6"])
         .arg("--path")
         .arg(repo("examples/scenarios/live-comb.toml"))
-        .args(["--nan-at", "1.6", "--teleport-at", "1.7", "--duplicate-at", "1.8", "--pause", "2.0:0.15", "--out"])
+        .args(["--nan-at", "1.6", "--teleport-at", "1.7", "--duplicate-at", "1.8", "--pause", "2.0:0.3", "--out"])
         .arg(&csv)
         .output()
         .unwrap();
@@ -152,28 +152,30 @@ fn a_simulated_device_combs_the_live_hair_and_faults_are_handled() {
     assert!(answered.iter().all(|r| r[4].is_finite() && r[5].is_finite() && r[6].is_finite()), "finite forces");
     assert!(largest <= 3.3 + 1e-9, "within the Omni's 3.3 N: {largest} N");
     assert!(in_hair > 0.05, "the comb in the hair is felt: {in_hair} N");
-    // A loose bound: answers are fresh, not queued (the 2 ms p99 figure on an idle machine is in
-    // bench/RESULTS.md; timing targets are not asserted in tests on a shared machine).
-    assert!(p99 < 0.05, "round trip p99 {p99} s");
+    // Loose bounds: answers are fresh, not queued (a backlog would put the median at seconds). The 2 ms p99
+    // figure on an idle machine is in bench/RESULTS.md; timing targets are not asserted in tests on a shared
+    // machine (under a parallel build the p99 reached 140 ms while the median stayed at a few ms).
+    assert!(p50 < 0.05 && p99 < 0.5, "round trip p50 {p50} s, p99 {p99} s");
 
-    // The NaN pose, the 10 m teleport and the duplicate: answered with the rejected flag and zero force.
+    // The NaN pose, the 10 m teleport and the duplicate: answered with the rejected flag and zero force (a row's
+    // t is when it was sent: a stalled simulator sends a scheduled fault a few ms late).
     let rejected: Vec<&[f64; 9]> = rows.iter().filter(|r| flagged(r)).collect();
     for (what, t) in [("NaN", 1.6), ("teleport", 1.7), ("duplicate", 1.8)] {
-        let r = rejected.iter().find(|r| (r[0] - t).abs() < 0.01).unwrap_or_else(|| panic!("the {what} pose at {t} s was answered with the flag: {rejected:?}"));
+        let r = rejected.iter().find(|r| (r[0] - t).abs() < 0.05).unwrap_or_else(|| panic!("the {what} pose at {t} s was answered with the flag: {rejected:?}"));
         assert_eq!([r[4], r[5], r[6]], [0.0; 3], "{what}: zero force");
     }
     assert!(rows.iter().any(|r| r[1].is_nan() && flagged(r)), "the NaN row");
     assert!(rows.iter().any(|r| r[1].abs() > 5.0 && flagged(r)), "the teleport row");
     assert_eq!(rejected.len(), 3, "nothing else rejected: {rejected:?}");
 
-    // The pause: no poses for 150 ms. The viewer saw the device connected during the stroke, lost during the
+    // The pause: no poses for 300 ms (DEVICE comes at 10 Hz). The viewer saw the device connected during the stroke, lost during the
     // pause, and connected again after it.
     let at = |t: f64| started + t;
     let state_in = |a: f64, b: f64| status.iter().filter(|s| s.0 >= at(a) && s.0 <= at(b)).map(|s| s.1).collect::<Vec<_>>();
     println!("device status seen by the viewer: {:?}", status.iter().map(|s| (format!("{:.2}", s.0 - started), s.1)).collect::<Vec<_>>());
     assert!(state_in(0.3, 1.5).contains(&1), "connected during the stroke");
-    assert!(state_in(2.05, 2.2).contains(&2), "lost during the pause");
-    assert!(state_in(2.25, 2.6).contains(&1), "connected after the pause");
+    assert!(state_in(2.1, 2.3).contains(&2), "lost during the pause");
+    assert!(state_in(2.4, 2.6).contains(&1), "connected after the pause");
     let last = status.last().unwrap().2;
     // Lost at the pause and at the end of the stream (more if the loaded machine stalled the simulator for
     // over 50 ms: that is a real loss as the server sees it).

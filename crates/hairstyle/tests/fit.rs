@@ -43,6 +43,28 @@ fn a_coiffure_hairstyle_moved_to_y_up_centimetres_comes_back() {
     assert!(report.root_distance.median < 0.002, "{:?}", report.root_distance);
 }
 
+/// The final fit's free scale does not shrink a hairstyle that covers only part of the scalp: a
+/// strip of a Coiffure hairstyle (roots within 2 cm of the mid-sagittal plane, a mohawk on a head of
+/// our size), moved to y up, centimetres, comes back at its scale (0.01 m per unit within 2 %) with
+/// its roots within 5 mm (median) and 15 mm (95th percentile) of where they were (measured 0.80 mm
+/// and 0.83 mm).
+#[test]
+fn a_mohawk_strip_of_our_head_keeps_its_scale() {
+    let h = Hairstyle::generate(&HairstyleParams { render_count: 3000, guide_count: 100, ..Default::default() }).unwrap();
+    let all = h.to_curves();
+    let strip = HairCurves::from_strands(all.strands.iter().filter(|s| s[0][0].abs() < 0.02).cloned().collect());
+    assert!(strip.strands.len() > 300, "{}", strip.strands.len());
+    let to_file = Similarity { scale: 100.0, rotation: axes_rotation(Axis::PosY, Axis::PosZ).transpose(), translation: Vector3::new(12.0, 150.0, -7.0) };
+    let mut moved = strip.clone();
+    transform_curves(&mut moved, &to_file);
+    let (back, report) = fit(&moved, Some(Format::Hair), &Metadata::default(), &FitOptions::default(), &Head::default(), &FitParams::default()).unwrap();
+    assert!((report.transform.scale / 0.01 - 1.0).abs() < 0.02, "scale {}", report.transform.scale);
+    let d: Vec<f64> = strip.strands.iter().zip(&back.strands).map(|(a, b)| (p64(&a[0]) - p64(&b[0])).norm()).collect();
+    let (median, p95) = (quantile(d.clone(), 0.5), quantile(d, 0.95));
+    println!("strip: root error median {:.2} mm, p95 {:.2} mm", 1e3 * median, 1e3 * p95);
+    assert!(median <= 0.005 && p95 <= 0.015, "root error median {median} m, p95 {p95} m");
+}
+
 /// AMD's TressFX sample hairstyle (Ratboy's mohawk, 2,228 strands, y up, metres) from
 /// ../shared/data: detected as y up facing +z by the format's convention and shape; its roots (a
 /// strip 0.7 m long from Ratboy's forehead over his head and down his neck and back) land on our

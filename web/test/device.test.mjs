@@ -22,11 +22,12 @@ describe('a haptic device drives the tool (5k render strands standing for a 100k
     await page.waitForFunction(() => window.coiffure.device !== null, null, { timeout: 30_000 });
     assert.equal(await page.evaluate(() => window.coiffure.device.state), 'waiting');
     // The comb stroke of examples/scenarios/live-comb.toml slowed down for software rendering (a few frames a
-    // second): into the back hair in 1 s, drawn 11 cm down in 3 s, out in 1 s.
+    // second, fewer on a loaded machine): into the back hair in 1 s, drawn 11 cm down in 3 s, held there 6 s (so
+    // that the busy page surely receives frames of the tool down there), out in 1 s.
     mkdirSync(artifacts, { recursive: true });
     const path = join(artifacts, 'device-comb.toml');
     const rot = '[0.0, 2.2214415, -2.2214415]';
-    writeFileSync(path, `[live]\n[tool]\nshape = "comb"\npath = [\n  { t = 0.0, position = [0.0, -0.165, 0.03], rotation = ${rot} },\n  { t = 1.0, position = [0.0, -0.125, 0.03], rotation = ${rot} },\n  { t = 4.0, position = [0.0, -0.125, -0.08], rotation = ${rot} },\n  { t = 5.0, position = [0.0, -0.218, -0.08], rotation = ${rot} },\n]\n`);
+    writeFileSync(path, `[live]\n[tool]\nshape = "comb"\npath = [\n  { t = 0.0, position = [0.0, -0.165, 0.03], rotation = ${rot} },\n  { t = 1.0, position = [0.0, -0.125, 0.03], rotation = ${rot} },\n  { t = 4.0, position = [0.0, -0.125, -0.08], rotation = ${rot} },\n  { t = 10.0, position = [0.0, -0.125, -0.08], rotation = ${rot} },\n  { t = 11.0, position = [0.0, -0.218, -0.08], rotation = ${rot} },\n]\n`);
     // Every FRAME's tool position as the page receives it (software rendering keeps the page busy for long
     // stretches, so the test does not poll): recorded by a setter on window.coiffure.toolPosition.
     await page.evaluate(() => {
@@ -35,7 +36,7 @@ describe('a haptic device drives the tool (5k render strands standing for a 100k
       window.toolSeen = [];
       Object.defineProperty(s, 'toolPosition', { configurable: true, get: () => v, set: (x) => { v = x; window.toolSeen.push([x[0], x[1], x[2], s.device?.state]); } });
     });
-    const sim = new Promise((res, rej) => execFile(binary, ['device-sim', '--server', `udp:${udp}`, '--path', path, '--rate', '1000', '--duration', '5.5'],
+    const sim = new Promise((res, rej) => execFile(binary, ['device-sim', '--server', `udp:${udp}`, '--path', path, '--rate', '1000', '--duration', '11.5'],
       { cwd: repoDir }, (e, out, err) => (e ? rej(new Error(`${e.message}\n${err}`)) : res(out))));
     // Mid-stroke (the comb drawn down the back hair from 1 s to 4 s): the screenshot artifact.
     await new Promise((r) => setTimeout(r, 2500));

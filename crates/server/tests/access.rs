@@ -3,68 +3,12 @@
 //! are let in; off loopback a token is required; a viewer that never reads is disconnected instead of
 //! growing the server; a finite but absurd POSE is an error.
 
-use std::io::{BufRead, BufReader};
+mod common;
+
+use common::serve;
 use std::net::TcpStream;
-use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc;
 use std::time::{Duration, Instant};
 use tungstenite::client::IntoClientRequest;
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("coiffure-access-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// A running `coiffure serve` (killed when dropped) and the URL it printed.
-struct Server {
-    child: Child,
-    /// host:port
-    http: String,
-    /// The printed token, if any.
-    token: Option<String>,
-    _lines: mpsc::Receiver<String>,
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-fn serve(extra: &[&str]) -> Server {
-    let web = scratch("web");
-    std::fs::write(web.join("index.html"), "<!doctype html><title>stub</title>").unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_coiffure"))
-        .args(["serve", "--port", "0", "--render-strands", "2000", "--haptic-priority", "0", "--duration", "60", "--web"])
-        .arg(&web)
-        .args(extra)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let out = child.stdout.take().unwrap();
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        for l in BufReader::new(out).lines().map_while(Result::ok) {
-            if tx.send(l).is_err() {
-                break;
-            }
-        }
-    });
-    let deadline = Instant::now() + Duration::from_secs(120);
-    loop {
-        let l = rx.recv_timeout(deadline.saturating_duration_since(Instant::now())).expect("serve printed its URL");
-        if let Some(rest) = l.split("listening on http://").nth(1) {
-            let url = rest.split_whitespace().next().unwrap();
-            let http = url.split('/').next().unwrap().to_string();
-            let token = url.split("?token=").nth(1).map(str::to_string);
-            return Server { child, http, token, _lines: rx };
-        }
-    }
-}
 
 /// Opens `/ws` on `http` (host:port) with an optional Origin and query; the HTTP status of a refusal.
 fn open(http: &str, origin: Option<&str>, query: &str) -> Result<tungstenite::WebSocket<TcpStream>, u16> {
@@ -95,7 +39,7 @@ fn first_of(ws: &mut tungstenite::WebSocket<TcpStream>, kind: u8) -> Vec<u8> {
 
 #[test]
 fn only_the_served_page_and_scripts_may_connect_and_absurd_poses_are_errors() {
-    let s = serve(&["--allow-origin", "http://localhost:3000"]);
+    let s = serve(&["--render-strands", "2000", "--allow-origin", "http://localhost:3000"]);
     assert!(s.token.is_none(), "no token on loopback by default");
     assert_eq!(open(&s.http, Some("http://evil.example"), "").err(), Some(403), "another page's origin");
     assert!(open(&s.http, Some(&format!("http://{}", s.http)), "").is_ok(), "the served page's own origin");
@@ -125,7 +69,7 @@ fn only_the_served_page_and_scripts_may_connect_and_absurd_poses_are_errors() {
 
 #[test]
 fn off_loopback_a_token_is_required() {
-    let s = serve(&["--addr", "0.0.0.0"]);
+    let s = serve(&["--render-strands", "2000", "--addr", "0.0.0.0"]);
     let token = s.token.clone().expect("a generated token is printed with the URL");
     assert_eq!(token.len(), 32, "{token}");
     let http = s.http.replace("0.0.0.0", "127.0.0.1");
@@ -139,7 +83,7 @@ fn a_viewer_that_never_reads_is_disconnected() {
     // The viewer sends PINGs and never reads: the server's answers (PONG) and frames back up in the socket,
     // then in its bounded outgoing queue (serve::OUTBOX_CAPACITY = 256), and the server drops it. Before, the
     // queue grew without limit (1.9 MB/s).
-    let s = serve(&[]);
+    let s = serve(&["--render-strands", "2000"]);
     let mut ws = open(&s.http, None, "").unwrap();
     ws.get_mut().set_write_timeout(Some(Duration::from_secs(5))).unwrap();
     let ping = [0x08u8, 1, 1, 2, 3, 4];

@@ -1,77 +1,24 @@
 //! `coiffure serve --device` driven by `coiffure device-sim` end to end: real processes, UDP on loopback,
 //! a WebSocket viewer watching the device status (issue 13's acceptance).
 
-use std::io::{BufRead, BufReader};
+mod common;
+
+use common::{bin, scratch};
 use std::net::TcpStream;
 use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_coiffure"))
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("coiffure-device-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn repo(path: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(path)
 }
 
-/// A running `coiffure serve` (killed when dropped) and the addresses it printed.
-struct Server {
-    child: Child,
-    http: String,
-    udp: String,
-    /// Keeps the stdout reader going (the server must not see a closed pipe).
-    _lines: mpsc::Receiver<String>,
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// Starts `coiffure serve --device udp:127.0.0.1:0` on a small built-in hairstyle (5000 render strands
-/// standing for 20 hairs each: the force of a full head) with a stub viewer folder.
-fn serve(extra: &[&str]) -> Server {
-    let web = scratch("web");
-    std::fs::write(web.join("index.html"), "<!doctype html><title>stub</title>").unwrap();
-    let mut child = bin()
-        .args(["serve", "--port", "0", "--render-strands", "5000", "--hairs-per-render-strand", "20", "--haptic-priority", "0", "--duration", "30", "--device", "udp:127.0.0.1:0", "--web"])
-        .arg(&web)
-        .args(extra)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let out = child.stdout.take().unwrap();
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        for l in BufReader::new(out).lines().map_while(Result::ok) {
-            if tx.send(l).is_err() {
-                break;
-            }
-        }
-    });
-    let (mut http, mut udp) = (None, None);
-    let deadline = Instant::now() + Duration::from_secs(120);
-    while http.is_none() || udp.is_none() {
-        let l = rx.recv_timeout(deadline.saturating_duration_since(Instant::now())).expect("serve printed its addresses");
-        if let Some(rest) = l.split("device on udp:").nth(1) {
-            udp = rest.split_whitespace().next().map(str::to_string);
-        }
-        if let Some(rest) = l.split("listening on http://").nth(1) {
-            http = rest.split('/').next().map(str::to_string);
-        }
-    }
-    Server { child, http: http.unwrap(), udp: udp.unwrap(), _lines: rx }
+/// `coiffure serve --device udp:127.0.0.1:0` on a small built-in hairstyle (5000 render strands standing for
+/// 20 hairs each: the force of a full head).
+fn serve(extra: &[&str]) -> common::Server {
+    let mut args = vec!["--render-strands", "5000", "--hairs-per-render-strand", "20", "--device", "udp:127.0.0.1:0"];
+    args.extend_from_slice(extra);
+    common::serve(&args)
 }
 
 /// Watches the viewer protocol's DEVICE messages (0x89): (seconds since `t0`, state, counters).
@@ -123,7 +70,7 @@ fn a_simulated_device_combs_the_live_hair_and_faults_are_handled() {
     let watcher = watch_device(&server.http, t0, stop_rx);
     let started = t0.elapsed().as_secs_f64();
     let out = bin()
-        .args(["device-sim", "--server", &format!("udp:{}", server.udp), "--rate", "1000", "--duration", "2.6"])
+        .args(["device-sim", "--server", &format!("udp:{}", server.udp.as_deref().unwrap()), "--rate", "1000", "--duration", "2.6"])
         .arg("--path")
         .arg(repo("examples/scenarios/live-comb.toml"))
         .args(["--nan-at", "1.6", "--teleport-at", "1.7", "--duplicate-at", "1.8", "--pause", "2.0:0.3", "--out"])

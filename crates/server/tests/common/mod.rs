@@ -1,0 +1,82 @@
+//! A real `coiffure serve` for the end-to-end tests (tests/access.rs, tests/device.rs): started on a free port
+//! with a stub viewer folder, its printed addresses read from its output, killed when dropped.
+
+// Each test binary uses a part of this module.
+#![allow(dead_code)]
+
+use std::io::{BufRead, BufReader};
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+/// The `coiffure` binary under test.
+pub fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_coiffure"))
+}
+
+/// A scratch folder for this test process.
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("coiffure-e2e-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A running `coiffure serve` (killed when dropped) and what it printed.
+pub struct Server {
+    child: Child,
+    /// host:port of the HTTP and WebSocket server.
+    pub http: String,
+    /// The printed access token, if any.
+    pub token: Option<String>,
+    /// host:port of the device socket (`--device`), if any.
+    pub udp: Option<String>,
+    /// Keeps the stdout reader going (the server must not see a closed pipe).
+    _lines: mpsc::Receiver<String>,
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Starts `coiffure serve --port 0 --haptic-priority 0 --duration 60 --web STUB` with `args`; returns once it
+/// printed its URL (and, with `--device`, its device address).
+pub fn serve(args: &[&str]) -> Server {
+    let web = scratch("web");
+    std::fs::write(web.join("index.html"), "<!doctype html><title>stub</title>").unwrap();
+    let mut child = bin()
+        .args(["serve", "--port", "0", "--haptic-priority", "0", "--duration", "60", "--web"])
+        .arg(&web)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let out = child.stdout.take().unwrap();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for l in BufReader::new(out).lines().map_while(Result::ok) {
+            if tx.send(l).is_err() {
+                break;
+            }
+        }
+    });
+    let device = args.contains(&"--device");
+    let (mut http, mut token, mut udp) = (None, None, None);
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while http.is_none() || (device && udp.is_none()) {
+        let l = rx.recv_timeout(deadline.saturating_duration_since(Instant::now())).expect("serve printed its addresses");
+        if let Some(rest) = l.split("device on udp:").nth(1) {
+            udp = rest.split_whitespace().next().map(str::to_string);
+        }
+        if let Some(rest) = l.split("listening on http://").nth(1) {
+            let url = rest.split_whitespace().next().unwrap();
+            http = url.split('/').next().map(str::to_string);
+            token = url.split("?token=").nth(1).map(str::to_string);
+        }
+    }
+    Server { child, http: http.unwrap(), token, udp, _lines: rx }
+}

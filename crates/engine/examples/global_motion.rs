@@ -1,6 +1,7 @@
 //! How the global layer moves: the built-in hairstyle's lattice under a hand-held dryer and a head turn.
 //! Prints the largest displacement of the guides' points through the lattice (relative to the head, m)
-//! over time. Run: `cargo run --release -p coiffure-engine --example global_motion [-- STRANDS]`.
+//! over time. Run: `cargo run --release -p coiffure-engine --example global_motion [-- STRANDS [side]]`
+//! (`side`: the dryer at the right side of the head, the live-dryer scenario's place, instead of behind it).
 
 use engine::global::GlobalCore;
 use engine::params::SessionParams;
@@ -32,7 +33,7 @@ fn main() {
     println!("rest: after 5 s, largest guide-point distance from the groomed shape {:.4} m", displacement(&core, &settled));
     // 2. dryer behind the head (the live-dryer scenario's pose) 2 s on, 2.3 s off
     let mut core = GlobalCore::new(scene.clone(), &params);
-    let side = std::env::var("SIDE").is_ok();
+    let side = std::env::args().nth(2).as_deref() == Some("side");
     let rot = if side { Rotation3::new(Vector3::new(2.2214415, 0.0, 2.2214415)).into_inner() } else { Rotation3::new(Vector3::new(0.0, 2.2214415, -2.2214415)).into_inner() };
     let mut input = ToolInput { tool: Tool::Dryer, present: true, position: if side { Vector3::new(0.118, 0.0, 0.0) } else { Vector3::new(0.0, -0.118, 0.0) }, rotation: rot, pressed: true, cuts: 0, ..ToolInput::default() };
     let (mut peak, mut line) = (0.0f64, String::new());

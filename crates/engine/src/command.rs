@@ -30,8 +30,14 @@ pub enum Command {
     },
 }
 
-/// The head pose of a [`Command::SetHead`], if its values are finite and within range (1 m, pi rad).
+/// The head pose of a [`Command::SetHead`], if its values are finite and within range (position within 1 m,
+/// rotation within pi rad).
 pub fn head_pose(position: &Vector3<f64>, rotation: &Vector3<f64>) -> Option<Isometry3<f64>> {
     let finite = position.iter().chain(rotation.iter()).all(|x| x.is_finite());
     (finite && position.norm() <= 1.0 && rotation.norm() <= std::f64::consts::PI + 1e-9).then(|| Isometry3::new(*position, *rotation))
+}
+
+/// A pose whose translation (m) and rotation quaternion are all finite (the check of every `set_head_pose`).
+pub fn is_finite_pose(pose: &Isometry3<f64>) -> bool {
+    pose.translation.vector.iter().chain(pose.rotation.coords.iter()).all(|x| x.is_finite())
 }

@@ -201,7 +201,7 @@ impl GlobalCore {
     /// it and the body pushes the nodes out where it now is. A pose with a non-finite part is ignored
     /// (returns false).
     pub fn set_head_pose(&mut self, head: Isometry3<f64>) -> bool {
-        let ok = head.translation.vector.iter().chain(head.rotation.coords.iter()).all(|x| x.is_finite());
+        let ok = crate::command::is_finite_pose(&head);
         if ok {
             self.head = head;
         }

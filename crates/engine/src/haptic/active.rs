@@ -343,10 +343,11 @@ impl HapticCore {
     /// repelling obstacle deforms the lattice, and roots following it sank into the head and were kicked out.
     pub(crate) fn roots_follow(&mut self, dt: f64) {
         let head = self.head;
+        let head_rotation = head.rotation.to_rotation_matrix().into_inner();
         for (slot, &g) in self.active.iter().enumerate() {
             let groomed = &self.scene.guides[g].state.root;
             let target = head * nalgebra::Point3::from(groomed.position);
-            let turn = head.rotation.to_rotation_matrix().into_inner() * groomed.rotation;
+            let turn = head_rotation * groomed.rotation;
             let root = &mut self.interaction.strands[slot].state.root;
             // A root that is elsewhere (a state from before, or a head that moved) is brought back over one
             // step, turning with the head.

@@ -138,7 +138,7 @@ impl HapticCore {
     /// step (`roots_follow`), and the body they rest on and the tool keeps out of moves with it. A pose with
     /// a non-finite part is ignored (returns false). The tool's device positions stay in the world frame.
     pub fn set_head_pose(&mut self, head: nalgebra::Isometry3<f64>) -> bool {
-        let ok = head.translation.vector.iter().chain(head.rotation.coords.iter()).all(|x| x.is_finite());
+        let ok = crate::command::is_finite_pose(&head);
         if ok && head != self.head {
             self.head = head;
             if let Some((body, _)) = self.interaction.body.as_mut() {

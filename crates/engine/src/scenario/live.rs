@@ -256,6 +256,7 @@ impl LiveScenario {
         ls.global.set_wetness(self.live.wetness);
         ls.record = record.then(|| Record::new(params.haptic_rate_hz));
         let hair_index = HairType::ALL.iter().position(|h| *h == hair).unwrap_or(0) as u8;
+        let mut last_head = None;
         let mut commands = vec![Command::SelectTool(tool), Command::SetHair { hair_type: hair_index, curliness: self.live.curliness, combing_ease: self.live.combing_ease }];
         let every = ((params.haptic_rate_hz / params.global_rate_hz).round() as u64).max(1);
         let settle_steps = (self.settle / ls.dt).round() as u64;
@@ -274,9 +275,13 @@ impl LiveScenario {
             }
             let t = (n as f64 - settle_steps as f64) * ls.dt;
             if !self.live.head.is_empty() {
+                // The head moves as the viewer moves it: a recorded command to the haptic core, which hands the
+                // pose to the global layer with the tool input (so a record of this run replays the motion).
                 let head = self.head_pose(t);
-                ls.global.set_head_pose(head);
-                ls.haptic.set_head_pose(head);
+                if last_head != Some(head) {
+                    last_head = Some(head);
+                    commands.push(Command::SetHead { position: head.translation.vector, rotation: head.rotation.scaled_axis() });
+                }
             }
             let reading = (n >= settle_steps).then(|| self.reading(t));
             if n == settle_steps {
@@ -542,6 +547,26 @@ mod tests {
         assert!(m.max_displacement_m >= 0.01, "the hair swings: {} m", m.max_displacement_m);
         assert!(m.final_max_displacement_m <= 0.005 && m.final_max_displacement_m < 0.1 * m.max_displacement_m, "settled 2 s after: {} m", m.final_max_displacement_m);
         assert!(m.max_depth_in_body_m <= 5e-4, "a vertex {} m inside the body", m.max_depth_in_body_m);
+    }
+
+    #[test]
+    fn a_recorded_head_turn_replays_with_the_head_turned() {
+        // The head moves through recorded commands (Command::SetHead), so replaying a record of the head-turn
+        // scenario on a fresh session turns the haptic core's head (the strands' roots) by the scenario's 30 degrees
+        // (to 1e-9 rad) and gives the same force trace bit for bit.
+        let s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-head-turn.toml")).unwrap();
+        let scene = Arc::new(Scene::builtin(&s.scene_options()).unwrap());
+        let (trace, _, record) = s.run_recorded(scene.clone(), true).unwrap();
+        let record = record.unwrap();
+        assert!(record.steps.iter().flat_map(|st| &st.commands).any(|c| matches!(c, Command::SetHead { .. })));
+        let mut ls = Lockstep::new(scene, SessionParams::default(), record.rate_hz).unwrap();
+        let mut forces = Vec::new();
+        ls.replay(&record, |_, c| if let Some(c) = c { forces.push(c.force) });
+        let angle = ls.haptic.head_pose().rotation.angle();
+        let want = s.head_pose(s.run_time()).rotation.angle();
+        assert!((angle - want).abs() < 1e-9 && (want - 30f64.to_radians()).abs() < 1e-6, "replayed head turned {angle} rad, scenario {want} rad");
+        let recorded: Vec<_> = (trace.len().saturating_sub(forces.len())..trace.len()).map(|i| trace.force(i)).collect();
+        assert!(forces.len() >= recorded.len() && forces[forces.len() - recorded.len()..].iter().zip(&recorded).all(|(a, b)| a == b));
     }
 
     #[test]

@@ -67,7 +67,7 @@ pub const CURL_RAMP: f64 = 0.01;
 /// Range of the forward component of a root's unit direction from the head centre over which
 /// grooming turns from [`HairstyleParams::flow`] (below the first value: the back and the sides) to
 /// [`HairstyleParams::flow_front`] (above the second: the forehead), smoothstep in between.
-pub const FLOW_FRONT_BLEND: (f64, f64) = (0.3, 0.7);
+pub const FLOW_FRONT_BLEND: (f64, f64) = (0.5, 0.85);
 /// Smallest gap (m) kept between a render strand vertex (other than the root) and the head surface.
 pub const RENDER_GAP: f64 = 0.001;
 

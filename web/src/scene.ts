@@ -7,6 +7,7 @@ import { HairMaterial, fillShadowIndex, hairGeometry, setKept, shadowGeometry } 
 import { DeepOpacityMaps } from './deepOpacityMaps';
 import { Person } from './person';
 import { GpuTimer } from './gpuTimer';
+import { HairCompositor } from './hairCompositor';
 import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS, sigmaFromMelanin, type Melanin } from './hairColor';
 
 /** Default direction towards the key light (head frame: from behind, right and a little above, so that the
@@ -19,7 +20,13 @@ export class View {
   readonly camera: THREE.PerspectiveCamera;
   readonly controls: OrbitControls;
   hair: HairMaterial | null = null;
-  hairMesh: THREE.LineSegments | null = null;
+  /** The strands (one draw call), drawn by `compositor` over the opaque `scene`. */
+  hairMesh: THREE.Mesh | null = null;
+  readonly hairScene = new THREE.Scene();
+  readonly compositor = new HairCompositor();
+  /** Holds every strand wherever the hair moves (world, m): the front of the hair for the compositing's depth weight. */
+  private readonly hairBounds = new THREE.Sphere(new THREE.Vector3(), 1);
+  private readonly hairRestCentre = new THREE.Vector3(); // head frame, m
   person: Person | null = null;
   readonly dom = new DeepOpacityMaps();
   readonly gpuTimer: GpuTimer;
@@ -44,6 +51,7 @@ export class View {
     this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
     this.renderer.setClearColor(0x1d1f24);
+    this.renderer.autoClear = false; // render() clears once, then draws the opaque scene and the hair over it
     this.gpuTimer = new GpuTimer(this.renderer.getContext() as WebGL2RenderingContext);
     this.camera = new THREE.PerspectiveCamera(35, 1, 0.01, 10);
     this.camera.up.set(0, 0, 1); // z up, as in the simulation
@@ -133,7 +141,7 @@ export class View {
 
   /** Builds the person and the hair from the SCENE message (replacing earlier ones). */
   load(msg: SceneMsg): void {
-    if (this.hairMesh) { this.scene.remove(this.hairMesh); this.hairMesh.geometry.dispose(); }
+    if (this.hairMesh) { this.hairScene.remove(this.hairMesh); this.hairMesh.geometry.dispose(); }
     this.shadowHair?.dispose(); // shares the hair's attributes (disposed with them just above)
     this.hair?.dispose();
     if (this.person) { this.scene.remove(this.person.group); this.person.dispose(); }
@@ -143,22 +151,24 @@ export class View {
     const box = new THREE.Box3().setFromArray(msg.renderPositions).union(new THREE.Box3().setFromArray(msg.headPositions));
     const sphere = box.getBoundingSphere(new THREE.Sphere());
     this.dom.fit(sphere.center, sphere.radius + 0.05);
+    this.hairRestCentre.copy(sphere.center);
+    this.hairBounds.radius = sphere.radius + 0.05;
     this.person = new Person(msg, this.dom, this.lighting);
     this.person.setBrows(sigmaFromMelanin(this.colour));
     this.scene.add(this.person.group);
     this.dom.depthScene.add(this.person.depthBody);
     this.dom.opacityScene.add(this.person.opacityBody);
-    this.hair = new HairMaterial(msg, this.dom, this.lighting);
+    this.hair = new HairMaterial(msg, this.dom, this.lighting, this.compositor.uniforms);
     this.hair.setColour(this.colour);
     const g = hairGeometry(msg);
-    this.hairMesh = new THREE.LineSegments(g, this.hair.material);
+    this.hairMesh = new THREE.Mesh(g, this.hair.material);
     this.hairMesh.frustumCulled = false;
     this.verticesPerStrand = msg.verticesPerStrand;
-    this.scene.add(this.hairMesh);
+    this.hairScene.add(this.hairMesh);
     const stride = Math.max(1, Math.ceil(msg.strands / this.dom.params.maxStrands));
     this.shadowHair = shadowGeometry(g, stride, msg.strands, msg.verticesPerStrand);
     fillShadowIndex(this.shadowHair, msg.verticesPerStrand, null, msg.strands);
-    this.dom.setHair(this.hair.hairsPerStrand * stride, this.hair.material.uniforms.strandWidth.value / this.hair.hairsPerStrand);
+    this.dom.setHair(this.hair.hairsPerStrand * stride, this.hair.fibreWidth);
     for (const [m, s] of [[this.hair.depthMaterial, this.dom.depthScene], [this.hair.opacityMaterial, this.dom.opacityScene]] as const) {
       const l = new THREE.LineSegments(this.shadowHair, m);
       l.frustumCulled = false;
@@ -166,12 +176,12 @@ export class View {
     }
   }
 
-  /** Sets the hair type's strand width (by the type's name). */
-  setHairType(name: string): void {
+  /** Sets the strand width from the fibre section of the SCENE's hair type `index`. */
+  setHairType(index: number): void {
     if (!this.hair) return;
     const stride = (this.shadowHair?.userData.stride as number) ?? 1;
-    this.hair.setHairType(name, this.dom);
-    this.dom.setHair(this.hair.hairsPerStrand * stride, this.hair.material.uniforms.strandWidth.value / this.hair.hairsPerStrand);
+    this.hair.setHairType(index, this.dom);
+    this.dom.setHair(this.hair.hairsPerStrand * stride, this.hair.fibreWidth);
   }
 
   render(): void {
@@ -181,7 +191,14 @@ export class View {
     if (this.hair) {
       this.dom.update(this.renderer, this.lighting.lightDirection.value);
     }
+    this.renderer.setRenderTarget(null);
+    this.renderer.clear();
     this.renderer.render(this.scene, this.camera);
+    if (this.hair && this.hairMesh?.visible) {
+      this.renderer.getDrawingBufferSize(this.hair.material.uniforms.viewport.value);
+      this.hairBounds.center.copy(this.hairRestCentre).applyQuaternion(this.headQuaternion).add(this.headPosition);
+      this.compositor.render(this.renderer, this.scene, this.hairScene, this.camera, this.hairBounds);
+    }
     this.gpuTimer.end();
   }
 }

@@ -463,6 +463,9 @@ pub fn encode_strands(kept: &[u16]) -> Vec<u8> {
 }
 
 #[cfg(test)]
+mod properties;
+
+#[cfg(test)]
 mod tests {
     use super::*;
 

@@ -38,12 +38,15 @@ export interface HairLookParams {
   /** Strips are drawn at least this wide, px; a thinner strand covers its pixels by its width over this.
    * Default 1 px. */
   minStrandPixels: number;
+  /** Strands thinner than this on screen (at the hair's centre) are drawn as one-pixel lines instead of strips
+   * (same coverage, half the vertex work), px. Default 0.5 px. */
+  lineBelowPixels: number;
 }
 
 export const DEFAULT_HAIR_LOOK: HairLookParams = {
   cuticleTilt: 2.5 * Math.PI / 180, roughness: 7 * Math.PI / 180, fibreIndex: 1.55,
   waterRoughness: 1.5 * Math.PI / 180, wetAbsorption: 0.6, clumpStrength: 0.8, hairsOnHead: 100000,
-  densityForward: 0.7, densityBack: 0.7, minStrandPixels: 1,
+  densityForward: 0.7, densityBack: 0.7, minStrandPixels: 1, lineBelowPixels: 0.5,
 };
 
 // The lit pass shades per vertex (12 to 32 per strand; a strand is a pixel or so wide, so its shading varies
@@ -170,6 +173,7 @@ export class HairMaterial {
         ...oit,
         strandWidth: { value: 0 },
         minStrandPixels: { value: p.minStrandPixels },
+        stripMode: { value: 1 },
         viewport: { value: new THREE.Vector2(1, 1) },
         sigmaA: { value: new THREE.Vector3() },
         cuticleTilt: { value: p.cuticleTilt },
@@ -379,6 +383,22 @@ export function shadowGeometry(g: THREE.BufferGeometry, stride: number, strands:
   s.setIndex(new THREE.BufferAttribute(new Uint32Array(Math.ceil(strands / stride) * 2 * Math.max(1, nv - 1)), 1));
   s.userData.stride = stride;
   return s;
+}
+
+/** The same strands as one-pixel lines through one copy of each vertex (for strands far thinner than a pixel):
+ * shares the attributes. */
+export function lineGeometry(g: THREE.BufferGeometry, strands: number, nv: number): THREE.BufferGeometry {
+  const l = new THREE.BufferGeometry();
+  for (const name of ['position', 'rest', 'restTangent', 'guides', 'weights', 'arc']) l.setAttribute(name, g.getAttribute(name));
+  l.setIndex(new THREE.BufferAttribute(new Uint32Array(2 * strands * Math.max(1, nv - 1)), 1));
+  l.userData.stride = 1;
+  fillShadowIndex(l, nv, null, strands);
+  return l;
+}
+
+/** Every kept segment of every strand as a line (the line geometry's index). */
+export function fillLineIndex(l: THREE.BufferGeometry, nv: number, kept: Uint16Array): void {
+  fillShadowIndex(l, nv, kept);
 }
 
 // --- scissors (issue 5) ---

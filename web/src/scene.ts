@@ -3,7 +3,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import type { SceneMsg } from './protocol';
-import { HairMaterial, fillShadowIndex, hairGeometry, setKept, shadowGeometry } from './hairMaterial';
+import { HairMaterial, fillLineIndex, fillShadowIndex, hairGeometry, lineGeometry, setKept, shadowGeometry } from './hairMaterial';
 import { DeepOpacityMaps } from './deepOpacityMaps';
 import { Person } from './person';
 import { GpuTimer } from './gpuTimer';
@@ -20,8 +20,11 @@ export class View {
   readonly camera: THREE.PerspectiveCamera;
   readonly controls: OrbitControls;
   hair: HairMaterial | null = null;
-  /** The strands (one draw call), drawn by `compositor` over the opaque `scene`. */
-  hairMesh: THREE.Mesh | null = null;
+  /** The strands, drawn by `compositor` over the opaque `scene`: as strips, or as lines when they are far
+   * thinner than a pixel (one draw call either way). `hairMesh.visible` shows or hides the hair. */
+  hairMesh: THREE.Group | null = null;
+  private hairStrips: THREE.Mesh | null = null;
+  private hairLines: THREE.LineSegments | null = null;
   readonly hairScene = new THREE.Scene();
   readonly compositor = new HairCompositor();
   /** Holds every strand wherever the hair moves (world, m): the front of the hair for the compositing's depth weight. */
@@ -79,8 +82,9 @@ export class View {
 
   /** Shortens the strands to their kept points (STRANDS message); returns the segments drawn. */
   setKept(kept: Uint16Array): number {
-    if (!this.hairMesh) return 0;
-    return setKept(this.hairMesh.geometry, this.verticesPerStrand, kept, this.shadowHair ?? undefined);
+    if (!this.hairStrips || !this.hairLines) return 0;
+    fillLineIndex(this.hairLines.geometry, this.verticesPerStrand, kept);
+    return setKept(this.hairStrips.geometry, this.verticesPerStrand, kept, this.shadowHair ?? undefined);
   }
 
   /** The falling chains: `counts[c]` points each, 3 floats per point in `points` (world, m). */
@@ -141,7 +145,7 @@ export class View {
 
   /** Builds the person and the hair from the SCENE message (replacing earlier ones). */
   load(msg: SceneMsg): void {
-    if (this.hairMesh) { this.hairScene.remove(this.hairMesh); this.hairMesh.geometry.dispose(); }
+    if (this.hairMesh) { this.hairScene.remove(this.hairMesh); this.hairStrips?.geometry.dispose(); this.hairLines?.geometry.dispose(); }
     this.shadowHair?.dispose(); // shares the hair's attributes (disposed with them just above)
     this.hair?.dispose();
     if (this.person) { this.scene.remove(this.person.group); this.person.dispose(); }
@@ -161,8 +165,10 @@ export class View {
     this.hair = new HairMaterial(msg, this.dom, this.lighting, this.compositor.uniforms);
     this.hair.setColour(this.colour);
     const g = hairGeometry(msg);
-    this.hairMesh = new THREE.Mesh(g, this.hair.material);
-    this.hairMesh.frustumCulled = false;
+    this.hairStrips = new THREE.Mesh(g, this.hair.material);
+    this.hairLines = new THREE.LineSegments(lineGeometry(g, msg.strands, msg.verticesPerStrand), this.hair.material);
+    this.hairMesh = new THREE.Group();
+    for (const o of [this.hairStrips, this.hairLines]) { o.frustumCulled = false; this.hairMesh.add(o); }
     this.verticesPerStrand = msg.verticesPerStrand;
     this.hairScene.add(this.hairMesh);
     const stride = Math.max(1, Math.ceil(msg.strands / this.dom.params.maxStrands));
@@ -194,9 +200,17 @@ export class View {
     this.renderer.setRenderTarget(null);
     this.renderer.clear();
     this.renderer.render(this.scene, this.camera);
-    if (this.hair && this.hairMesh?.visible) {
-      this.renderer.getDrawingBufferSize(this.hair.material.uniforms.viewport.value);
+    if (this.hair && this.hairMesh?.visible && this.hairStrips && this.hairLines) {
+      const u = this.hair.material.uniforms;
+      this.renderer.getDrawingBufferSize(u.viewport.value);
       this.hairBounds.center.copy(this.hairRestCentre).applyQuaternion(this.headQuaternion).add(this.headPosition);
+      // Strips or lines: the strands' width on screen at the hair's centre (one number per frame).
+      const d = Math.max(this.camera.near, this.camera.position.distanceTo(this.hairBounds.center));
+      const px = u.strandWidth.value * this.camera.projectionMatrix.elements[5] * 0.5 * u.viewport.value.y / d;
+      const lines = px < this.hair.params.lineBelowPixels;
+      u.stripMode.value = lines ? 0 : 1;
+      this.hairLines.visible = lines;
+      this.hairStrips.visible = !lines;
       this.compositor.render(this.renderer, this.scene, this.hairScene, this.camera, this.hairBounds);
     }
     this.gpuTimer.end();

@@ -5,11 +5,15 @@
 // covers the pixels it crosses by its true width over the drawn one, so its weight in the picture follows its
 // width continuously as the camera moves (no popping, no strands vanishing between pixels). Half a pixel of
 // edge filter on each side (a box filter across the strip) anti-aliases the edges without multisampling.
+// When every strand is far thinner than a pixel (stripMode 0: the viewer decides per frame from the distance),
+// the same vertices are drawn as one-pixel lines with the same coverage: half the vertex work of strips and
+// the same ink per unit length, so switching between the two does not change the picture's weight.
 
 export const hairStripGLSL = /* glsl */ `
 uniform vec2 viewport;          // drawing buffer size, px
 uniform float strandWidth;      // true width of a render strand (its fibres side by side), m
 uniform float minStrandPixels;  // strips are drawn at least this wide, px
+uniform float stripMode;        // 1: strips (two vertices across); 0: one-pixel lines through the even copies
 varying float vAcross;          // signed distance from the strand's axis, px
 varying float vWidthPixels;     // the strand's true width on screen, px
 
@@ -22,7 +26,7 @@ vec4 strandStrip(vec3 p, vec3 t, float side) {
   // Width on screen: the projection's y scale (perspective: divided by the distance c.w).
   vWidthPixels = strandWidth * projectionMatrix[1][1] * 0.5 * viewport.y / c.w;
   float halfWidth = 0.5 * max(vWidthPixels, minStrandPixels) + 0.5;
-  vAcross = side * halfWidth;
+  vAcross = stripMode * side * halfWidth;
   c.xy += n * (vAcross * 2.0 / viewport) * c.w;
   return c;
 }
@@ -31,9 +35,11 @@ vec4 strandStrip(vec3 p, vec3 t, float side) {
 /** Fragment side: the fraction of the pixel the strand covers. */
 export const hairStripCoverageGLSL = /* glsl */ `
 uniform float minStrandPixels;
+uniform float stripMode;
 varying float vAcross;
 varying float vWidthPixels;
 float strandCoverage() {
+  if (stripMode < 0.5) return min(vWidthPixels, 1.0);
   float drawn = max(vWidthPixels, minStrandPixels);
   return clamp(0.5 * drawn + 0.5 - abs(vAcross), 0.0, 1.0) * vWidthPixels / drawn;
 }

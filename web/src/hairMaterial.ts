@@ -1,8 +1,7 @@
-// Hair strands: the geometry (rest positions, guide binding, clump centres; every vertex twice, for the two
-// edges of its strip), the lit material (Marschner lobes, melanin colour, dual scattering with deep opacity map
-// shadows, wet look; strips as wide as the strand's fibres with their coverage, written for order-independent
-// blending, hairCompositor.ts) and the two deep-opacity-map materials, all deforming the strands with the same
-// shader code (shaders/hairDeform.glsl.ts): FFD by the lattice and the local strands' displacement on the GPU.
+// Hair strands: the geometry (rest positions, guide binding, clump centres), the lit material (Marschner
+// lobes, melanin colour, dual scattering with deep opacity map shadows, wet look, alpha-to-coverage from the
+// strand's width) and the two deep-opacity-map materials, all deforming the strands with the same shader code
+// (shaders/hairDeform.glsl.ts): FFD by the lattice and the local strands' displacement on the GPU.
 import * as THREE from 'three';
 import type { SceneMsg } from './protocol';
 import { hairDeformGLSL } from './shaders/hairDeform.glsl';
@@ -10,8 +9,6 @@ import { marschnerGLSL } from './shaders/marschner.glsl';
 import { dualScatteringGLSL } from './shaders/dualScattering.glsl';
 import { domLookupGLSL } from './shaders/deepOpacity.glsl';
 import { displayGLSL } from './shaders/display.glsl';
-import { hairStripCoverageGLSL, hairStripGLSL } from './shaders/hairStrip.glsl';
-import { oitOutputGLSL } from './shaders/hairOit.glsl';
 import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS, sigmaFromMelanin, type Melanin } from './hairColor';
 import { meanFibreWidth } from './fibre';
 import type { DeepOpacityMaps } from './deepOpacityMaps';
@@ -35,21 +32,15 @@ export interface HairLookParams {
   /** Dual scattering densities d_f and d_b (Zinke et al. 2008). Default 0.7 each. */
   densityForward: number;
   densityBack: number;
-  /** Strips are drawn at least this wide, px; a thinner strand covers its pixels by its width over this.
-   * Default 1 px. */
-  minStrandPixels: number;
-  /** Strands thinner than this on screen (at the hair's centre) are drawn as one-pixel lines instead of strips
-   * (same coverage, half the vertex work), px. Default 0.5 px. */
-  lineBelowPixels: number;
 }
 
 export const DEFAULT_HAIR_LOOK: HairLookParams = {
   cuticleTilt: 2.5 * Math.PI / 180, roughness: 7 * Math.PI / 180, fibreIndex: 1.55,
   waterRoughness: 1.5 * Math.PI / 180, wetAbsorption: 0.6, clumpStrength: 0.8, hairsOnHead: 100000,
-  densityForward: 0.7, densityBack: 0.7, minStrandPixels: 1, lineBelowPixels: 0.5,
+  densityForward: 0.7, densityBack: 0.7,
 };
 
-// The lit pass shades per vertex (12 to 32 per strand; a strand is a pixel or so wide, so its shading varies
+// The lit pass shades per vertex (32 or so per strand; a strand is a pixel wide, so its shading varies
 // along it only): in software rendering a fragment shader with the full model cost about ten times more.
 const litVertex = /* glsl */ `
 ${hairDeformGLSL}
@@ -57,7 +48,6 @@ ${marschnerGLSL}
 ${dualScatteringGLSL}
 ${domLookupGLSL}
 ${displayGLSL}
-${hairStripGLSL}
 uniform vec3 lightDirection;  // unit, towards the key light
 uniform vec3 lightColor;      // key light irradiance (linear RGB)
 uniform vec3 skyColor;        // ambient irradiance from above
@@ -66,12 +56,10 @@ uniform vec3 cameraPos;
 uniform int debugView;        // 0 shaded; 1 direct transmittance exp(-n) from the deep opacity maps; 2 highlight only
 varying vec3 vColour;
 varying float vCut;
-varying float vDepth;
 void main() {
   HairVertex h = deformHair();
   vCut = h.u - h.keep - 1e-4;
-  gl_Position = strandStrip(h.position, h.tangent, gl_VertexID % 2 == 0 ? -1.0 : 1.0);
-  vDepth = gl_Position.w;
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(h.position, 1.0);
   vec3 T = h.tangent;
   vec3 L = normalize(lightDirection);
   vec3 V = normalize(cameraPos - h.position);
@@ -101,16 +89,11 @@ void main() {
 
 const litFragment = /* glsl */ `
 precision highp float;
-${hairStripCoverageGLSL}
-${oitOutputGLSL}
 varying vec3 vColour;
 varying float vCut;
-varying float vDepth;
 void main() {
   if (vCut > 0.0) discard; // cut off by the scissors
-  float a = strandCoverage();
-  if (a <= 0.0) discard;
-  writeOit(vColour, a, vDepth);
+  gl_FragColor = vec4(vColour, 1.0);
 }
 `;
 
@@ -131,7 +114,7 @@ export class HairMaterial {
   /** Mean width of one fibre of the current hair type, m (fibre.ts). */
   fibreWidth = 0;
 
-  constructor(scene: SceneMsg, dom: DeepOpacityMaps, lighting: Record<string, THREE.IUniform>, oit: Record<string, THREE.IUniform>, params: Partial<HairLookParams> = {}) {
+  constructor(scene: SceneMsg, dom: DeepOpacityMaps, lighting: Record<string, THREE.IUniform>, params: Partial<HairLookParams> = {}) {
     this.params = { ...DEFAULT_HAIR_LOOK, ...params };
     const p = this.params;
     const [nx, ny, nz] = scene.latticeDims;
@@ -160,21 +143,12 @@ export class HairMaterial {
       ...pushOutUniforms(scene),
     };
     this.material = new THREE.ShaderMaterial({
-      glslVersion: THREE.GLSL3,
       vertexShader: litVertex,
       fragmentShader: litFragment,
-      // Order-independent: every fragment adds (hairCompositor.ts); the opaque depth hides strands behind the body.
-      depthWrite: false, blending: THREE.CustomBlending, blendEquation: THREE.AddEquation,
-      blendSrc: THREE.OneFactor, blendDst: THREE.OneFactor, blendSrcAlpha: THREE.OneFactor, blendDstAlpha: THREE.OneFactor,
-      side: THREE.DoubleSide,
       uniforms: {
         ...deform,
         ...dom.uniforms,
-        ...oit,
         strandWidth: { value: 0 },
-        minStrandPixels: { value: p.minStrandPixels },
-        stripMode: { value: 1 },
-        viewport: { value: new THREE.Vector2(1, 1) },
         sigmaA: { value: new THREE.Vector3() },
         cuticleTilt: { value: p.cuticleTilt },
         roughness: { value: p.roughness },
@@ -315,68 +289,44 @@ function clumpCentres(scene: SceneMsg): THREE.DataTexture {
   return t;
 }
 
-/** Strips for every strand: each vertex twice (vertex v of the SCENE is 2v and 2v + 1, the strip's two edges)
- * with its rest position, rest tangent and guide binding; two triangles per segment. */
+/** Line segments for every strand: rest positions, rest tangents and the guide binding per vertex. */
 export function hairGeometry(scene: SceneMsg): THREE.BufferGeometry {
   const nv = scene.verticesPerStrand, ns = scene.strands, k = scene.guidesPerStrand;
-  const src = scene.renderPositions;
-  const pos = new Float32Array(2 * src.length);
-  const tangent = new Float32Array(2 * src.length);
-  const guides = new Float32Array(6 * nv * ns);
-  const weights = new Float32Array(6 * nv * ns);
-  const arc = new Float32Array(4 * nv * ns);
-  const index = new Uint32Array(6 * (nv - 1) * ns);
+  const pos = scene.renderPositions;
+  const tangent = new Float32Array(pos.length);
+  const guides = new Float32Array(3 * nv * ns);
+  const weights = new Float32Array(3 * nv * ns);
+  const arc = new Float32Array(2 * nv * ns);
+  const index = new Uint32Array(2 * (nv - 1) * ns);
+  let n = 0;
   for (let s = 0; s < ns; s++) {
     const phase = ((s * 2654435761) >>> 0) / 4294967296 * 6.2832;
     for (let i = 0; i < nv; i++) {
       const v = s * nv + i;
       const a = s * nv + Math.max(0, i - 1), b = s * nv + Math.min(nv - 1, i + 1);
-      for (let e = 2 * v; e < 2 * v + 2; e++) {
-        for (let c = 0; c < 3; c++) {
-          pos[3 * e + c] = src[3 * v + c];
-          tangent[3 * e + c] = src[3 * b + c] - src[3 * a + c];
-        }
-        for (let m = 0; m < Math.min(3, k); m++) {
-          guides[3 * e + m] = scene.renderGuide[s * k + m];
-          weights[3 * e + m] = scene.renderWeight[s * k + m];
-        }
-        arc[2 * e] = scene.renderSpan[s] * i / (nv - 1);
-        arc[2 * e + 1] = phase;
+      for (let c = 0; c < 3; c++) tangent[3 * v + c] = pos[3 * b + c] - pos[3 * a + c];
+      for (let m = 0; m < Math.min(3, k); m++) {
+        guides[3 * v + m] = scene.renderGuide[s * k + m];
+        weights[3 * v + m] = scene.renderWeight[s * k + m];
       }
+      arc[2 * v] = scene.renderSpan[s] * i / (nv - 1);
+      arc[2 * v + 1] = phase;
+      if (i + 1 < nv) { index[n++] = v; index[n++] = v + 1; }
     }
   }
   const g = new THREE.BufferGeometry();
-  // 'position' is required by three.js (bounding volumes); the shader uses 'rest' (the same buffer).
-  const rest = new THREE.BufferAttribute(pos, 3);
-  g.setAttribute('position', rest);
-  g.setAttribute('rest', rest);
+  // 'position' is required by three.js (bounding volumes); the shader uses 'rest'.
+  g.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+  g.setAttribute('rest', new THREE.BufferAttribute(pos, 3));
   g.setAttribute('restTangent', new THREE.BufferAttribute(tangent, 3));
   g.setAttribute('guides', new THREE.BufferAttribute(guides, 3));
   g.setAttribute('weights', new THREE.BufferAttribute(weights, 3));
   g.setAttribute('arc', new THREE.BufferAttribute(arc, 2));
   g.setIndex(new THREE.BufferAttribute(index, 1));
-  g.setDrawRange(0, stripIndices(index, nv, null, ns));
   return g;
 }
 
-/** Writes two triangles per kept segment (segments (j, j + 1) with j + 1 < kept[s]; all when `kept` is null)
- * into `a`; returns the number of indices written. */
-function stripIndices(a: Uint32Array, nv: number, kept: Uint16Array | null, strands: number): number {
-  let n = 0;
-  const ns = kept ? kept.length : strands;
-  for (let s = 0; s < ns; s++) {
-    const k = kept ? Math.min(nv, kept[s]) : nv;
-    for (let i = 0; i + 1 < k; i++) {
-      const e = 2 * (s * nv + i);
-      a[n++] = e; a[n++] = e + 1; a[n++] = e + 2;
-      a[n++] = e + 1; a[n++] = e + 3; a[n++] = e + 2;
-    }
-  }
-  return n;
-}
-
-/** The same strands for the deep opacity maps, as lines through one copy of each vertex: shares the
- * attributes, draws every `stride`-th strand. */
+/** The same strands for the deep opacity maps: shares the attributes, draws every `stride`-th strand. */
 export function shadowGeometry(g: THREE.BufferGeometry, stride: number, strands: number, nv: number): THREE.BufferGeometry {
   const s = new THREE.BufferGeometry();
   for (const name of ['position', 'rest', 'restTangent', 'guides', 'weights', 'arc']) s.setAttribute(name, g.getAttribute(name));
@@ -385,33 +335,22 @@ export function shadowGeometry(g: THREE.BufferGeometry, stride: number, strands:
   return s;
 }
 
-/** The same strands as one-pixel lines through one copy of each vertex (for strands far thinner than a pixel):
- * shares the attributes. */
-export function lineGeometry(g: THREE.BufferGeometry, strands: number, nv: number): THREE.BufferGeometry {
-  const l = new THREE.BufferGeometry();
-  for (const name of ['position', 'rest', 'restTangent', 'guides', 'weights', 'arc']) l.setAttribute(name, g.getAttribute(name));
-  l.setIndex(new THREE.BufferAttribute(new Uint32Array(2 * strands * Math.max(1, nv - 1)), 1));
-  l.userData.stride = 1;
-  fillShadowIndex(l, nv, null, strands);
-  return l;
-}
-
-/** Every kept segment of every strand as a line (the line geometry's index). */
-export function fillLineIndex(l: THREE.BufferGeometry, nv: number, kept: Uint16Array): void {
-  fillShadowIndex(l, nv, kept);
-}
-
 // --- scissors (issue 5) ---
 /** Draws only the kept part of every strand: segments (j, j + 1) with j + 1 < kept[s] (STRANDS message).
  * Returns the number of segments drawn. `shadow` (optional) gets every stride-th strand's kept segments. */
 export function setKept(g: THREE.BufferGeometry, nv: number, kept: Uint16Array, shadow?: THREE.BufferGeometry): number {
   const index = g.getIndex();
   if (!index) return 0;
-  const n = stripIndices(index.array as Uint32Array, nv, kept, kept.length);
+  const a = index.array as Uint32Array;
+  let n = 0;
+  for (let s = 0; s < kept.length; s++) {
+    const k = Math.min(nv, kept[s]);
+    for (let i = 0; i + 1 < k; i++) { a[n++] = s * nv + i; a[n++] = s * nv + i + 1; }
+  }
   g.setDrawRange(0, n);
   index.needsUpdate = true;
   if (shadow) fillShadowIndex(shadow, nv, kept);
-  return n / 6;
+  return n / 2;
 }
 
 /** Every stride-th strand's segments (all of them when `kept` is absent). */
@@ -423,7 +362,7 @@ export function fillShadowIndex(shadow: THREE.BufferGeometry, nv: number, kept: 
   let n = 0;
   for (let s = 0; s < ns; s += stride) {
     const k = kept ? Math.min(nv, kept[s]) : nv;
-    for (let i = 0; i + 1 < k && n + 1 < a.length; i++) { a[n++] = 2 * (s * nv + i); a[n++] = 2 * (s * nv + i + 1); }
+    for (let i = 0; i + 1 < k && n + 1 < a.length; i++) { a[n++] = s * nv + i; a[n++] = s * nv + i + 1; }
   }
   shadow.setDrawRange(0, n);
   index.needsUpdate = true;

@@ -3,11 +3,10 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import type { SceneMsg } from './protocol';
-import { HairMaterial, fillLineIndex, fillShadowIndex, hairGeometry, lineGeometry, setKept, shadowGeometry } from './hairMaterial';
+import { HairMaterial, fillShadowIndex, hairGeometry, setKept, shadowGeometry } from './hairMaterial';
 import { DeepOpacityMaps } from './deepOpacityMaps';
 import { Person } from './person';
 import { GpuTimer } from './gpuTimer';
-import { HairCompositor } from './hairCompositor';
 import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS, sigmaFromMelanin, type Melanin } from './hairColor';
 
 /** Default direction towards the key light (head frame: from behind, right and a little above, so that the
@@ -20,16 +19,7 @@ export class View {
   readonly camera: THREE.PerspectiveCamera;
   readonly controls: OrbitControls;
   hair: HairMaterial | null = null;
-  /** The strands, drawn by `compositor` over the opaque `scene`: as strips, or as lines when they are far
-   * thinner than a pixel (one draw call either way). `hairMesh.visible` shows or hides the hair. */
-  hairMesh: THREE.Group | null = null;
-  private hairStrips: THREE.Mesh | null = null;
-  private hairLines: THREE.LineSegments | null = null;
-  readonly hairScene = new THREE.Scene();
-  readonly compositor = new HairCompositor();
-  /** Holds every strand wherever the hair moves (world, m): the front of the hair for the compositing's depth weight. */
-  private readonly hairBounds = new THREE.Sphere(new THREE.Vector3(), 1);
-  private readonly hairRestCentre = new THREE.Vector3(); // head frame, m
+  hairMesh: THREE.LineSegments | null = null;
   person: Person | null = null;
   readonly dom = new DeepOpacityMaps();
   readonly gpuTimer: GpuTimer;
@@ -54,7 +44,6 @@ export class View {
     this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
     this.renderer.setClearColor(0x1d1f24);
-    this.renderer.autoClear = false; // render() clears once, then draws the opaque scene and the hair over it
     this.gpuTimer = new GpuTimer(this.renderer.getContext() as WebGL2RenderingContext);
     this.camera = new THREE.PerspectiveCamera(35, 1, 0.01, 10);
     this.camera.up.set(0, 0, 1); // z up, as in the simulation
@@ -82,9 +71,8 @@ export class View {
 
   /** Shortens the strands to their kept points (STRANDS message); returns the segments drawn. */
   setKept(kept: Uint16Array): number {
-    if (!this.hairStrips || !this.hairLines) return 0;
-    fillLineIndex(this.hairLines.geometry, this.verticesPerStrand, kept);
-    return setKept(this.hairStrips.geometry, this.verticesPerStrand, kept, this.shadowHair ?? undefined);
+    if (!this.hairMesh) return 0;
+    return setKept(this.hairMesh.geometry, this.verticesPerStrand, kept, this.shadowHair ?? undefined);
   }
 
   /** The falling chains: `counts[c]` points each, 3 floats per point in `points` (world, m). */
@@ -145,7 +133,7 @@ export class View {
 
   /** Builds the person and the hair from the SCENE message (replacing earlier ones). */
   load(msg: SceneMsg): void {
-    if (this.hairMesh) { this.hairScene.remove(this.hairMesh); this.hairStrips?.geometry.dispose(); this.hairLines?.geometry.dispose(); }
+    if (this.hairMesh) { this.scene.remove(this.hairMesh); this.hairMesh.geometry.dispose(); }
     this.shadowHair?.dispose(); // shares the hair's attributes (disposed with them just above)
     this.hair?.dispose();
     if (this.person) { this.scene.remove(this.person.group); this.person.dispose(); }
@@ -155,22 +143,18 @@ export class View {
     const box = new THREE.Box3().setFromArray(msg.renderPositions).union(new THREE.Box3().setFromArray(msg.headPositions));
     const sphere = box.getBoundingSphere(new THREE.Sphere());
     this.dom.fit(sphere.center, sphere.radius + 0.05);
-    this.hairRestCentre.copy(sphere.center);
-    this.hairBounds.radius = sphere.radius + 0.05;
     this.person = new Person(msg, this.dom, this.lighting);
     this.person.setBrows(sigmaFromMelanin(this.colour));
     this.scene.add(this.person.group);
     this.dom.depthScene.add(this.person.depthBody);
     this.dom.opacityScene.add(this.person.opacityBody);
-    this.hair = new HairMaterial(msg, this.dom, this.lighting, this.compositor.uniforms);
+    this.hair = new HairMaterial(msg, this.dom, this.lighting);
     this.hair.setColour(this.colour);
     const g = hairGeometry(msg);
-    this.hairStrips = new THREE.Mesh(g, this.hair.material);
-    this.hairLines = new THREE.LineSegments(lineGeometry(g, msg.strands, msg.verticesPerStrand), this.hair.material);
-    this.hairMesh = new THREE.Group();
-    for (const o of [this.hairStrips, this.hairLines]) { o.frustumCulled = false; this.hairMesh.add(o); }
+    this.hairMesh = new THREE.LineSegments(g, this.hair.material);
+    this.hairMesh.frustumCulled = false;
     this.verticesPerStrand = msg.verticesPerStrand;
-    this.hairScene.add(this.hairMesh);
+    this.scene.add(this.hairMesh);
     const stride = Math.max(1, Math.ceil(msg.strands / this.dom.params.maxStrands));
     this.shadowHair = shadowGeometry(g, stride, msg.strands, msg.verticesPerStrand);
     fillShadowIndex(this.shadowHair, msg.verticesPerStrand, null, msg.strands);
@@ -197,22 +181,7 @@ export class View {
     if (this.hair) {
       this.dom.update(this.renderer, this.lighting.lightDirection.value);
     }
-    this.renderer.setRenderTarget(null);
-    this.renderer.clear();
     this.renderer.render(this.scene, this.camera);
-    if (this.hair && this.hairMesh?.visible && this.hairStrips && this.hairLines) {
-      const u = this.hair.material.uniforms;
-      this.renderer.getDrawingBufferSize(u.viewport.value);
-      this.hairBounds.center.copy(this.hairRestCentre).applyQuaternion(this.headQuaternion).add(this.headPosition);
-      // Strips or lines: the strands' width on screen at the hair's centre (one number per frame).
-      const d = Math.max(this.camera.near, this.camera.position.distanceTo(this.hairBounds.center));
-      const px = u.strandWidth.value * this.camera.projectionMatrix.elements[5] * 0.5 * u.viewport.value.y / d;
-      const lines = px < this.hair.params.lineBelowPixels;
-      u.stripMode.value = lines ? 0 : 1;
-      this.hairLines.visible = lines;
-      this.hairStrips.visible = !lines;
-      this.compositor.render(this.renderer, this.scene, this.hairScene, this.camera, this.hairBounds);
-    }
     this.gpuTimer.end();
   }
 }

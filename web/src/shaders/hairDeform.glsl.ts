@@ -110,7 +110,7 @@ vec3 guideOffset(int g, float u) {
 HairVertex deformHair() {
   HairVertex h;
   int g = int(guides.x + 0.5);
-  int i = (gl_VertexID / 2) % verticesPerStrand; // every vertex is stored twice (the strip's two edges)
+  int i = gl_VertexID % verticesPerStrand;
   float u = arc.x;
   h.u = u;
   h.v = float(i) / float(max(1, verticesPerStrand - 1));

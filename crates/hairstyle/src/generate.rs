@@ -64,10 +64,6 @@ pub const CURL_RADIUS_MIN: f64 = 0.006;
 pub const CURL_INDEX_MAX: f64 = 2.5;
 /// Arc length from the root over which a render strand's curl radius fades in, m.
 pub const CURL_RAMP: f64 = 0.01;
-/// Range of the forward component of a root's unit direction from the head centre over which
-/// grooming turns from [`HairstyleParams::flow`] (below the first value: the back and the sides) to
-/// [`HairstyleParams::flow_front`] (above the second: the forehead), smoothstep in between.
-pub const FLOW_FRONT_BLEND: (f64, f64) = (0.5, 0.85);
 /// Smallest gap (m) kept between a render strand vertex (other than the root) and the head surface.
 pub const RENDER_GAP: f64 = 0.001;
 
@@ -137,18 +133,9 @@ pub struct HairstyleParams {
     pub clearance: f64,
     /// Direction (head frame, any length) from the head centre to the point hair is combed away
     /// from: a guide at p leaves the scalp along the projection of (p - |p| d) onto the scalp, so
-    /// hair flows away from that point over the head. Default (0, 0.6, 0.8): 53 deg above the
-    /// front, so that the sides and the back are combed down and back. Roots towards the face use
-    /// [`HairstyleParams::flow_front`] instead (blended over [`FLOW_FRONT_BLEND`]).
+    /// hair flows away from that point over the head. Default (0, 0.6, 0.8): the front of the
+    /// hairline, giving swept-back hair that leaves the face free.
     pub flow: Vector3<f64>,
-    /// The point (a direction, as [`HairstyleParams::flow`]) the hair at the front of the scalp is
-    /// combed away from. It must lie below the front hairline, or the roots between the hairline and
-    /// the point are combed forwards, over the eyes. A root whose direction from the head centre has
-    /// the forward (+y) component c uses the direction `normalize(lerp(flow, flow_front, w))` with
-    /// w = smoothstep([`FLOW_FRONT_BLEND`], c): w = 0 on the back half and the sides (the back hair
-    /// is groomed by `flow` alone), 1 at the forehead. Default (0, 0.96, 0.28): mid-forehead, 16 deg
-    /// above the head centre, so the fringe is swept up and back and the face stays free.
-    pub flow_front: Vector3<f64>,
     /// Angle by which the hanging part of a guide leans outwards from the steepest descent,
     /// radians; increased in 5 degree steps (up to 50 degrees more) for a guide that would
     /// otherwise pass through the body. Default 5 deg.
@@ -177,7 +164,6 @@ impl Default for HairstyleParams {
             lift: 0.015,
             clearance: 0.003,
             flow: Vector3::new(0.0, 0.6, 0.8),
-            flow_front: Vector3::new(0.0, 0.96, 0.28),
             hang_tilt: 5f64.to_radians(),
             max_curl_amplitude: 0.015,
             seed: 1,
@@ -202,7 +188,7 @@ impl HairstyleParams {
             });
         }
         // Each rule: (holds, field, what the field must be, the value given).
-        let rules: [(bool, &'static str, &str, String); 15] = [
+        let rules: [(bool, &'static str, &str, String); 14] = [
             (
                 self.length > 0.0 && self.length <= 2.0,
                 "length",
@@ -275,12 +261,6 @@ impl HairstyleParams {
                 "flow",
                 "a finite non-zero vector",
                 format!("{:?}", self.flow),
-            ),
-            (
-                self.flow_front.iter().all(|x| x.is_finite()) && self.flow_front.norm() > 0.0,
-                "flow_front",
-                "a finite non-zero vector",
-                format!("{:?}", self.flow_front),
             ),
             (
                 self.hang_tilt.abs() <= std::f64::consts::FRAC_PI_2,
@@ -406,18 +386,6 @@ pub struct Hairstyle {
     pub render: RenderStrands,
 }
 
-/// The unit direction of the point the hair at a root `p` (m, head frame) is combed away from:
-/// [`HairstyleParams::flow`] on the back and sides, [`HairstyleParams::flow_front`] at the front.
-pub fn flow_direction(params: &HairstyleParams, p: &Vector3<f64>) -> Vector3<f64> {
-    let (a, b) = FLOW_FRONT_BLEND;
-    let t = ((p.y / p.norm().max(1e-12) - a) / (b - a)).clamp(0.0, 1.0);
-    let w = t * t * (3.0 - 2.0 * t);
-    let back = params.flow.normalize();
-    (back + w * (params.flow_front.normalize() - back))
-        .try_normalize(1e-9)
-        .unwrap_or(back)
-}
-
 /// Groomed coordinates of a guide: bend only (planar curve), see the module docs.
 fn groomed_bends(
     params: &HairstyleParams,
@@ -429,7 +397,7 @@ fn groomed_bends(
     let n = root.normal;
     let proj = |v: Vector3<f64>| v - n * n.dot(&v);
     let p = root.position.coords;
-    let away = p - flow_direction(params, &p) * p.norm();
+    let away = p - params.flow.normalize() * p.norm();
     let f = proj(away)
         .try_normalize(1e-6 * p.norm())
         .or_else(|| proj(-Vector3::y()).try_normalize(1e-6))

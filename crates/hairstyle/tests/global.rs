@@ -154,18 +154,11 @@ fn head_shake_moves_hair_with_inertia_and_it_settles_back() {
 /// distance from the pre-dryer equilibrium 3 s after the dryer stops, total dryer force, anchors'
 /// total force), m and N.
 /// The hairstyle of the head-shake and dryer tests (2000 render strands, 60 guides) and its 4 cm lattice cells.
-/// Groomed with one flow point for the whole scalp (`flow_front = flow`: the fringe falls forward), the
-/// hairstyle these tests' figures were measured on. With the default swept-back fringe the lattice is
-/// 8 x 8 x 11 nodes and, after the shake, the hair-carrying nodes are back within 0.25 mm, but one empty,
-/// fully attached node inside the chest settles 2.7 mm from where it was (the contact's attraction band
-/// gives such nodes more than one equilibrium).
 fn shake_hairstyle() -> (Hairstyle, CarryParams) {
-    let d = HairstyleParams::default();
     let h = Hairstyle::generate(&HairstyleParams {
         guide_count: 60,
         render_count: 2000,
         seed: 21,
-        flow_front: d.flow,
         ..Default::default()
     })
     .unwrap();

@@ -156,13 +156,13 @@ pub fn parse_client(b: &[u8]) -> Result<ClientMessage, WireError> {
         client::TAKE_CONTROL => need(0, "TAKE_CONTROL").map(|_| ClientMessage::TakeControl),
         client::SELECT_TOOL => {
             need(1, "SELECT_TOOL")?;
-            let t = Tool::from_id(p[0]).ok_or_else(|| err(code::MALFORMED, format!("tool id {} unknown (0-5)", p[0])))?;
+            let t = Tool::from_id(p[0]).ok_or_else(|| err(code::MALFORMED, format!("SELECT_TOOL tool id {} unknown (0-5)", p[0])))?;
             Ok(ClientMessage::Command(Command::SelectTool(t)))
         }
         client::SET_HAIR => {
             need(9, "SET_HAIR")?;
             if p[0] as usize >= strand::HairType::ALL.len() {
-                return Err(err(code::MALFORMED, format!("hair type {} unknown (0-{})", p[0], strand::HairType::ALL.len() - 1)));
+                return Err(err(code::MALFORMED, format!("SET_HAIR hair type {} unknown (0-{})", p[0], strand::HairType::ALL.len() - 1)));
             }
             let (c, e) = (f32_at(p, 1) as f64, f32_at(p, 5) as f64);
             if !(c.is_finite() && e.is_finite()) {
@@ -203,7 +203,7 @@ pub fn parse_client(b: &[u8]) -> Result<ClientMessage, WireError> {
         client::SAVE => {
             need(1, "SAVE")?;
             if p[0] as usize >= FORMATS.len() {
-                return Err(err(code::MALFORMED, format!("format {} unknown (0-3)", p[0])));
+                return Err(err(code::MALFORMED, format!("SAVE format {} unknown (0-3)", p[0])));
             }
             Ok(ClientMessage::Save(p[0] as usize))
         }
@@ -464,6 +464,9 @@ pub fn encode_strands(kept: &[u16]) -> Vec<u8> {
     }
     w.0
 }
+
+#[cfg(test)]
+mod properties;
 
 #[cfg(test)]
 mod tests {

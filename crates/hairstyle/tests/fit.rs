@@ -214,3 +214,19 @@ fn our_own_z_up_tfx_and_data_files_come_back_z_up() {
         assert!(median <= 0.005 && p95 <= 0.015, "{format:?}: median {median} m, p95 {p95} m");
     }
 }
+
+/// Degenerate hairstyles (one strand; every root at one point; every root on a line) are fitted
+/// without panicking, to a finite transform within the scale range.
+#[test]
+fn degenerate_hairstyles_fit_to_a_finite_transform() {
+    let one = HairCurves::from_strands(vec![vec![[0.0, 1.0, 0.0], [0.0, 0.8, 0.05]]]);
+    let same = HairCurves::from_strands((0..10).map(|i| vec![[0.0, 1.0, 0.0], [0.01 * i as f32, 0.8, 0.05]]).collect());
+    let line = HairCurves::from_strands((0..50).map(|i| vec![[0.0, 1.0, 0.002 * i as f32], [0.0, 0.8, 0.002 * i as f32]]).collect());
+    for (name, c) in [("one", one), ("same", same), ("line", line)] {
+        let (out, r) = fit(&c, Some(Format::Tfx), &Metadata::default(), &FitOptions::default(), &Head::default(), &FitParams::default()).unwrap();
+        let t = &r.transform;
+        assert!(t.scale.is_finite() && t.translation.iter().all(|x| x.is_finite()) && out.strands.iter().flatten().flatten().all(|x| x.is_finite()), "{name}: {r:?}");
+        let f = FitParams::default().scale_freedom;
+        assert!(t.scale >= r.meters_per_unit / f - 1e-12 && t.scale <= r.meters_per_unit * f + 1e-12, "{name}: {r:?}");
+    }
+}

@@ -56,7 +56,8 @@ impl LoadLimits {
     /// point outside and the box.
     pub fn check_box(&self, curves: &HairCurves) -> Result<(), String> {
         for (i, st) in curves.strands.iter().enumerate() {
-            let outside = |p: &[f32; 3]| !(0..3).all(|a| (p[a] as f64) >= self.box_min[a] && (p[a] as f64) <= self.box_max[a]);
+            // Compared in f32, the files' precision (the corners themselves are inside).
+            let outside = |p: &[f32; 3]| !(0..3).all(|a| p[a] >= self.box_min[a] as f32 && p[a] <= self.box_max[a] as f32);
             if let Some(j) = st.iter().position(outside) {
                 return Err(format!(
                     "strand {i} point {j} at {:?} m is outside the box around the head, x {:?} y {:?} z {:?} m (head frame; non-finite points are outside too)",

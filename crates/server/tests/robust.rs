@@ -178,17 +178,19 @@ fn a_message_over_the_limit_gets_an_error_and_a_close_with_the_reason() {
 fn a_burst_of_1000_resets_does_not_stall_the_haptic_loop() {
     let _one = serial();
     // 1,000 RESETs in one burst (2 KB). Before, all ran in one haptic step and froze the 1 kHz loop for 0.45 s.
-    // Now at most 2 run per step (a reset costs about 0.2-0.5 ms): the loop's longest step, printed when the
-    // server stops, stays under 0.1 s (1,000 resets in one step would take 0.2 s or more), and the haptic time
-    // in the FRAMEs keeps up with the wall clock within 0.5 s over any stretch (loose: a shared machine, normal
-    // priority). The speed figure is bench/soak's.
-    let s = serve(&["--render-strands", "2000", "--duration", "8"]);
+    // Now at most `engine::live::MAX_COMMANDS_PER_STEP` (2) run per step: the session's record shows all 1,000
+    // applied, never more than 2 in a step (counts, whatever the machine's load), and the loop's longest step,
+    // printed when the server stops, stays under 0.25 s (loose: a shared machine at normal priority preempts
+    // steps by tens of ms). The speed figure is bench/soak's.
+    let dir = common::scratch("burst");
+    let record = dir.join("burst.rec");
+    let s = serve(&["--render-strands", "2000", "--duration", "6", "--record", record.to_str().unwrap()]);
     let mut ws = open(&s.http, None, "").unwrap();
     first_of(&mut ws, 0x82);
     for _ in 0..1000 {
         ws.send(tungstenite::Message::Binary(vec![0x05, 1].into())).unwrap();
     }
-    // (wall s, haptic s) of the frames of the next 2 s.
+    // (wall s, haptic s) of the frames of the next 2 s: information (the haptic clock's lag is the machine's load).
     let t0 = std::time::Instant::now();
     let mut seen = Vec::new();
     while t0.elapsed() < std::time::Duration::from_secs(2) {
@@ -199,8 +201,15 @@ fn a_burst_of_1000_resets_does_not_stall_the_haptic_loop() {
     eprintln!("{} frames; worst lag of the haptic clock behind the wall clock {:.3} s", seen.len(), worst);
     drop(ws);
     let line = s.line_with("haptic loop:", std::time::Duration::from_secs(30)).expect("the server's summary");
-    let max_us: f64 = line.split("max ").nth(1).and_then(|r| r.split_whitespace().next()).and_then(|v| v.parse().ok()).expect(&line);
     eprintln!("{line}");
-    assert!(worst < 0.5, "the haptic clock fell {worst:.3} s behind");
-    assert!(max_us < 1e5, "longest haptic step {max_us} us");
+    s.line_with("record:", std::time::Duration::from_secs(30)).expect("the record written");
+    let rec = engine::record::Record::from_bytes(&std::fs::read(&record).unwrap()).unwrap();
+    let resets: Vec<usize> = rec.steps.iter().map(|st| st.commands.iter().filter(|c| **c == engine::session::Command::Reset).count()).collect();
+    assert_eq!(resets.iter().sum::<usize>(), 1000, "every RESET applied");
+    let busiest = resets.iter().copied().max().unwrap();
+    let spread = resets.iter().filter(|&&n| n > 0).count();
+    eprintln!("the 1000 resets ran in {spread} haptic steps, at most {busiest} in one");
+    assert!(busiest <= engine::live::MAX_COMMANDS_PER_STEP, "{busiest} resets in one step");
+    let max_us: f64 = line.split("max ").nth(1).and_then(|r| r.split_whitespace().next()).and_then(|v| v.parse().ok()).expect(&line);
+    assert!(max_us < 2.5e5, "longest haptic step {max_us} us");
 }

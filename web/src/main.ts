@@ -118,8 +118,8 @@ ws.onmessage = (ev) => {
       const t = f.translation.map((x) => x.toFixed(3)).join(', ');
       const el = document.getElementById('fit-info');
       if (el) {
-        el.textContent = `fit: ${f.metersPerUnit} m/unit (${f.unitsSource}), up ${f.up} front ${f.front} (${f.axesSource}), scale ${f.scale.toPrecision(4)}, move [${t}] m; roots to scalp median ${(1e3 * f.rootMedian).toFixed(1)} mm, p95 ${(1e3 * f.rootP95).toFixed(1)} mm`;
-        el.title = `rotation (file to head frame, rows): ${f.rotation.map((x) => x.toFixed(3)).join(' ')}; ${(100 * f.inliers).toFixed(0)} % of roots kept by the fit; ${f.pushedOut} points pushed out of the head`;
+        el.textContent = `fit: ${f.metersPerUnit} m/unit (${f.unitsSource}), up ${f.up} front ${f.front} (${f.axesSource}), scale ${f.scale.toPrecision(4)}, move [${t}] m; ${(100 * f.rooted).toFixed(0)} % of strands rooted on the scalp (roots median ${(1e3 * f.rootedMedian).toFixed(1)} mm, p95 ${(1e3 * f.rootedP95).toFixed(1)} mm from it)${f.rooted < 0.999 ? `, ${(100 * (1 - f.rooted)).toFixed(0)} % loose` : ''}`;
+        el.title = `rotation (file to head frame, rows): ${f.rotation.map((x) => x.toFixed(3)).join(' ')}; all roots to the scalp: median ${(1e3 * f.rootMedian).toFixed(1)} mm, p95 ${(1e3 * f.rootP95).toFixed(1)} mm, max ${(1e3 * f.rootMax).toFixed(1)} mm; ${f.pushedOut} points pushed out of the head`;
       }
       break;
     }

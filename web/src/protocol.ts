@@ -60,11 +60,14 @@ export interface FitMsg {
   front: string;
   unitsSource: string;
   axesSource: string;
-  inliers: number;
-  rootMedian: number; // m
+  rooted: number; // fraction of strands rooted on the scalp
+  rootMedian: number; // m, all roots to the scalp
   rootP95: number; // m
   rootMax: number; // m
   pushedOut: number;
+  rootedMedian: number; // m, the rooted strands' roots to the scalp
+  rootedP95: number; // m
+  rootedMax: number; // m
 }
 
 export function decodeFit(buf: ArrayBuffer): FitMsg {
@@ -79,11 +82,14 @@ export function decodeFit(buf: ArrayBuffer): FitMsg {
     front: AXES[v.getUint8(59)] ?? '?',
     unitsSource: FIT_SOURCES[v.getUint8(60)] ?? '?',
     axesSource: FIT_SOURCES[v.getUint8(61)] ?? '?',
-    inliers: v.getFloat32(62, true),
+    rooted: v.getFloat32(62, true),
     rootMedian: v.getFloat32(66, true),
     rootP95: v.getFloat32(70, true),
     rootMax: v.getFloat32(74, true),
     pushedOut: v.getUint32(78, true),
+    rootedMedian: v.getFloat32(82, true),
+    rootedP95: v.getFloat32(86, true),
+    rootedMax: v.getFloat32(90, true),
   };
 }
 

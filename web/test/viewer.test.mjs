@@ -238,15 +238,19 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     await page.screenshot({ path: join(artifacts, 'mohawk-fitted.png') });
     writeFileSync(join(artifacts, 'mohawk-fit.json'), JSON.stringify(fit, null, 1));
     console.log('mohawk fit', fit);
-    // The format's convention and the hair's shape: y up, facing +z, metres; no point left inside the head.
+    // The format's convention: y up, facing +z, metres.
     assert.equal(fit.up, '+y');
     assert.equal(fit.front, '+z');
     assert.equal(fit.metersPerUnit, 1);
-    // The final fit's scale adapts to the head (Ratboy's mohawk strip runs from his forehead down his back: it goes
-    // to the lower end of the scale range, 0.3); measured root-to-scalp median 2.8 mm, 57 % of the roots kept.
-    assert.ok(fit.inliers > 0.5, `fraction of roots on the scalp ${fit.inliers}`);
-    assert.ok(fit.rootMedian < 0.005, `root-to-scalp median ${fit.rootMedian} m`);
-    assert.ok(fit.scale >= 0.3 - 1e-9 && fit.scale < 0.5, `scale ${fit.scale}`);
+    // Ratboy's roots run from the top of his (long) head down his neck and back: only the head part (437 of
+    // 2,228 strands, 20 %) can be on a scalp. Its roots sit on ours (measured: 18.8 % of the strands rooted,
+    // their roots median 0.5 mm, p95 7.6 mm from the scalp) at scale 0.8, the end of the fit's range of head
+    // sizes (a head 1.25x ours); the mane on his back is loose (hanging behind the neck).
+    // Asserted: about the head part's share is rooted (a rooted root is within 10 mm by definition; the Rust test
+    // the_tressfx_mohawk_lands_on_the_scalp checks the head part's roots, chosen from the file, against 5 / 15 mm).
+    assert.ok(fit.rooted > 0.15 && fit.rooted < 0.3, `fraction of strands rooted on the scalp ${fit.rooted}`);
+    assert.ok(fit.rootedMedian < 0.005, `rooted roots to the scalp: median ${fit.rootedMedian} m`);
+    assert.ok(fit.scale >= 0.8 - 1e-6 && fit.scale <= 1.0, `scale ${fit.scale}`);
   });
 
   test('a second viewer watches; it controls only after TAKE_CONTROL', async () => {

@@ -4,7 +4,7 @@
 
 use anyhow::{anyhow, Context, Result};
 use clap::Args;
-use hairstyle::fit::{fit_file, parse_units, Axis, FitOptions, FitReport};
+use hairstyle::fit::{fit_file, parse_units, Axis, Distances, FitOptions, FitParams, FitReport};
 use hairstyle::formats::write_file;
 use std::path::PathBuf;
 
@@ -53,6 +53,10 @@ pub struct FitArgs {
     json: bool,
 }
 
+fn distances(d: &Distances) -> serde_json::Value {
+    serde_json::json!({ "median": d.median, "p95": d.p95, "max": d.max })
+}
+
 /// The report as a JSON value (lengths in m).
 pub fn report_json(r: &FitReport) -> serde_json::Value {
     let t = &r.transform;
@@ -66,8 +70,10 @@ pub fn report_json(r: &FitReport) -> serde_json::Value {
         "scale": t.scale,
         "rotation": rows,
         "translation": [t.translation.x, t.translation.y, t.translation.z],
-        "inliers": r.inliers,
-        "root_distance": { "median": r.root_distance.median, "p95": r.root_distance.p95, "max": r.root_distance.max },
+        "rooted": r.rooted,
+        "root_distance": distances(&r.root_distance),
+        "rooted_distance": distances(&r.rooted_distance),
+        "loose_distance": distances(&r.loose_distance),
         "pushed_out": r.pushed_out,
         "scores": r.scores.map(|(a, b)| [a, b]),
     })
@@ -83,9 +89,10 @@ pub fn report_text(r: &FitReport) -> String {
         t.rotation[(0, 0)], t.rotation[(0, 1)], t.rotation[(0, 2)], t.rotation[(1, 0)], t.rotation[(1, 1)], t.rotation[(1, 2)], t.rotation[(2, 0)], t.rotation[(2, 1)], t.rotation[(2, 2)],
         t.translation.x, t.translation.y, t.translation.z,
     );
+    let line = |d: &Distances| format!("median {}, 95th percentile {}, max {}", m(d.median), m(d.p95), m(d.max));
     s += &format!(
-        "roots on the scalp: {:.1} % kept by the fit; root-to-scalp distance median {}, 95th percentile {}, max {}\npushed out of the body: {} points\n",
-        100.0 * r.inliers, m(r.root_distance.median), m(r.root_distance.p95), m(r.root_distance.max), r.pushed_out
+        "roots to the scalp: all {}\n  rooted on the scalp (within {}): {:.1} % of the strands, {}\n  loose: {:.1} %, {}\npushed out of the body: {} points\n",
+        line(&r.root_distance), m(FitParams::default().inlier_distance), 100.0 * r.rooted, line(&r.rooted_distance), 100.0 * (1.0 - r.rooted), line(&r.loose_distance), r.pushed_out
     );
     s
 }

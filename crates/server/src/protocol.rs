@@ -156,13 +156,13 @@ pub fn parse_client(b: &[u8]) -> Result<ClientMessage, WireError> {
         client::TAKE_CONTROL => need(0, "TAKE_CONTROL").map(|_| ClientMessage::TakeControl),
         client::SELECT_TOOL => {
             need(1, "SELECT_TOOL")?;
-            let t = Tool::from_id(p[0]).ok_or_else(|| err(code::MALFORMED, format!("tool id {} unknown (0-5)", p[0])))?;
+            let t = Tool::from_id(p[0]).ok_or_else(|| err(code::MALFORMED, format!("SELECT_TOOL tool id {} unknown (0-5)", p[0])))?;
             Ok(ClientMessage::Command(Command::SelectTool(t)))
         }
         client::SET_HAIR => {
             need(9, "SET_HAIR")?;
             if p[0] as usize >= strand::HairType::ALL.len() {
-                return Err(err(code::MALFORMED, format!("hair type {} unknown (0-{})", p[0], strand::HairType::ALL.len() - 1)));
+                return Err(err(code::MALFORMED, format!("SET_HAIR hair type {} unknown (0-{})", p[0], strand::HairType::ALL.len() - 1)));
             }
             let (c, e) = (f32_at(p, 1) as f64, f32_at(p, 5) as f64);
             if !(c.is_finite() && e.is_finite()) {
@@ -203,7 +203,7 @@ pub fn parse_client(b: &[u8]) -> Result<ClientMessage, WireError> {
         client::SAVE => {
             need(1, "SAVE")?;
             if p[0] as usize >= FORMATS.len() {
-                return Err(err(code::MALFORMED, format!("format {} unknown (0-3)", p[0])));
+                return Err(err(code::MALFORMED, format!("SAVE format {} unknown (0-3)", p[0])));
             }
             Ok(ClientMessage::Save(p[0] as usize))
         }
@@ -300,7 +300,7 @@ pub fn encode_pong(token: u32) -> Vec<u8> {
 
 /// FIT message: how a loaded hairstyle was placed (docs/protocol.md).
 pub fn encode_fit(r: &hairstyle::fit::FitReport) -> Vec<u8> {
-    let mut w = W::new(server::FIT, 84);
+    let mut w = W::new(server::FIT, 96);
     let t = &r.transform;
     w.f32(t.scale);
     for i in 0..3 {
@@ -315,11 +315,14 @@ pub fn encode_fit(r: &hairstyle::fit::FitReport) -> Vec<u8> {
     w.u8(r.front as u8 + 1);
     w.u8(source(r.units_source));
     w.u8(source(r.orientation_source));
-    w.f32(r.inliers);
+    w.f32(r.rooted);
     w.f32(r.root_distance.median);
     w.f32(r.root_distance.p95);
     w.f32(r.root_distance.max);
     w.u32(r.pushed_out as u32);
+    w.f32(r.rooted_distance.median);
+    w.f32(r.rooted_distance.p95);
+    w.f32(r.rooted_distance.max);
     w.0
 }
 
@@ -463,6 +466,9 @@ pub fn encode_strands(kept: &[u16]) -> Vec<u8> {
 }
 
 #[cfg(test)]
+mod properties;
+
+#[cfg(test)]
 mod tests {
     use super::*;
 
@@ -572,16 +578,20 @@ mod tests {
             front: Axis::PosZ,
             orientation_source: hairstyle::fit::Source::Option,
             transform: hairstyle::fit::Similarity::identity(),
-            inliers: 0.5,
+            rooted: 0.5,
             root_distance: hairstyle::fit::Distances { median: 0.001, p95: 0.002, max: 0.003 },
+            rooted_distance: hairstyle::fit::Distances { median: 0.0005, p95: 0.001, max: 0.002 },
+            loose_distance: hairstyle::fit::Distances { median: 0.1, p95: 0.2, max: 0.3 },
             pushed_out: 42,
             scores: None,
         };
         let b = encode_fit(&r);
-        assert_eq!((b[0], b.len()), (server::FIT, 2 + 4 * 14 + 4 + 4 * 4 + 4));
+        assert_eq!((b[0], b.len()), (server::FIT, 2 + 4 * 14 + 4 + 4 * 4 + 4 + 3 * 4));
         assert_eq!(&b[2..6], &1f32.to_le_bytes());
         assert_eq!(&b[58..62], &[3, 5, 2, 0]); // up +y, front +z, units detected, orientation option
+        assert_eq!(&b[62..66], &0.5f32.to_le_bytes());
         assert_eq!(&b[78..82], &42u32.to_le_bytes());
+        assert_eq!(&b[86..90], &0.001f32.to_le_bytes()); // rooted p95
     }
 
     #[test]

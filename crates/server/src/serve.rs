@@ -604,7 +604,7 @@ fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
             let file_error = |message| Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message }));
             match hairstyle::fit::read_and_fit(f, &bytes, &opts) {
                 Ok((c, report)) => {
-                    tracing::info!("loaded hairstyle fitted: scale {:.5} m per unit, up {} front {} ({}), roots to scalp median {:.2} mm, p95 {:.2} mm", report.transform.scale, report.up.name(), report.front.name(), report.orientation_source.name(), 1e3 * report.root_distance.median, 1e3 * report.root_distance.p95);
+                    tracing::info!("loaded hairstyle fitted: scale {:.5} m per unit, up {} front {} ({}), {:.1} % of the strands rooted on the scalp (roots median {:.2} mm, p95 {:.2} mm from it)", report.transform.scale, report.up.name(), report.front.name(), report.orientation_source.name(), 100.0 * report.rooted, 1e3 * report.rooted_distance.median, 1e3 * report.rooted_distance.p95);
                     match load(app, &c) {
                         Ok(()) => {
                             let msg = protocol::encode_fit(&report);

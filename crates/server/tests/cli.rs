@@ -290,6 +290,9 @@ fn fit_brings_a_moved_centimetre_y_up_hairstyle_back() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!((report["up"].as_str(), report["front"].as_str(), report["meters_per_unit"].as_f64()), (Some("+y"), Some("+z"), Some(0.01)));
+    // every root of the built-in hairstyle is on the scalp: no loose strands
+    assert_eq!(report["rooted"].as_f64(), Some(1.0), "{report}");
+    assert!(report["rooted_distance"]["p95"].as_f64().unwrap() < 0.002, "{report}");
     let back = hairstyle::read_file(dir.join("back.usda")).unwrap();
     let mut d: Vec<f64> = original.strands.iter().zip(&back.strands).map(|(a, b)| (0..3).map(|k| ((a[0][k] - b[0][k]) as f64).powi(2)).sum::<f64>().sqrt()).collect();
     d.sort_by(f64::total_cmp);
@@ -298,6 +301,8 @@ fn fit_brings_a_moved_centimetre_y_up_hairstyle_back() {
     assert!(median <= 0.005 && p95 <= 0.015, "median {median} m, p95 {p95} m");
     let text = std::fs::read_to_string(dir.join("back.usda")).unwrap();
     assert!(text.contains("metersPerUnit = 1") && text.contains("upAxis = \"Z\"") && text.contains("float[] widths"));
+    let text_report = bin().arg("fit").arg(dir.join("moved.hair")).arg(dir.join("back.hair")).output().unwrap();
+    assert!(String::from_utf8_lossy(&text_report.stdout).contains("rooted on the scalp (within 10.00 mm): 100.0 % of the strands"), "{}", String::from_utf8_lossy(&text_report.stdout));
     let bad = bin().args(["fit", "--up", "w"]).arg(dir.join("moved.hair")).arg(dir.join("x.hair")).output().unwrap();
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("--up: axis `w`"));
     let usdz = bin().arg("fit").arg(dir.join("a.usdz")).arg(dir.join("x.hair")).output().unwrap();

@@ -9,6 +9,10 @@ use nalgebra::{Matrix3, Vector3};
 
 const MAGIC: &[u8; 8] = b"CFREC2\0\0";
 const MAGIC_V1: &[u8; 8] = b"CFREC1\0\0";
+/// Smallest global input: tool, flags, 3 + 9 f64, u64 cuts (bytes).
+const MIN_GLOBAL_INPUT_BYTES: usize = 2 + 12 * 8 + 8;
+/// Smallest haptic step: no reading, u64 version, 3 f64 force, no commands (bytes).
+const MIN_STEP_BYTES: usize = 1 + 8 + 24 + 1;
 
 impl Record {
     /// Serialises the record.
@@ -82,14 +86,15 @@ impl Record {
             return Err(RecordError::Bad { offset: 8, what: format!("haptic rate {rate_hz} Hz must be > 0") });
         }
         let n = r.u64()? as usize;
-        let mut global_resets = Vec::with_capacity(n.min(1 << 16));
+        // Capacities are bounded by what the rest of the file can hold (a damaged count must not allocate).
+        let mut global_resets = Vec::with_capacity(n.min(r.0.remaining() / 8));
         for _ in 0..n {
             global_resets.push(r.u64()?);
         }
         let mut global_inputs = Vec::new();
         if v2 {
             let n = r.u64()? as usize;
-            global_inputs.reserve(n.min(1 << 20));
+            global_inputs.reserve(n.min(r.0.remaining() / MIN_GLOBAL_INPUT_BYTES));
             for _ in 0..n {
                 let at = r.at();
                 let id = r.u8()?;
@@ -119,7 +124,7 @@ impl Record {
             }
         }
         let n = r.u64()? as usize;
-        let mut steps = Vec::with_capacity(n.min(1 << 20));
+        let mut steps = Vec::with_capacity(n.min(r.0.remaining() / MIN_STEP_BYTES));
         for _ in 0..n {
             let reading = match r.u8()? {
                 0 => None,

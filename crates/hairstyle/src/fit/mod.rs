@@ -10,31 +10,38 @@
 //!    to the built-in scalp's.
 //! 2. **Up axis and facing**: `--up`/`--front`, else metadata (USD `upAxis`), else each of the
 //!    axis-aligned candidates (6 up axes x 4 facings, fewer when one is given) is fitted (stage 3)
-//!    and scored; the best wins. The score ([`FitParams`]) is the trimmed root-to-scalp residual
-//!    (relative to the head radius) plus the fraction of hair points inside the body (hair through
-//!    the face or neck), plus the fraction of strands whose tip is above their root (hair hangs:
-//!    roots above tips), with the format's convention ([`convention`]: TressFX and USC-HairSalon
-//!    files are y up facing +z) preferred by a factor.
-//! 3. **Similarity transform** (scale, rotation, translation) putting the roots onto the scalp:
-//!    trimmed ICP ([`FitParams`]): each root's nearest scalp point (tangent-plane projection,
-//!    [`ScalpIndex`]), the closest [`FitParams::trim`] fraction kept, and every root within
-//!    [`FitParams::inlier_distance`] (so strands whose roots are not on a scalp, e.g. loose
-//!    strands or hair rooted on the neck, do not pull), the least-squares similarity
-//!    of the kept pairs ([`Similarity::fit`]), repeated until the roots stop moving. The
-//!    orientation candidates are fitted with the scale held within [`FitParams::scale_freedom`]
-//!    of the units (a head about our size, so that no candidate wins by shrinking onto the scalp);
-//!    the final fit of the chosen orientation lets the scale adapt within
-//!    [`FitParams::scale_range`] of the units (a head of another size, or roots covering only
-//!    part of a scalp: a character's mohawk strip from forehead to back, e.g. TressFX's Ratboy,
-//!    goes to the range's lower end, 0.3, with 57 % of its roots within 1 cm of the scalp and a
-//!    root-to-scalp median of 2.8 mm; a full hairstyle keeps its scale).
+//!    and scored; the best wins. The score ([`FitParams`]) is the roots' mean truncated squared
+//!    distance to the scalp (saturating at [`FitParams::inlier_distance`]: a root off the scalp
+//!    costs 1, so the score counts how much of the hairline fits, which is what tells the facing
+//!    of a partial hairstyle: a back half turned to face sideways puts its nape on the ears) plus
+//!    the fraction of hair points inside the body (hair through the face or neck), plus the
+//!    fraction of strands whose tip is above their root (hair hangs: roots above tips), with the
+//!    format's convention ([`convention`]: TressFX and USC-HairSalon files are y up facing +z)
+//!    preferred by a factor. Where the roots do not tell the facing (a strip from front to back,
+//!    the top of a head, a front half that fits the back of the scalp as well) the convention
+//!    decides; a format without one (`.hair`) then gets whichever candidate scored lowest, and
+//!    [`FitReport::scores`] shows how close the runner-up was.
+//! 3. **Scale and translation** putting the roots onto the scalp, the rotation held at the axes'
+//!    (a rotation about the head's centre slides a part of a scalp along the sphere at no cost,
+//!    so only the axes can fix it). Only the roots that can be on a head of plausible size are
+//!    matched: those at most the scalp's height times [`FitParams::scale_freedom`] below the
+//!    highest roots (not a character's mane down its back). Trimmed point-to-plane ICP
+//!    ([`FitParams`]): each root's nearest scalp sample ([`ScalpIndex`]), the closest
+//!    [`FitParams::trim`] fraction kept, and every root within [`FitParams::inlier_distance`] (so
+//!    loose strands do not pull), then the scale and translation minimising the squared distances
+//!    to the samples' tangent planes (linear least squares), repeated until the roots stop
+//!    moving. The scale stays within [`FitParams::scale_freedom`] of the units (heads from 0.8 to
+//!    1.25 times ours): the roots' curvature sets it where they cover enough of a round scalp; a
+//!    hairstyle whose head is not round (TressFX's Ratboy: a rat's long head) goes to the end of
+//!    that range rather than shrinking until its mane fits the nape.
 //! 4. **Push-out**: every point the transform puts inside the body (or within
 //!    [`lattice::metaball::PUSH_OUT_SKIN`] of it) is moved out onto that offset surface
 //!    ([`lattice::metaball::MetaballSet::push_out_many_f32`]).
 //!
 //! `--no-fit` ([`FitOptions::fit`] false) keeps only what is given (units and axes from options or
 //! metadata, else metres and z up facing +y) and skips stages 3 and 4. The [`FitReport`] says
-//! what was chosen and why, the transform, and the roots' distances to the scalp.
+//! what was chosen and why, the transform, which strands are rooted on the scalp and which are
+//! loose, and the roots' distances to the scalp.
 
 pub mod scalp_index;
 pub mod similarity;
@@ -147,26 +154,24 @@ pub struct FitParams {
     pub fit_roots: usize,
     /// ICP iterations per orientation candidate. Default 25.
     pub candidate_iterations: usize,
-    /// ICP iterations of the final fit (a scale far from the units is reached slowly). Default 300.
+    /// ICP iterations of the final fit (it stops earlier once the roots stop moving). Default 300.
     pub fit_iterations: usize,
     /// Fraction of roots (the closest to the scalp) trimmed ICP always keeps. Default 0.2.
     pub trim: f64,
-    /// Roots within this distance of the scalp are kept too (and count as on the scalp in
-    /// [`FitReport::inliers`]), m. Default 0.01 m.
+    /// Roots within this distance of the scalp are kept too, and count as rooted on the scalp in
+    /// [`FitReport::rooted`]; also the distance at which the score's cost of a root saturates, m.
+    /// Default 0.01 m.
     pub inlier_distance: f64,
-    /// Range of the scale relative to the units in the final fit (a head of another size).
-    /// Default (0.3, 3).
-    pub scale_range: (f64, f64),
-    /// Depth of the top band of roots (below the highest) whose extent sets the starting scale, m
-    /// (head frame). Default 0.04 m.
+    /// Depth of the scalp's top band (below its highest sample) whose centre the roots' median
+    /// starts over, m (head frame). Default 0.04 m.
     pub band_height: f64,
-    /// ICP of the orientation candidates may change the scale from the units by this factor at
-    /// most (either way). Default 1.25.
+    /// Heads between 1 / this and this times the built-in head's size, in the units (dimensionless):
+    /// the fit may change the scale from the units by this factor at most either way, and roots
+    /// more than this times the scalp's height below the highest roots are not matched (they
+    /// cannot be on such a head). Default 1.25.
     pub scale_freedom: f64,
     /// ICP stops when no root moves more than this in an iteration, m. Default 1e-5 m.
     pub tolerance: f64,
-    /// Fraction of roots in the score's trimmed residual. Default 0.5.
-    pub score_fraction: f64,
     /// Weight of the fraction of hair points inside the body in the score. Default 1.
     pub inside_weight: f64,
     /// Weight of the fraction of strands whose tip is above the root in the score. Default 0.25.
@@ -185,11 +190,9 @@ impl Default for FitParams {
             fit_iterations: 300,
             trim: 0.2,
             inlier_distance: 0.01,
-            scale_range: (0.3, 3.0),
             band_height: 0.04,
             scale_freedom: 1.25,
             tolerance: 1e-5,
-            score_fraction: 0.5,
             inside_weight: 1.0,
             hang_weight: 0.25,
             convention_factor: 0.6,
@@ -260,10 +263,16 @@ pub struct FitReport {
     pub orientation_source: Source,
     /// The transform from file coordinates to the head frame (m): its scale is m per file unit.
     pub transform: Similarity,
-    /// Fraction of roots the trimmed ICP kept in its last iteration (1 without a fit).
-    pub inliers: f64,
+    /// Fraction of strands rooted on the scalp: root within [`FitParams::inlier_distance`] of it
+    /// after the fit and push-out. The others are loose (not rooted on a scalp of our head: e.g. a
+    /// character's mane down its back, loose strands).
+    pub rooted: f64,
     /// Root-to-scalp distances after the fit and push-out, m, over all strands.
     pub root_distance: Distances,
+    /// The same over the rooted strands, m.
+    pub rooted_distance: Distances,
+    /// The same over the loose strands, m (zeros when there are none).
+    pub loose_distance: Distances,
     /// Number of points pushed out of the body.
     pub pushed_out: usize,
     /// Score of the chosen orientation and of the runner-up (lower is better; None when the
@@ -338,65 +347,86 @@ struct Fitter<'a> {
     index: ScalpIndex,
     params: FitParams,
     scalp_spread: f64,
+    /// The scalp's height (highest sample minus lowest), m.
+    scalp_height: f64,
+}
+
+/// One ICP correspondence: a root `a` (after the fixed rotation, file units) and its nearest
+/// scalp point `b` with the plane normal there (None: matched point to point).
+struct Pair {
+    a: Vector3<f64>,
+    b: Vector3<f64>,
+    normal: Option<Vector3<f64>>,
 }
 
 impl Fitter<'_> {
-    /// Trimmed ICP from `start` (scale kept within `range`, m per file unit); returns the
-    /// transform and the kept fraction.
+    /// The roots that can lie on a scalp of a plausible size with the axes `rot` and `units` (m
+    /// per file unit): those at most the scalp's height times [`FitParams::scale_freedom`] below
+    /// the 99th percentile of the roots' heights. The rest (a mane down a character's back, a
+    /// rat-tail) cannot be on a head of about our size, whatever the placement.
+    fn plausible(&self, roots: &[Point3<f64>], rot: &Matrix3<f64>, units: f64) -> Vec<Point3<f64>> {
+        let up = rot.row(2).transpose();
+        let mut h: Vec<f64> = roots.iter().map(|r| units * up.dot(&r.coords)).collect();
+        h.sort_by(f64::total_cmp);
+        let top = h[((0.99 * (h.len() - 1) as f64).round() as usize).min(h.len() - 1)];
+        let depth = self.scalp_height * self.params.scale_freedom;
+        let sel: Vec<Point3<f64>> = roots.iter().copied().filter(|r| units * up.dot(&r.coords) >= top - depth).collect();
+        if sel.len() >= 3 { sel } else { roots.to_vec() }
+    }
+
+    /// Trimmed point-to-plane ICP from `start` with its rotation held: only the scale (within
+    /// `range`, m per file unit) and the translation change. Returns the transform and the
+    /// fraction of roots kept in the last iteration.
     fn icp(&self, roots: &[Point3<f64>], start: Similarity, range: (f64, f64), iterations: usize) -> (Similarity, f64) {
-        let mut t = start;
+        let rot = start.rotation;
+        // centred on the roots' centroid c (well-conditioned least squares): x = s (a - c) + u,
+        // u = t + s c
+        let c = roots.iter().fold(Vector3::zeros(), |s, r| s + rot * r.coords) / roots.len().max(1) as f64;
+        let a: Vec<Vector3<f64>> = roots.iter().map(|r| rot * r.coords - c).collect();
+        let (mut s, mut t) = (start.scale, start.translation + start.scale * c);
         let mut kept = 1.0;
-        let mut prev: Vec<Point3<f64>> = roots.iter().map(|r| t.apply(r)).collect();
         for _ in 0..iterations {
-            let near: Vec<_> = prev.iter().map(|x| self.index.nearest(x)).collect();
-            let mut order: Vec<usize> = (0..roots.len()).collect();
-            order.sort_by(|&a, &b| near[a].distance.total_cmp(&near[b].distance));
-            // trimmed ICP: the closest `trim` fraction, then (once it holds) every root within
-            // `inlier_distance` of the scalp
-            let n = roots.len();
+            let near: Vec<_> = a.iter().map(|x| self.index.nearest(&Point3::from(s * x + t))).collect();
+            let mut order: Vec<usize> = (0..a.len()).collect();
+            order.sort_by(|&i, &j| near[i].distance.total_cmp(&near[j].distance));
+            // trimmed ICP: the closest `trim` fraction, and every root within `inlier_distance`
+            let n = a.len();
             let k_trim = ((self.params.trim * n as f64).ceil() as usize).clamp(3.min(n), n);
             let within = order.iter().take_while(|&&i| near[i].distance <= self.params.inlier_distance).count();
-            let best_k = within.max(k_trim);
-            kept = best_k as f64 / n as f64;
-            let a: Vec<Point3<f64>> = order[..best_k].iter().map(|&i| roots[i]).collect();
-            let b: Vec<Point3<f64>> = order[..best_k].iter().map(|&i| near[i].on_surface).collect();
-            let Some(next) = Similarity::fit(&a, &b, range) else { break };
-            t = next;
-            let moved: Vec<Point3<f64>> = roots.iter().map(|r| t.apply(r)).collect();
-            let step = moved.iter().zip(&prev).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
-            prev = moved;
+            let k = within.max(k_trim);
+            kept = k as f64 / n as f64;
+            let pairs: Vec<Pair> = order[..k]
+                .iter()
+                .map(|&i| {
+                    // over the sample's patch: point to its tangent plane; else to the sample
+                    let on_plane = near[i].on_surface != near[i].sample.position;
+                    Pair { a: a[i], b: near[i].sample.position.coords, normal: on_plane.then_some(near[i].sample.normal) }
+                })
+                .collect();
+            let Some((s1, t1)) = scale_translation(&pairs, range) else { break };
+            let step = a.iter().map(|x| ((s1 - s) * x + (t1 - t)).norm()).fold(0.0, f64::max);
+            (s, t) = (s1, t1);
             if step < self.params.tolerance {
                 break;
             }
         }
-        (t, kept)
+        (Similarity { scale: s, rotation: rot, translation: t - s * c }, kept)
     }
 
-    /// The starting transform for axes `rot` and `units`: the roots' top band (those within
-    /// [`FitParams::band_height`] of the highest root) centred on the scalp's top band, scaled so
-    /// that the band's longer horizontal extent (5th to 95th percentile) matches the scalp's.
+    /// The starting transform for axes `rot` and `units`: the roots' top (99th percentile of
+    /// heights) on the scalp's top, their horizontal median over the scalp's top band's centre
+    /// (the band [`FitParams::band_height`] deep), at scale `units`.
     fn start(&self, roots: &[Point3<f64>], rot: Matrix3<f64>, units: f64) -> Similarity {
-        // (centre x, y, top z, longer horizontal extent) of the band `h` deep
-        let band = |p: &[Point3<f64>], h: f64| {
-            let top = p.iter().map(|q| q.z).fold(f64::NEG_INFINITY, f64::max);
-            let sel: Vec<&Point3<f64>> = p.iter().filter(|q| q.z >= top - h).collect();
-            let c = sel.iter().fold(Vector3::zeros(), |s, q| s + q.coords) / sel.len() as f64;
-            let extent = |a: usize| {
-                let mut v: Vec<f64> = sel.iter().map(|q| q[a]).collect();
-                v.sort_by(f64::total_cmp);
-                v[(0.95 * (v.len() - 1) as f64) as usize] - v[(0.05 * (v.len() - 1) as f64) as usize]
-            };
-            (Vector3::new(c.x, c.y, top), extent(0).max(extent(1)))
-        };
         let scalp: Vec<Point3<f64>> = self.index.samples().iter().map(|p| p.position).collect();
-        let h = self.params.band_height;
-        let (scalp_top, scalp_extent) = band(&scalp, h);
-        let raw: Vec<Point3<f64>> = roots.iter().map(|r| Point3::from(rot * r.coords)).collect();
-        let _ = scalp_extent;
-        let scale = units;
-        let x: Vec<Point3<f64>> = raw.iter().map(|r| Point3::from(scale * r.coords)).collect();
-        let (top, _) = band(&x, h);
-        Similarity { scale, rotation: rot, translation: scalp_top - top }
+        let top = scalp.iter().map(|q| q.z).fold(f64::NEG_INFINITY, f64::max);
+        let band: Vec<&Point3<f64>> = scalp.iter().filter(|q| q.z >= top - self.params.band_height).collect();
+        let c = band.iter().fold(Vector3::zeros(), |s, q| s + q.coords) / band.len() as f64;
+        let x: Vec<Point3<f64>> = roots.iter().map(|r| Point3::from(units * (rot * r.coords))).collect();
+        let mut h: Vec<f64> = x.iter().map(|q| q.z).collect();
+        h.sort_by(f64::total_cmp);
+        let x_top = h[((0.99 * (h.len() - 1) as f64).round() as usize).min(h.len() - 1)];
+        let (m, _) = spread(&x);
+        Similarity { scale: units, rotation: rot, translation: Vector3::new(c.x - m.x, c.y - m.y, top - x_top) }
     }
 
     /// Score of a candidate fit (lower is better; see the module docs).
@@ -405,12 +435,12 @@ impl Fitter<'_> {
         a + self.params.inside_weight * b + self.params.hang_weight * c
     }
 
-    /// The score's terms: trimmed residual / head radius, fraction inside, fraction hanging up.
+    /// The score's terms: the roots' mean truncated squared distance to the scalp (min(d,
+    /// inlier_distance)^2 / inlier_distance^2: 0 on the scalp, 1 off it), the fraction of hair
+    /// points inside the body, the fraction of strands whose tip is above the root.
     fn score_parts(&self, t: &Similarity, roots: &[Point3<f64>], strands: &[Vec<Point3<f64>>]) -> (f64, f64, f64) {
-        let mut d: Vec<f64> = roots.iter().map(|r| self.index.nearest(&t.apply(r)).distance).collect();
-        d.sort_by(f64::total_cmp);
-        let k = ((self.params.score_fraction * d.len() as f64).ceil() as usize).clamp(1, d.len());
-        let rms = (d[..k].iter().map(|x| x * x).sum::<f64>() / k as f64).sqrt();
+        let delta = self.params.inlier_distance;
+        let off = roots.iter().map(|r| (self.index.nearest(&t.apply(r)).distance / delta).min(1.0).powi(2)).sum::<f64>() / roots.len().max(1) as f64;
         let threshold = self.head.params.threshold;
         let (mut inside, mut points, mut up) = (0usize, 0usize, 0usize);
         for s in strands {
@@ -421,8 +451,45 @@ impl Fitter<'_> {
             let (a, b) = (t.apply(&s[0]), t.apply(&s[s.len() - 1]));
             up += (b.z > a.z + 0.01 * self.head.params.head_radius) as usize;
         }
-        (rms / self.head.params.head_radius, inside as f64 / points.max(1) as f64, up as f64 / strands.len().max(1) as f64)
+        (off, inside as f64 / points.max(1) as f64, up as f64 / strands.len().max(1) as f64)
     }
+}
+
+/// The scale s (clamped to `range`) and translation t minimising the sum of squared residuals
+/// n . (s a + t - b) (point to plane) or |s a + t - b| (point to point) over `pairs`: linear
+/// least squares in (s, t), solved by normal equations. None when degenerate.
+fn scale_translation(pairs: &[Pair], range: (f64, f64)) -> Option<(f64, Vector3<f64>)> {
+    use nalgebra::{Matrix4, Vector4};
+    let (mut m, mut r) = (Matrix4::<f64>::zeros(), Vector4::<f64>::zeros());
+    let mut add = |j: Vector4<f64>, y: f64| {
+        m += j * j.transpose();
+        r += j * y;
+    };
+    for p in pairs {
+        match p.normal {
+            Some(n) => add(Vector4::new(n.dot(&p.a), n.x, n.y, n.z), n.dot(&p.b)),
+            None => {
+                for k in 0..3 {
+                    let e = Vector3::ith(k, 1.0);
+                    add(Vector4::new(p.a[k], e.x, e.y, e.z), p.b[k]);
+                }
+            }
+        }
+    }
+    // a tiny relative ridge (Levenberg) keeps the system solvable when the pairs leave a
+    // direction unconstrained (e.g. three planes with parallel normals)
+    let ridge = Matrix4::from_diagonal(&(m.diagonal() * 1e-12 + Vector4::repeat(1e-300)));
+    let x = (m + ridge).cholesky()?.solve(&r);
+    let s = x[0];
+    if s >= range.0 && s <= range.1 {
+        return Some((s, Vector3::new(x[1], x[2], x[3])));
+    }
+    // clamped scale: the translation re-solved with s fixed
+    let s = s.clamp(range.0, range.1);
+    let m3 = (m + ridge).fixed_view::<3, 3>(1, 1).into_owned();
+    let r3 = r.fixed_rows::<3>(1).into_owned() - m.fixed_view::<3, 1>(1, 0).into_owned() * s;
+    let t = m3.cholesky()?.solve(&r3);
+    Some((s, t))
 }
 
 /// Places `curves` (file units and axes) on `head`: see the module docs. `format` and `meta` say
@@ -455,7 +522,9 @@ pub fn fit(
     let index = ScalpIndex::new(head, params.scalp_samples);
     let scalp_points: Vec<Point3<f64>> = index.samples().iter().map(|p| p.position).collect();
     let (_, scalp_spread) = spread(&scalp_points);
-    let fitter = Fitter { head, index, params: *params, scalp_spread };
+    let heights = scalp_points.iter().map(|p| p.z);
+    let scalp_height = heights.clone().fold(f64::NEG_INFINITY, f64::max) - heights.fold(f64::INFINITY, f64::min);
+    let fitter = Fitter { head, index, params: *params, scalp_spread, scalp_height };
 
     // 1. units
     let (units, units_source) = match (opts.units, meta.meters_per_unit, opts.fit) {
@@ -505,7 +574,8 @@ pub fn fit(
         let (u, f) = candidates[0];
         let t = Similarity { scale: units, rotation: axes_rotation(u, f), translation: Vector3::zeros() };
         transform_curves(&mut out, &t);
-        let d = all_roots.iter().map(|r| fitter.index.nearest(&t.apply(r)).distance).collect();
+        let d: Vec<f64> = all_roots.iter().map(|r| fitter.index.nearest(&t.apply(r)).distance).collect();
+        let (rooted, root_distance, rooted_distance, loose_distance) = root_classes(d, params.inlier_distance);
         let report = FitReport {
             meters_per_unit: units,
             units_source,
@@ -513,8 +583,10 @@ pub fn fit(
             front: f,
             orientation_source,
             transform: t,
-            inliers: 1.0,
-            root_distance: Distances::of(d),
+            rooted,
+            root_distance,
+            rooted_distance,
+            loose_distance,
             pushed_out: 0,
             scores: None,
         };
@@ -529,13 +601,15 @@ pub fn fit(
         .map(|s| strided(&s.iter().map(p64).collect::<Vec<_>>(), 8))
         .collect();
     let conv = convention(format).filter(|_| meta_up.is_none() || meta_up == convention(format).map(|c| c.0));
+    let near_units = (units / params.scale_freedom, units * params.scale_freedom);
     let mut scored: Vec<(f64, (Axis, Axis), Similarity)> = candidates
         .iter()
         .map(|&(u, f)| {
-            let start = fitter.start(&roots_c, axes_rotation(u, f), units);
-            let near_units = (units / params.scale_freedom, units * params.scale_freedom);
-            let (t, _) = fitter.icp(&roots_c, start, near_units, params.candidate_iterations);
-            let mut s = fitter.score(&t, &roots_c, &strands_c);
+            let rot = axes_rotation(u, f);
+            let sel = fitter.plausible(&roots_c, &rot, units);
+            let start = fitter.start(&sel, rot, units);
+            let (t, _) = fitter.icp(&sel, start, near_units, params.candidate_iterations);
+            let mut s = fitter.score(&t, &sel, &strands_c);
             if conv == Some((u, f)) {
                 s *= params.convention_factor;
             }
@@ -545,11 +619,8 @@ pub fn fit(
     scored.sort_by(|a, b| a.0.total_cmp(&b.0));
     let (best_score, (up, front), start) = scored[0];
     let scores = (scored.len() > 1 && orientation_source == Source::Detected).then(|| (best_score, scored[1].0));
-    let roots_f = strided(&all_roots, params.fit_roots);
-    // the final fit lets the scale adapt to a head of another size (a character's head, a
-    // hairstyle covering only part of a scalp such as a mohawk strip)
-    let head_sizes = (units * params.scale_range.0, units * params.scale_range.1);
-    let (t, inliers) = fitter.icp(&roots_f, start, head_sizes, params.fit_iterations);
+    let roots_f = fitter.plausible(&strided(&all_roots, params.fit_roots), &start.rotation, units);
+    let (t, _) = fitter.icp(&roots_f, start, near_units, params.fit_iterations);
 
     // 4. transform and push out
     transform_curves(&mut out, &t);
@@ -557,7 +628,8 @@ pub fn fit(
     for s in &mut out.strands {
         pushed_out += head.body.push_out_many_f32(s, head.params.threshold, lattice::metaball::PUSH_OUT_SKIN);
     }
-    let d = out.strands.iter().filter(|s| !s.is_empty()).map(|s| fitter.index.nearest(&p64(&s[0])).distance).collect();
+    let d: Vec<f64> = out.strands.iter().filter(|s| !s.is_empty()).map(|s| fitter.index.nearest(&p64(&s[0])).distance).collect();
+    let (rooted, root_distance, rooted_distance, loose_distance) = root_classes(d, params.inlier_distance);
     let report = FitReport {
         meters_per_unit: units,
         units_source,
@@ -565,12 +637,21 @@ pub fn fit(
         front,
         orientation_source,
         transform: t,
-        inliers,
-        root_distance: Distances::of(d),
+        rooted,
+        root_distance,
+        rooted_distance,
+        loose_distance,
         pushed_out,
         scores,
     };
     Ok((out, report))
+}
+
+/// Of the roots' distances to the scalp (m): the fraction within `rooted_within` (m), and the
+/// distances of all, of those within and of the others.
+fn root_classes(d: Vec<f64>, rooted_within: f64) -> (f64, Distances, Distances, Distances) {
+    let (on, off): (Vec<f64>, Vec<f64>) = d.iter().partition(|&&x| x <= rooted_within);
+    (on.len() as f64 / d.len().max(1) as f64, Distances::of(d), Distances::of(on), Distances::of(off))
 }
 
 /// Applies `t` to every point of `c` (f32) and scales the thickness by its scale.
@@ -606,4 +687,40 @@ pub fn read_and_fit(format: Format, bytes: &[u8], opts: &FitOptions) -> Result<(
 pub fn fit_file(path: impl AsRef<std::path::Path>, opts: &FitOptions) -> Result<(HairCurves, FitReport), LoadError> {
     let (curves, format, meta) = crate::formats::read_file_with_metadata(path)?;
     Ok(fit(&curves, Some(format), &meta, opts, &Head::default(), &FitParams::default())?)
+}
+
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Exact pairs (points on planes through s a + t, and points matched point to point) give
+    /// back s and t; a scale outside the range is clamped and t re-solved for it.
+    #[test]
+    fn scale_translation_recovers_a_known_scale_and_translation() {
+        let (s, t) = (0.013, Vector3::new(-0.2, 1.5, 0.07));
+        let pairs: Vec<Pair> = (0..40)
+            .map(|i| {
+                let f = i as f64;
+                let a = Vector3::new((0.7 * f).sin(), (1.3 * f).cos(), 0.1 * f - 2.0) * 9.0;
+                let n = Vector3::new((0.4 * f).cos(), (0.9 * f).sin(), 0.5).normalize();
+                // b anywhere on the plane through s a + t with normal n (offset along the plane)
+                let along = n.cross(&Vector3::new(0.3, -0.2, 1.0)).normalize() * (0.01 * f);
+                let x = s * a + t;
+                Pair { a, b: if i % 5 == 0 { x } else { x + along }, normal: (i % 5 != 0).then_some(n) }
+            })
+            .collect();
+        let (s1, t1) = scale_translation(&pairs, (0.0, 1.0)).unwrap();
+        assert!((s1 - s).abs() < 1e-12 && (t1 - t).norm() < 1e-10, "{s1} {t1:?}");
+        // clamped: t is the least-squares translation for the clamped scale
+        let (s2, t2) = scale_translation(&pairs, (0.02, 1.0)).unwrap();
+        assert_eq!(s2, 0.02);
+        let cost = |t: Vector3<f64>| pairs.iter().map(|p| match p.normal {
+            Some(n) => n.dot(&(0.02 * p.a + t - p.b)).powi(2),
+            None => (0.02 * p.a + t - p.b).norm_squared(),
+        }).sum::<f64>();
+        for d in [Vector3::x(), Vector3::y(), Vector3::z()] {
+            assert!(cost(t2) <= cost(t2 + 1e-4 * d) && cost(t2) <= cost(t2 - 1e-4 * d));
+        }
+    }
 }

@@ -1,4 +1,4 @@
-//! Least-squares similarity transform between paired point sets (Umeyama 1991).
+//! A similarity transform (scale, rotation, translation): the fit's map from file to head frame.
 
 use nalgebra::{Matrix3, Point3, Vector3};
 
@@ -31,43 +31,5 @@ impl Similarity {
             rotation: self.rotation * first.rotation,
             translation: self.scale * (self.rotation * first.translation) + self.translation,
         }
-    }
-
-    /// The similarity minimising sum |s R a_i + t - b_i|^2 over pairs (a_i, b_i), with the scale
-    /// clamped to `scale_range` (the translation then re-solved for the clamped scale). None for
-    /// fewer than 3 pairs or a degenerate (collinear) set.
-    pub fn fit(a: &[Point3<f64>], b: &[Point3<f64>], scale_range: (f64, f64)) -> Option<Similarity> {
-        let n = a.len();
-        if n < 3 || b.len() != n {
-            return None;
-        }
-        let ma = a.iter().fold(Vector3::zeros(), |s, p| s + p.coords) / n as f64;
-        let mb = b.iter().fold(Vector3::zeros(), |s, p| s + p.coords) / n as f64;
-        let mut cov = Matrix3::zeros();
-        let mut var_a = 0.0;
-        for (p, q) in a.iter().zip(b) {
-            let (da, db) = (p.coords - ma, q.coords - mb);
-            cov += db * da.transpose();
-            var_a += da.norm_squared();
-        }
-        cov /= n as f64;
-        var_a /= n as f64;
-        if var_a <= 0.0 {
-            return None;
-        }
-        let svd = cov.svd(true, true);
-        let (u, v_t) = (svd.u?, svd.v_t?);
-        let mut s = Matrix3::identity();
-        if (u.determinant() * v_t.determinant()) < 0.0 {
-            s[(2, 2)] = -1.0;
-        }
-        let rotation = u * s * v_t;
-        let d = svd.singular_values;
-        let trace = d[0] * s[(0, 0)] + d[1] * s[(1, 1)] + d[2] * s[(2, 2)];
-        let scale = (trace / var_a).clamp(scale_range.0, scale_range.1);
-        if !(scale.is_finite() && scale > 0.0) || !rotation.iter().all(|x| x.is_finite()) {
-            return None;
-        }
-        Some(Similarity { scale, rotation, translation: mb - scale * (rotation * ma) })
     }
 }

@@ -196,3 +196,37 @@ fn partial_hairstyles_come_back_with_their_orientation() {
         assert!(median <= 0.005 && p95 <= 0.015, "{name}: root error median {median} m, p95 {p95} m");
     }
 }
+
+/// A hairstyle Coiffure saved as `.tfx` or `.data` is in its own head frame (metres, z up, facing
+/// +y), against those formats' y-up convention: the roots' fit to the scalp outweighs the
+/// convention's preference, and the hairstyle comes back where it was (within 5 mm / 15 mm;
+/// measured 0.50 mm, the push-out skin).
+#[test]
+fn our_own_z_up_tfx_and_data_files_come_back_z_up() {
+    let h = Hairstyle::generate(&HairstyleParams { render_count: 2000, guide_count: 100, ..Default::default() }).unwrap();
+    let ours = h.to_curves();
+    for format in [Format::Tfx, Format::Usc] {
+        let (back, report) = fit(&ours, Some(format), &Metadata::default(), &FitOptions::default(), &Head::default(), &FitParams::default()).unwrap();
+        let d: Vec<f64> = ours.strands.iter().zip(&back.strands).map(|(a, b)| (p64(&a[0]) - p64(&b[0])).norm()).collect();
+        let (median, p95) = (quantile(d.clone(), 0.5), quantile(d, 0.95));
+        println!("{format:?}: up {} front {} scores {:?}; root error median {:.2} mm, p95 {:.2} mm", report.up.name(), report.front.name(), report.scores, 1e3 * median, 1e3 * p95);
+        assert_eq!((report.up, report.front, report.meters_per_unit), (Axis::PosZ, Axis::PosY, 1.0), "{format:?}");
+        assert!(median <= 0.005 && p95 <= 0.015, "{format:?}: median {median} m, p95 {p95} m");
+    }
+}
+
+/// Degenerate hairstyles (one strand; every root at one point; every root on a line) are fitted
+/// without panicking, to a finite transform within the scale range.
+#[test]
+fn degenerate_hairstyles_fit_to_a_finite_transform() {
+    let one = HairCurves::from_strands(vec![vec![[0.0, 1.0, 0.0], [0.0, 0.8, 0.05]]]);
+    let same = HairCurves::from_strands((0..10).map(|i| vec![[0.0, 1.0, 0.0], [0.01 * i as f32, 0.8, 0.05]]).collect());
+    let line = HairCurves::from_strands((0..50).map(|i| vec![[0.0, 1.0, 0.002 * i as f32], [0.0, 0.8, 0.002 * i as f32]]).collect());
+    for (name, c) in [("one", one), ("same", same), ("line", line)] {
+        let (out, r) = fit(&c, Some(Format::Tfx), &Metadata::default(), &FitOptions::default(), &Head::default(), &FitParams::default()).unwrap();
+        let t = &r.transform;
+        assert!(t.scale.is_finite() && t.translation.iter().all(|x| x.is_finite()) && out.strands.iter().flatten().flatten().all(|x| x.is_finite()), "{name}: {r:?}");
+        let f = FitParams::default().scale_freedom;
+        assert!(t.scale >= r.meters_per_unit / f - 1e-12 && t.scale <= r.meters_per_unit * f + 1e-12, "{name}: {r:?}");
+    }
+}

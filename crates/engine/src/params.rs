@@ -181,7 +181,8 @@ pub struct HapticParams {
     /// dimensionless in [0, 1]. Default 0.8.
     pub hydrogen_share: f64,
     /// The local strands touch each other (contact and Coulomb friction, `tools::hair_contact`; each guide a
-    /// wisp of the real hairs it stands for, `HapticCore::hair_contact`). Default false (see bench/RESULTS.md).
+    /// wisp of the real hairs it stands for, `HapticCore::hair_contact`; each contact solved for both strands
+    /// together). Default false (see bench/RESULTS.md).
     pub hair_contact: bool,
     /// The tool drags through the local strands against the fibres it parts (`tools::entanglement`, the tress
     /// scenarios' law: bending of the parted fibres and, wet, the water bridges on the tooth; each guide's

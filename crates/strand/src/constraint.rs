@@ -34,7 +34,7 @@
 use crate::error::{Result, StrandError};
 use crate::integrator::{Integrator, Strand};
 use crate::kinematics::{frame_at, segment_frames};
-use nalgebra::{DVector, Matrix3, Matrix3xX, Vector3};
+use nalgebra::{Matrix3, Matrix3xX, Vector3};
 
 /// What a point constraint does.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -93,13 +93,16 @@ pub struct ConstraintOptions {
     /// root of an H1 fibre the bending stiffness `3 EI / s^3` reaches it at s = 0.6 mm, so only points that
     /// can hardly move are softened. `f64::INFINITY` gives rigid constraints.
     pub max_stiffness: f64,
-    /// Projected Gauss-Seidel sweeps. Default 30.
+    /// Most projected Gauss-Seidel sweeps. Default 30.
     pub iterations: usize,
+    /// The sweeps stop early once a whole sweep changed no impulse by more than `tolerance` times the largest
+    /// impulse (dimensionless, >= 0; 0 always runs `iterations` sweeps). Default 1e-6.
+    pub tolerance: f64,
 }
 
 impl Default for ConstraintOptions {
     fn default() -> Self {
-        Self { time_constant: 0.004, damping_ratio: 1.0, max_correction_speed: 0.05, max_stiffness: 100.0, iterations: 30 }
+        Self { time_constant: 0.004, damping_ratio: 1.0, max_correction_speed: 0.05, max_stiffness: 100.0, iterations: 30, tolerance: 1e-6 }
     }
 }
 
@@ -108,7 +111,7 @@ impl ConstraintOptions {
     /// half of a position error per step of `h` seconds. Kept to show what the bounds change.
     pub fn rigid(h: f64) -> Self {
         // beta = omega / (2 zeta + h omega) = 0.5 / h  <=>  omega = 2 zeta / h  <=>  tau = h / (2 zeta^2).
-        Self { time_constant: 0.5 * h, damping_ratio: 1.0, max_correction_speed: f64::INFINITY, max_stiffness: f64::INFINITY, iterations: 30 }
+        Self { time_constant: 0.5 * h, damping_ratio: 1.0, max_correction_speed: f64::INFINITY, max_stiffness: f64::INFINITY, iterations: 30, tolerance: 1e-6 }
     }
 
     /// Error-reduction rate `beta = omega / (2 zeta + h omega)` with `omega = 1 / (tau zeta)`, 1/s, for a step of
@@ -137,6 +140,9 @@ impl ConstraintOptions {
         }
         if !(self.max_stiffness > 0.0) {
             return bad("max_stiffness", format!("must be > 0 N/m, got {}", self.max_stiffness));
+        }
+        if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
+            return bad("tolerance", format!("must be finite and >= 0, got {}", self.tolerance));
         }
         Ok(())
     }
@@ -229,132 +235,107 @@ impl Strand {
     /// Second half of the step begun by [`Strand::prepare_step`]: solves the point `constraints` (at the state
     /// the step was prepared at) and advances the state. Returns each constraint's impulse (N s), as
     /// [`Strand::step_constrained`]. An error if no step was prepared; on failure the state is unchanged.
+    /// Equal to [`Strand::constraint_rows`], [`solve`] for this strand alone and [`Strand::apply_constraints`].
     pub fn finish_step(&mut self, constraints: &[PointConstraint], opts: &ConstraintOptions) -> Result<Vec<Vector3<f64>>> {
-        let Some((h, mut v)) = self.prepared.take() else {
+        if self.prepared.is_none() {
             return Err(StrandError::InvalidParameter { field: "finish_step", reason: "no step was prepared (call prepare_step first)".into() });
-        };
+        }
         if constraints.is_empty() {
+            let (h, v) = self.prepared.take().expect("checked above");
             return self.commit_step(h, v).map(|_| vec![]);
         }
+        let mut rows = self.constraint_rows(constraints, opts)?;
+        solve(std::slice::from_mut(&mut rows), &[], opts);
+        self.apply_constraints(rows, opts)
+    }
+
+    /// The rows of `constraints` in the prepared step (Jacobians, their responses `Y = A^-1 J^T`, the Delassus
+    /// blocks and the unconstrained point velocities), for [`solve`]; the step stays prepared. Errors if no
+    /// step was prepared, a constraint or `opts` is invalid, or the step matrix fails.
+    pub fn constraint_rows(&mut self, constraints: &[PointConstraint], opts: &ConstraintOptions) -> Result<ConstraintRows> {
+        let Some((h, _)) = self.prepared.as_ref() else {
+            return Err(StrandError::InvalidParameter { field: "constraint_rows", reason: "no step was prepared (call prepare_step first)".into() });
+        };
+        let h = *h;
         for c in constraints {
             c.validate()?;
         }
-        if let Err(e) = opts.validate() {
-            self.prepared = Some((h, v));
-            return Err(e);
-        }
-        // Jacobians from the frames and motion subspaces of the step's own sweep (same state).
+        opts.validate()?;
         let root = self.state.root.clone();
-        let mut jac: Vec<Matrix3xX<f64>> = Vec::with_capacity(constraints.len());
-        let mut y: Vec<Matrix3xX<f64>> = Vec::with_capacity(constraints.len());
-        let mut bias: Vec<Vector3<f64>> = Vec::with_capacity(constraints.len());
-        let mut position: Vec<Vector3<f64>> = Vec::with_capacity(constraints.len());
+        let n = constraints.len();
+        let mut rows = ConstraintRows { h, constraints: constraints.to_vec(), ..Default::default() };
+        let mut jac: Vec<Matrix3xX<f64>> = Vec::with_capacity(n);
         for c in constraints {
             let (j, x) = self.dynamics.point_jacobian(&self.model, &self.state, c.s);
-            bias.push(root.velocity + root.angular_velocity.cross(&(x - root.position)));
-            position.push(x);
-            let mut yc = Matrix3xX::zeros(self.model.dofs());
-            for k in 0..3 {
-                let mut col: DVector<f64> = j.row(k).transpose();
-                if !self.resolve_step_matrix(&mut col) {
-                    return Err(StrandError::NotPositiveDefinite { what: "step matrix" });
-                }
-                yc.set_row(k, &col.transpose());
+            let bias = root.velocity + root.angular_velocity.cross(&(x - root.position));
+            rows.position.push(x);
+            let mut yc = j.clone();
+            if !self.resolve_step_matrix3(&mut yc) {
+                return Err(StrandError::NotPositiveDefinite { what: "step matrix" });
             }
+            let v = &self.prepared.as_ref().expect("checked above").1;
+            rows.u_free.push(&j * v + bias);
             jac.push(j);
-            y.push(yc);
+            rows.y.push(yc);
         }
-        let n = constraints.len();
-        // Delassus blocks W[c][d] = J_c Y_d^T (3 x 3).
-        let w: Vec<Vec<Matrix3<f64>>> = (0..n).map(|c| (0..n).map(|d| &jac[c] * y[d].transpose()).collect()).collect();
-        let u_free: Vec<Vector3<f64>> = (0..n).map(|c| &jac[c] * &v + bias[c]).collect();
-        let mut p = vec![Vector3::zeros(); n];
-        let beta = opts.error_reduction_rate(h);
-        let v_max = opts.max_correction_speed;
+        // Delassus blocks W[c][d] = J_c Y_d^T (3 x 3); W is symmetric, so only c <= d is computed.
+        rows.w = vec![Matrix3::zeros(); n * n];
+        for c in 0..n {
+            for d in c..n {
+                let b = &jac[c] * rows.y[d].transpose();
+                rows.w[c * n + d] = b;
+                rows.w[d * n + c] = b.transpose();
+            }
+        }
         let mix = opts.force_mixing(h);
         // A point that (almost) cannot move, such as the clamped root, is left out: its constraint could only
         // produce an impulse against the root clamp.
-        let mobility = |c: usize| w[c][c].trace();
+        let mobility = |c: usize| rows.w[c * n + c].trace();
         let max_mobility = (0..n).map(mobility).fold(0.0, f64::max);
-        let active: Vec<bool> = (0..n).map(|c| mobility(c).is_finite() && mobility(c) > 1e-9 * max_mobility).collect();
+        rows.active = (0..n).map(|c| mobility(c).is_finite() && mobility(c) > 1e-9 * max_mobility).collect();
         // What the sweeps need of each contact, fixed over the iterations: tangent basis, regularized normal
         // mobility `W_nn + R` and the inverse of the regularized tangential Delassus block.
-        let contact_frames: Vec<Option<(Vector3<f64>, Vector3<f64>, f64, nalgebra::Matrix2<f64>)>> = (0..n)
+        rows.contact_frames = (0..n)
             .map(|c| match constraints[c].kind {
-                ConstraintKind::Contact { normal, .. } => {
-                    let (t1, t2) = tangents(&normal);
-                    let wnn = (normal.dot(&(w[c][c] * normal)) + mix).max(1e-300);
-                    let wt = Matrix3::from_columns(&[t1, t2, normal]).transpose() * w[c][c] * Matrix3::from_columns(&[t1, t2, normal]);
-                    let wt2 = nalgebra::Matrix2::new(wt[(0, 0)] + mix, wt[(0, 1)], wt[(1, 0)], wt[(1, 1)] + mix);
-                    Some((t1, t2, wnn, wt2.try_inverse().unwrap_or_else(nalgebra::Matrix2::zeros)))
-                }
+                ConstraintKind::Contact { normal, .. } => Some(ContactFrame::new(&normal, &rows.w[c * n + c], mix)),
                 ConstraintKind::Pin { .. } | ConstraintKind::Drag { .. } => None,
             })
             .collect();
-        // Inverses of the pins' regularized Delassus blocks `W + R I` (pseudo-inverses when rigid); the
-        // post-stabilization uses the pseudo-inverses of the blocks themselves.
-        let is_pin = |c: usize| matches!(constraints[c].kind, ConstraintKind::Pin { .. });
-        let is_drag = |c: usize| matches!(constraints[c].kind, ConstraintKind::Drag { .. });
-        let pin_projection: Vec<Matrix3<f64>> = (0..n).map(|c| if is_pin(c) || is_drag(c) { pinv3(&w[c][c]) } else { Matrix3::zeros() }).collect();
-        let pin_inverse: Vec<Matrix3<f64>> = (0..n)
-            .map(|c| match (is_pin(c) || is_drag(c), mix > 0.0) {
+        // Inverses of the pins' (and drags') regularized Delassus blocks `W + R I` (pseudo-inverses when rigid);
+        // the post-stabilization uses the pseudo-inverses of the blocks themselves.
+        let held = |c: usize| matches!(constraints[c].kind, ConstraintKind::Pin { .. } | ConstraintKind::Drag { .. });
+        rows.pin_projection = (0..n).map(|c| if held(c) { pinv3(&rows.w[c * n + c]) } else { Matrix3::zeros() }).collect();
+        rows.pin_inverse = (0..n)
+            .map(|c| match (held(c), mix > 0.0) {
                 (false, _) => Matrix3::zeros(),
-                (true, true) => (w[c][c] + Matrix3::identity() * mix).try_inverse().unwrap_or_else(|| pinv3(&w[c][c])),
-                (true, false) => pin_projection[c],
+                (true, true) => (rows.w[c * n + c] + Matrix3::identity() * mix).try_inverse().unwrap_or_else(|| pinv3(&rows.w[c * n + c])),
+                (true, false) => rows.pin_projection[c],
             })
             .collect();
-        let capped = |x: Vector3<f64>| if x.norm() > v_max { x * (v_max / x.norm()) } else { x };
-        for _ in 0..opts.iterations.max(1) {
-            for c in (0..n).filter(|&c| active[c]) {
-                let mut u = u_free[c];
-                for d in 0..n {
-                    u += w[c][d] * p[d];
-                }
-                let rel = u - constraints[c].velocity;
-                match constraints[c].kind {
-                    ConstraintKind::Pin { target } => {
-                        let want = capped((target - position[c]) * beta);
-                        let dp = pin_inverse[c] * (want - rel - p[c] * mix);
-                        p[c] += dp;
-                    }
-                    ConstraintKind::Drag { max_force } => {
-                        // Aim for no relative motion, then clamp to the drag's largest impulse.
-                        let mut pc = p[c] + pin_inverse[c] * (-rel - p[c] * mix);
-                        let limit = max_force * h;
-                        if pc.norm() > limit {
-                            pc *= limit / pc.norm();
-                        }
-                        p[c] = pc;
-                    }
-                    ConstraintKind::Contact { normal, depth, friction } => {
-                        let Some((t1, t2, wnn, wt2_inv)) = contact_frames[c] else { continue };
-                        let want_n = (beta * depth).min(v_max);
-                        let pn_old = p[c].dot(&normal);
-                        let mut pn = (pn_old + (want_n - rel.dot(&normal) - mix * pn_old) / wnn).max(0.0);
-                        // Tangential: aim for zero slip, then clamp to the cone.
-                        let rt = nalgebra::Vector2::new(rel.dot(&t1), rel.dot(&t2));
-                        let pt_old = nalgebra::Vector2::new(p[c].dot(&t1), p[c].dot(&t2));
-                        let mut pt = pt_old - wt2_inv * (rt + pt_old * mix);
-                        let limit = friction * pn;
-                        if pt.norm() > limit {
-                            pt *= limit / pt.norm();
-                        }
-                        if !pn.is_finite() {
-                            pn = 0.0;
-                        }
-                        p[c] = normal * pn + t1 * pt.x + t2 * pt.y;
-                    }
-                }
-                if !p[c].iter().all(|x| x.is_finite()) {
-                    p[c] = Vector3::zeros();
-                }
-            }
+        rows.impulses = vec![Vector3::zeros(); n];
+        Ok(rows)
+    }
+
+    /// Completes the prepared step with the impulses [`solve`] found for `rows` (built by this strand's
+    /// [`Strand::constraint_rows`] in this step): the velocities take `Y^T p`, the state advances, and the
+    /// positions are projected back onto the pins. Returns each constraint's impulse (N s). On failure the
+    /// state is unchanged.
+    pub fn apply_constraints(&mut self, rows: ConstraintRows, opts: &ConstraintOptions) -> Result<Vec<Vector3<f64>>> {
+        let Some((h, mut v)) = self.prepared.take() else {
+            return Err(StrandError::InvalidParameter { field: "apply_constraints", reason: "no step was prepared (call prepare_step first)".into() });
+        };
+        let n = rows.len();
+        if rows.y.iter().any(|y| y.ncols() != v.len()) || (rows.h - h).abs() > 1e-15 * h {
+            self.prepared = Some((h, v));
+            return Err(StrandError::InvalidParameter { field: "apply_constraints", reason: "the rows were not built for this strand's prepared step".into() });
         }
         for c in 0..n {
-            v += y[c].transpose() * p[c];
+            v += rows.y[c].transpose() * rows.impulses[c];
         }
         let saved = self.state.clone();
         self.commit_step(h, v)?;
+        let constraints = &rows.constraints;
+        let v_max = opts.max_correction_speed;
         // Post-stabilization of pins (Cline and Pai 2003): project the positions back onto the pins with the
         // same metric, dq = A^-1 J^T lambda with W lambda = error; two Gauss-Seidel passes per projection.
         let pins: Vec<usize> = (0..n).filter(|&c| matches!(constraints[c].kind, ConstraintKind::Pin { .. })).collect();
@@ -376,22 +357,214 @@ impl Strand {
                 })
                 .collect();
             for _ in 0..opts.iterations.max(1) {
-                for (k, &c) in pins.iter().enumerate().filter(|(_, &c)| active[c]) {
+                for (k, &c) in pins.iter().enumerate().filter(|(_, &c)| rows.active[c]) {
                     let mut r = error[k];
                     for &d in &pins {
-                        r -= w[c][d] * lambda[d];
+                        r -= rows.w[c * n + d] * lambda[d];
                     }
-                    lambda[c] += pin_projection[c] * r;
+                    lambda[c] += rows.pin_projection[c] * r;
                 }
             }
             for &c in &pins {
-                self.state.q += y[c].transpose() * lambda[c];
+                self.state.q += rows.y[c].transpose() * lambda[c];
             }
         }
         if !self.state.q.iter().all(|x| x.is_finite()) {
             self.state = saved;
             return Err(StrandError::NonFinite { what: "pin projection", time: self.state.time });
         }
-        Ok(p)
+        Ok(rows.impulses)
+    }
+}
+
+/// What the sweeps need of a contact, fixed over the iterations: the tangent basis, the regularized normal
+/// mobility `W_nn + R` (m/s per N s) and the inverse of the regularized tangential Delassus block.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ContactFrame {
+    t1: Vector3<f64>,
+    t2: Vector3<f64>,
+    wnn: f64,
+    wt2_inv: nalgebra::Matrix2<f64>,
+}
+
+impl ContactFrame {
+    /// For a contact along `normal` with the 3 x 3 Delassus block `w` and force mixing `mix`.
+    fn new(normal: &Vector3<f64>, w: &Matrix3<f64>, mix: f64) -> Self {
+        let (t1, t2) = tangents(normal);
+        let wnn = (normal.dot(&(w * normal)) + mix).max(1e-300);
+        let basis = Matrix3::from_columns(&[t1, t2, *normal]);
+        let wt = basis.transpose() * w * basis;
+        let wt2 = nalgebra::Matrix2::new(wt[(0, 0)] + mix, wt[(0, 1)], wt[(1, 0)], wt[(1, 1)] + mix);
+        Self { t1, t2, wnn, wt2_inv: wt2.try_inverse().unwrap_or_else(nalgebra::Matrix2::zeros) }
+    }
+
+    /// The contact's new impulse from its old one `p_old` and the relative velocity `rel` of the point to the
+    /// obstacle (both without this iteration's update): normal impulse `>= 0` aiming at the separation speed
+    /// `want_n`, tangential impulse aiming at no slip, clamped to the Coulomb cone of `friction`.
+    fn update(&self, normal: &Vector3<f64>, friction: f64, want_n: f64, rel: &Vector3<f64>, p_old: &Vector3<f64>, mix: f64) -> Vector3<f64> {
+        let pn_old = p_old.dot(normal);
+        let mut pn = (pn_old + (want_n - rel.dot(normal) - mix * pn_old) / self.wnn).max(0.0);
+        let rt = nalgebra::Vector2::new(rel.dot(&self.t1), rel.dot(&self.t2));
+        let pt_old = nalgebra::Vector2::new(p_old.dot(&self.t1), p_old.dot(&self.t2));
+        let mut pt = pt_old - self.wt2_inv * (rt + pt_old * mix);
+        let limit = friction * pn;
+        if pt.norm() > limit {
+            pt *= limit / pt.norm();
+        }
+        if !pn.is_finite() {
+            pn = 0.0;
+        }
+        normal * pn + self.t1 * pt.x + self.t2 * pt.y
+    }
+}
+
+/// One strand's constraints in its prepared step, as the projected Gauss-Seidel sweeps of [`solve`] need them:
+/// built by [`Strand::constraint_rows`], applied by [`Strand::apply_constraints`].
+#[derive(Debug, Clone, Default)]
+pub struct ConstraintRows {
+    /// The step's time step, s.
+    h: f64,
+    constraints: Vec<PointConstraint>,
+    /// Per constraint: `Y_c = (A^-1 J_c^T)^T` (3 x dofs).
+    y: Vec<Matrix3xX<f64>>,
+    /// Delassus blocks `W[c][d]` at `c * n + d`, m/s per N s.
+    w: Vec<Matrix3<f64>>,
+    /// Unconstrained point velocities, m/s, and the points, m.
+    u_free: Vec<Vector3<f64>>,
+    position: Vec<Vector3<f64>>,
+    /// Constraints the sweeps update (their point can move).
+    active: Vec<bool>,
+    contact_frames: Vec<Option<ContactFrame>>,
+    pin_projection: Vec<Matrix3<f64>>,
+    pin_inverse: Vec<Matrix3<f64>>,
+    /// Impulse of each constraint on the strand over the step, N s (zero until [`solve`]).
+    pub impulses: Vec<Vector3<f64>>,
+}
+
+impl ConstraintRows {
+    /// Number of constraints.
+    pub fn len(&self) -> usize {
+        self.constraints.len()
+    }
+
+    /// Whether there are no constraints.
+    pub fn is_empty(&self) -> bool {
+        self.constraints.is_empty()
+    }
+
+    /// Mobility of constraint `c`'s point along the unit `direction` in the prepared step: `n^T W_cc n`, m/s per
+    /// N s (as [`Strand::point_mobility`]).
+    pub fn mobility(&self, c: usize, direction: &Vector3<f64>) -> f64 {
+        direction.dot(&(self.w[c * self.len() + c] * direction))
+    }
+
+    /// Velocity of constraint `c`'s point with the current impulses, m/s.
+    fn velocity(&self, c: usize) -> Vector3<f64> {
+        let n = self.len();
+        let mut u = self.u_free[c];
+        for d in 0..n {
+            u += self.w[c * n + d] * self.impulses[d];
+        }
+        u
+    }
+
+    /// One Gauss-Seidel update of constraint `c` against its own obstacle.
+    fn update(&mut self, c: usize, beta: f64, v_max: f64, mix: f64) {
+        let rel = self.velocity(c) - self.constraints[c].velocity;
+        let capped = |x: Vector3<f64>| if x.norm() > v_max { x * (v_max / x.norm()) } else { x };
+        let p = self.impulses[c];
+        let new = match self.constraints[c].kind {
+            ConstraintKind::Pin { target } => {
+                let want = capped((target - self.position[c]) * beta);
+                p + self.pin_inverse[c] * (want - rel - p * mix)
+            }
+            ConstraintKind::Drag { max_force } => {
+                // Aim for no relative motion, then clamp to the drag's largest impulse.
+                let mut pc = p + self.pin_inverse[c] * (-rel - p * mix);
+                let limit = max_force * self.h;
+                if pc.norm() > limit {
+                    pc *= limit / pc.norm();
+                }
+                pc
+            }
+            ConstraintKind::Contact { normal, depth, friction } => {
+                let Some(frame) = self.contact_frames[c] else { return };
+                frame.update(&normal, friction, (beta * depth).min(v_max), &rel, &p, mix)
+            }
+        };
+        self.impulses[c] = if new.iter().all(|x| x.is_finite()) { new } else { Vector3::zeros() };
+    }
+}
+
+/// Two strands' constraints that are one contact (two strands touching): the `first` row's constraint, a
+/// [`ConstraintKind::Contact`] whose normal points from the second strand's point towards the first's, is
+/// solved for both points (relative velocity, the sum of both mobilities), and the `second` row takes the
+/// opposite impulse (its own kind is not used). Each index is (position of the strand's rows in the slice given
+/// to [`solve`], constraint index in those rows).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ConstraintLink {
+    /// The first strand's rows and constraint.
+    pub first: (usize, usize),
+    /// The second strand's rows and constraint.
+    pub second: (usize, usize),
+}
+
+/// Solves the constraints of one or several strands' prepared steps together by projected Gauss-Seidel sweeps
+/// (at most `opts.iterations`, fewer once converged to `opts.tolerance`), the law of the module documentation; `links` couple rows of different strands (their
+/// contacts with each other), so that both strands' responses enter each such contact in the same sweep
+/// (implicitly, with no lag of a step). Unlinked strands are solved as they would be alone. A link naming a
+/// missing row, a row of its own strand, a row already linked or a first row that is not a contact is ignored.
+/// The impulses are left in each [`ConstraintRows::impulses`].
+pub fn solve(rows: &mut [ConstraintRows], links: &[ConstraintLink], opts: &ConstraintOptions) {
+    let Some(h) = rows.first().map(|r| r.h) else { return };
+    let beta = opts.error_reduction_rate(h);
+    let v_max = opts.max_correction_speed;
+    let mix = opts.force_mixing(h);
+    // Each row's role: 0 its own, 1 + l the first row of link l, usize::MAX the second row of a link.
+    const SECOND: usize = usize::MAX;
+    let mut role: Vec<Vec<usize>> = rows.iter().map(|r| vec![0; r.len()]).collect();
+    let mut frames: Vec<Option<ContactFrame>> = vec![None; links.len()];
+    for (l, link) in links.iter().enumerate() {
+        let ((a, i), (b, j)) = (link.first, link.second);
+        let fits = |(s, c): (usize, usize)| s < rows.len() && c < rows[s].len() && role[s][c] == 0;
+        if a == b || !fits(link.first) || !fits(link.second) {
+            continue;
+        }
+        let ConstraintKind::Contact { normal, .. } = rows[a].constraints[i].kind else { continue };
+        let w = rows[a].w[i * rows[a].len() + i] + rows[b].w[j * rows[b].len() + j];
+        if !(rows[a].active[i] || rows[b].active[j]) || !(w.trace() > 0.0) {
+            continue;
+        }
+        frames[l] = Some(ContactFrame::new(&normal, &w, mix));
+        role[a][i] = 1 + l;
+        role[b][j] = SECOND;
+    }
+    for _ in 0..opts.iterations.max(1) {
+        // The largest impulse and the largest change of one in this sweep, N s.
+        let (mut largest, mut change) = (0.0f64, 0.0f64);
+        for s in 0..rows.len() {
+            for c in 0..rows[s].len() {
+                let before = rows[s].impulses[c];
+                match role[s][c] {
+                    0 if rows[s].active[c] => rows[s].update(c, beta, v_max, mix),
+                    0 | SECOND => continue,
+                    r => {
+                        let l = r - 1;
+                        let ((a, i), (b, j)) = (links[l].first, links[l].second);
+                        let (Some(frame), ConstraintKind::Contact { normal, depth, friction }) = (frames[l], rows[a].constraints[i].kind) else { continue };
+                        let rel = rows[a].velocity(i) - rows[b].velocity(j);
+                        let p = frame.update(&normal, friction, (beta * depth).min(v_max), &rel, &rows[a].impulses[i], mix);
+                        let p = if p.iter().all(|x| x.is_finite()) { p } else { Vector3::zeros() };
+                        rows[a].impulses[i] = p;
+                        rows[b].impulses[j] = -p;
+                    }
+                }
+                largest = largest.max(rows[s].impulses[c].norm());
+                change = change.max((rows[s].impulses[c] - before).norm());
+            }
+        }
+        if change <= opts.tolerance * largest {
+            break;
+        }
     }
 }

@@ -149,6 +149,12 @@ impl Strand {
         Ok(())
     }
 
+    /// Solves `A x = b` for the three rows of `b` (3 x dofs) in place with the matrix of the last linearly
+    /// implicit step, reusing its elimination.
+    pub(crate) fn resolve_step_matrix3(&mut self, b: &mut nalgebra::Matrix3xX<f64>) -> bool {
+        self.dynamics.resolve_articulated3(&self.model, b)
+    }
+
     /// Solves `A x = b` in place with the matrix of the last linearly implicit step, reusing its elimination.
     pub(crate) fn resolve_step_matrix(&mut self, b: &mut DVector<f64>) -> bool {
         self.dynamics.resolve_articulated(&self.model, b)

@@ -272,3 +272,59 @@ fn a_drag_carries_a_free_point_up_to_its_bound() {
     let bad = PointConstraint { kind: ConstraintKind::Drag { max_force: f64::NAN }, ..drag(1.0) };
     assert!(hanging().step_constrained(h, &[], &[bad], &opts).is_err());
 }
+
+/// Two identical horizontal cantilevers side by side along x, roots `gap` apart in z, whose tips are held on the
+/// same height by one contact between them (`linked`: a [`ConstraintLink`] solving both strands together) or
+/// the upper tip by an obstacle that follows the lower tip, which moves freely (`!linked`). Returns the contact force on the
+/// upper strand (N, z) and the tips' heights (m) after `seconds`.
+fn tips_pressed_together(gap: f64, linked: bool, seconds: f64) -> (f64, f64, f64) {
+    use strand::constraint::{solve, ConstraintLink};
+    let mut m = h1(0.02, 16);
+    m.damping = 0.05;
+    let at = |z: f64| RootFrame::new(Vector3::new(0.0, 0.0, z), Vector3::x(), Vector3::y()).unwrap();
+    let (mut upper, mut lower) = (Strand::new(m.clone(), at(gap)).unwrap(), Strand::new(m.clone(), at(0.0)).unwrap());
+    let opts = ConstraintOptions::default();
+    let h = 1e-3;
+    let mut force = 0.0;
+    for _ in 0..(seconds / h).round() as usize {
+        let (a, b) = (point(&upper, m.length), point(&lower, m.length));
+        // The upper tip must stay at or below the lower one: normal -z from the lower strand to the upper.
+        let depth = (a.z - b.z).max(0.0);
+        let down = PointConstraint { s: m.length, kind: ConstraintKind::Contact { normal: -Vector3::z(), depth, friction: 0.0 }, velocity: Vector3::zeros() };
+        let up = PointConstraint { kind: ConstraintKind::Contact { normal: Vector3::z(), depth, friction: 0.0 }, ..down };
+        if linked {
+            upper.prepare_step(h, &[]).unwrap();
+            lower.prepare_step(h, &[]).unwrap();
+            let mut rows = vec![upper.constraint_rows(&[down], &opts).unwrap(), lower.constraint_rows(&[up], &opts).unwrap()];
+            solve(&mut rows, &[ConstraintLink { first: (0, 0), second: (1, 0) }], &opts);
+            let pb = lower.apply_constraints(rows.pop().unwrap(), &opts).unwrap();
+            let pa = upper.apply_constraints(rows.pop().unwrap(), &opts).unwrap();
+            assert!((pa[0] + pb[0]).norm() <= 1e-15 * pa[0].norm().max(1e-30), "the strands take opposite impulses");
+            force = pa[0].z / h;
+        } else {
+            force = upper.step_constrained(h, &[], &[down], &opts).unwrap()[0].z / h;
+            lower.step(h, &[]).unwrap();
+        }
+    }
+    (force, point(&upper, m.length).z, point(&lower, m.length).z)
+}
+
+#[test]
+fn two_strands_pressed_together_share_the_contact() {
+    // Two identical cantilevers (H1, 2 cm, 16 segments) whose roots are 0.2 mm apart in z, their tips held at one
+    // height by a contact between them, solved together (a link). Linear statics: each tip moves gap / 2 and the
+    // contact force is half of what holds one tip against an obstacle at the other, free, tip
+    // (F = 3 EI gap / (2 L^3) against 3 EI gap / L^3). After 2 s: force ratio 0.5 within 2 %, the tips at the
+    // same height within 1 % of the gap, each moved gap / 2 within 3 % (from the free sag, which both share).
+    let gap = 2e-4;
+    let (f_linked, za, zb) = tips_pressed_together(gap, true, 2.0);
+    let (f_fixed, _, free_lower) = tips_pressed_together(gap, false, 2.0);
+    println!("linked force {f_linked:.4e} N, fixed-obstacle force {f_fixed:.4e} N, tips {za:.6e} / {zb:.6e} m, free tip {free_lower:.6e} m");
+    assert!(f_linked < 0.0 && f_fixed < 0.0, "the contact pushes the upper strand down");
+    assert!((f_linked / f_fixed - 0.5).abs() < 0.01, "force ratio {}", f_linked / f_fixed);
+    assert!((za - zb).abs() < 0.01 * gap, "tips {za} and {zb}");
+    let moved_down = free_lower + gap - za;
+    let moved_up = zb - free_lower;
+    assert!((moved_down / (0.5 * gap) - 1.0).abs() < 0.03, "upper tip moved {moved_down}");
+    assert!((moved_up / (0.5 * gap) - 1.0).abs() < 0.03, "lower tip moved {moved_up}");
+}

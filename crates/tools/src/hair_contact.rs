@@ -1,5 +1,5 @@
 //! Hair-hair contact in the local layer: which simulated strands touch, found cheaply enough for the 1 kHz
-//! loop, and the point constraints (non-penetration and Coulomb friction) each strand takes from them.
+//! loop, as pairs of points for the soft constraint solve (non-penetration and Coulomb friction).
 //!
 //! Pipeline of [`HairContactFinder::detect`] (no allocation once the workspaces have grown):
 //! 1. **Chords**: each strand's sampled centreline pieces are merged into chords, one per helical segment
@@ -13,15 +13,14 @@
 //! 4. **Reduction**: each strand keeps at most one contact per (chord, other strand) and at most
 //!    [`HairContact::max_per_strand`] contacts, the deepest.
 //!
-//! Each strand sees the other strand's point as an obstacle moving with that point's velocity over the last
-//! step and is pushed out by half the overlap (the other half is the other strand's); the strands are solved
-//! one after the other with last step's neighbours (one Jacobi iteration between strands per haptic step; the
-//! soft constraints' compliance keeps it stable).
+//! Each kept contact is one [`HairPair`]: a non-penetration contact with Coulomb friction between two strands'
+//! points, solved for both strands at once in the same soft constraint solve as the tool's and the body's
+//! contacts (`strand::constraint::solve` with a `ConstraintLink`: the relative velocity of the two points and
+//! the sum of their mobilities), so neither strand sees the other as a moving obstacle of the last step.
 
 use crate::bvh::Piece;
 use crate::geometry::{closest_segment_params, Aabb};
 use nalgebra::Vector3;
-use strand::constraint::{ConstraintKind, PointConstraint};
 use strand::StrandError;
 
 /// Contact and Coulomb friction between the simulated strands (the local layer's hair-hair interaction), in the
@@ -90,20 +89,38 @@ struct Chord {
     bounds: Aabb,
 }
 
-/// A contact one strand keeps: the other strand, this strand's chord, the overlap (m) and the constraint.
+/// A contact one strand keeps: the other strand, both chords, the overlap (m), both points' arc lengths (m) and
+/// the normal towards this strand.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Slot {
     other: usize,
     chord: usize,
+    other_chord: usize,
     depth: f64,
-    constraint: PointConstraint,
+    s: f64,
+    other_s: f64,
+    normal: Vector3<f64>,
+}
+
+/// One contact between two simulated strands: the `first` strand's point at arc length `s.0` and the `second`
+/// strand's at `s.1` (m) are closer than the contact distance by `depth` (m); `normal` is the unit vector from
+/// the second point towards the first.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HairPair {
+    /// The two strands (first, second).
+    pub strands: (usize, usize),
+    /// Arc lengths of the two points from their roots, m.
+    pub s: (f64, f64),
+    /// Unit normal from the second strand's point towards the first's.
+    pub normal: Vector3<f64>,
+    /// Overlap of the two wisps, m (> 0).
+    pub depth: f64,
 }
 
 /// The workspaces of hair-hair contact detection, kept between steps (see the module documentation).
 #[derive(Debug, Clone, Default)]
 pub struct HairContactFinder {
     chords: Vec<Chord>,
-    last: Vec<Chord>,
     /// Chord indices sorted by their boxes' lower end along `axis` (kept between steps).
     order: Vec<usize>,
     axis: usize,
@@ -131,18 +148,24 @@ impl HairContactFinder {
         self.tested
     }
 
-    /// The hair-hair constraints strand `strand` takes this step (at most `max_per_strand`).
-    pub fn constraints(&self, strand: usize) -> impl Iterator<Item = PointConstraint> + '_ {
-        let n = self.filled.get(strand).copied().unwrap_or(0);
-        self.slots[strand * self.cap..strand * self.cap + n].iter().map(|s| s.constraint)
+    /// The contacts kept by the last detection, each pair of points once: every contact some strand kept among
+    /// its deepest `max_per_strand` (so a strand may take part in more than `max_per_strand` of them, those the
+    /// other strand kept).
+    pub fn contacts(&self) -> impl Iterator<Item = HairPair> + '_ {
+        let cap = self.cap;
+        let mine = move |k: usize| &self.slots[k * cap..k * cap + self.filled[k]];
+        (0..self.filled.len()).flat_map(move |k| {
+            mine(k)
+                .iter()
+                .filter(move |sl| sl.other > k || !mine(sl.other).iter().any(|o| o.other == k && o.chord == sl.other_chord && o.other_chord == sl.chord))
+                .map(move |sl| HairPair { strands: (k, sl.other), s: (sl.s, sl.other_s), normal: sl.normal, depth: sl.depth })
+        })
     }
 
     /// Finds the contacts between the `strands` strands whose centreline `pieces` are given (contiguous per
     /// strand, in order from the root; `pieces_per_chord(k)` pieces of strand k make one chord, e.g. the pieces
-    /// of one helical segment), for wisps whose centrelines touch at `distance` (m). Velocities are taken over
-    /// the last `dt` seconds from the last call's chords (zero if the layout changed).
-    pub fn detect(&mut self, params: &HairContact, pieces: &[Piece], pieces_per_chord: impl Fn(usize) -> usize, strands: usize, distance: f64, dt: f64) {
-        std::mem::swap(&mut self.chords, &mut self.last);
+    /// of one helical segment), for wisps whose centrelines touch at `distance` (m).
+    pub fn detect(&mut self, params: &HairContact, pieces: &[Piece], pieces_per_chord: impl Fn(usize) -> usize, strands: usize, distance: f64) {
         self.chords.clear();
         let half = 0.5 * distance;
         let mut i = 0;
@@ -163,7 +186,6 @@ impl HairContactFinder {
             index += 1;
             i = j + 1;
         }
-        let same_layout = self.last.len() == self.chords.len() && self.last.iter().zip(&self.chords).all(|(p, q)| p.strand == q.strand && p.index == q.index);
         // The sweep axis: where the chords' centres spread widest relative to their boxes' mean extent.
         let n = self.chords.len();
         let mut score = [0.0f64; 3];
@@ -199,7 +221,7 @@ impl HairContactFinder {
         self.cap = params.max_per_strand;
         self.filled.clear();
         self.filled.resize(strands, 0);
-        let empty = Slot { other: 0, chord: 0, depth: 0.0, constraint: PointConstraint { s: 0.0, kind: ConstraintKind::Pin { target: Vector3::zeros() }, velocity: Vector3::zeros() } };
+        let empty = Slot { other: 0, chord: 0, other_chord: 0, depth: 0.0, s: 0.0, other_s: 0.0, normal: Vector3::zeros() };
         self.slots.clear();
         self.slots.resize(strands * self.cap, empty);
         self.pairs = 0;
@@ -225,22 +247,12 @@ impl HairContactFinder {
                     continue;
                 }
                 self.pairs += 1;
-                let velocity = |c: &Chord, n: usize, t: f64| {
-                    if same_layout {
-                        let o = &self.last[n];
-                        ((c.a - o.a) * (1.0 - t) + (c.b - o.b) * t) / dt
-                    } else {
-                        Vector3::zeros()
-                    }
-                };
-                let (vp, vq) = (velocity(p, nx, u), velocity(q, ny, v));
                 let depth = distance - dist;
                 let normal = gap / dist;
-                let contact = |normal: Vector3<f64>| ConstraintKind::Contact { normal, depth: 0.5 * depth, friction: params.friction };
                 let (sp, sq) = (p.s + u * p.length, q.s + v * q.length);
                 let (kp, kq, ip, iq) = (p.strand, q.strand, p.index, q.index);
-                keep(&mut self.slots, &mut self.filled, self.cap, kp, Slot { other: kq, chord: ip, depth, constraint: PointConstraint { s: sp, kind: contact(normal), velocity: vq } });
-                keep(&mut self.slots, &mut self.filled, self.cap, kq, Slot { other: kp, chord: iq, depth, constraint: PointConstraint { s: sq, kind: contact(-normal), velocity: vp } });
+                keep(&mut self.slots, &mut self.filled, self.cap, kp, Slot { other: kq, chord: ip, other_chord: iq, depth, s: sp, other_s: sq, normal });
+                keep(&mut self.slots, &mut self.filled, self.cap, kq, Slot { other: kp, chord: iq, other_chord: ip, depth, s: sq, other_s: sp, normal: -normal });
             }
         }
     }
@@ -325,7 +337,7 @@ mod tests {
         let params = HairContact { max_per_strand: 1000, ..Default::default() };
         let mut grid = HairContactFinder::new();
         for distance in [2e-4, 2e-4, 1e-3, 1e-3, 3e-3] {
-            grid.detect(&params, &pieces, |_| 3, xs.len(), distance, 1e-3);
+            grid.detect(&params, &pieces, |_| 3, xs.len(), distance);
             let want = brute(&pieces, distance);
             println!("distance {distance}: {} pairs (brute force {want}), {} tested", grid.pairs(), grid.tested());
             assert!(want > 0);
@@ -340,41 +352,33 @@ mod tests {
     fn each_strand_keeps_its_deepest_contacts_within_the_cap() {
         // Strand 0 at x = 0 beside strands at 0.5, 0.8 and 1.2 mm and a far one at 5 mm (contact distance
         // 1.5 mm): with a cap of 2, strand 0 keeps 2 contacts, both against the nearest strand (overlap 1 mm, the
-        // deepest; on two different chords), pushing it away (-x); the far strand has none.
+        // deepest; on two different chords), the normal pointing from strand 1 to strand 0 (-x); the far strand
+        // has none; every pair is listed once.
         let xs = [(0.0, 0.0), (0.0005, 0.0), (0.0008, 0.0), (0.0012, 0.0), (0.005, 0.0)];
         let pieces = strands(&xs, 4);
         let params = HairContact { max_per_strand: 2, ..Default::default() };
         let mut grid = HairContactFinder::new();
-        grid.detect(&params, &pieces, |_| 3, xs.len(), 1.5e-3, 1e-3);
-        let mine: Vec<PointConstraint> = grid.constraints(0).collect();
-        assert_eq!(mine.len(), 2);
-        for c in &mine {
-            let ConstraintKind::Contact { normal, depth, .. } = c.kind else { panic!("not a contact") };
-            assert!(normal.x < -0.99, "pushed towards -x: {normal}");
-            // Against strand 1 (0.5 mm apart along x, tilted by 0.02: 0.5 mm / sqrt(1 + 0.02^2) apart; the overlap
-            // is the contact distance minus that, half of it each), to round-off.
-            let want = 0.5 * (1.5e-3 - 0.5e-3 / (1.0f64 + 0.02 * 0.02).sqrt());
-            assert!((depth - want).abs() < 1e-12, "depth {depth}, want {want}");
+        grid.detect(&params, &pieces, |_| 3, xs.len(), 1.5e-3);
+        let all: Vec<HairPair> = grid.contacts().collect();
+        let of = |k: usize| all.iter().filter(move |p| p.strands.0 == k || p.strands.1 == k);
+        let zero: Vec<&HairPair> = of(0).collect();
+        assert_eq!(zero.len(), 2, "{zero:?}");
+        for p in &zero {
+            assert_eq!(p.strands, (0, 1), "strand 0 keeps its contacts with strand 1 (the deepest)");
+            assert!(p.normal.x < -0.99, "from strand 1 towards strand 0 (-x): {}", p.normal);
+            // 0.5 mm apart along x, tilted by 0.02: 0.5 mm / sqrt(1 + 0.02^2) apart; the overlap is the contact
+            // distance minus that, to round-off.
+            let want = 1.5e-3 - 0.5e-3 / (1.0f64 + 0.02 * 0.02).sqrt();
+            assert!((p.depth - want).abs() < 1e-12, "depth {}, want {want}", p.depth);
         }
-        assert_eq!(grid.constraints(4).count(), 0);
-        // Strand 1 touches 0, 2 and 3 (and keeps 2 of them); every strand keeps at most the cap.
-        assert!((0..5).all(|k| grid.constraints(k).count() <= 2));
-    }
-
-    #[test]
-    fn contact_velocities_come_from_the_last_step() {
-        // Two touching strands; the second moves +y by 1 mm between calls (dt 1 ms): the first strand's obstacle
-        // moves at 1 m/s along y.
-        let xs = [(0.0, 0.0), (0.001, 0.0)];
-        let params = HairContact::default();
-        let mut grid = HairContactFinder::new();
-        grid.detect(&params, &strands(&xs, 2), |_| 3, 2, 1.5e-3, 1e-3);
-        let moved = [(0.0, 0.0), (0.001, 0.001)];
-        grid.detect(&params, &strands(&moved, 2), |_| 3, 2, 1.5e-3, 1e-3);
-        let c: Vec<PointConstraint> = grid.constraints(0).collect();
-        assert!(!c.is_empty());
-        for c in c {
-            assert!((c.velocity - Vector3::new(0.0, 1.0, 0.0)).norm() < 1e-9, "{}", c.velocity);
+        assert_eq!(of(4).count(), 0);
+        // No pair twice (in either order).
+        for (i, p) in all.iter().enumerate() {
+            for q in &all[i + 1..] {
+                let same = |a: &HairPair, b: &HairPair| a.strands == b.strands && (a.s.0 - b.s.0).abs() < 1e-12 && (a.s.1 - b.s.1).abs() < 1e-12;
+                let mirrored = HairPair { strands: (q.strands.1, q.strands.0), s: (q.s.1, q.s.0), ..*q };
+                assert!(!same(p, q) && !same(p, &mirrored), "{p:?} listed twice");
+            }
         }
     }
 }

@@ -35,6 +35,7 @@ interface Status {
   lastFile: { format: number; bytes: number } | null;
   fit: P.FitMsg | null; // how the last loaded hairstyle was placed on the head (FIT)
   device: P.DeviceMsg | null; // the haptic device's stream (DEVICE; null without `serve --device`)
+  runaways: number; // runaway-guard resets of the tool proxy since the session started (FRAME; should stay 0)
   toolPosition: [number, number, number]; // the tool proxy of the last FRAME (m, world)
   headPosition: [number, number, number]; // the head pose of the last FRAME (m; head frame to world)
   headQuaternion: [number, number, number, number]; // x, y, z, w
@@ -48,6 +49,7 @@ interface Status {
 
 const canvas = document.getElementById('view') as HTMLCanvasElement;
 const statusEl = document.getElementById('status') as HTMLSpanElement;
+const healthEl = document.getElementById('health') as HTMLSpanElement;
 const view = new View(canvas);
 const plot = new ForcePlot(document.getElementById('plot') as HTMLCanvasElement);
 const device = new MouseDevice(view.camera, canvas);
@@ -55,7 +57,7 @@ const device = new MouseDevice(view.camera, canvas);
 const status: Status = {
   webgl2: view.renderer.getContext() instanceof WebGL2RenderingContext,
   connected: false, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
-  lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], frameTimes: [], strands: 0,
+  runaways: 0, lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], frameTimes: [], strands: 0,
   gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairColour: DEFAULT_HAIR_COLOUR,
   lastFile: null,
   fit: null,
@@ -228,6 +230,10 @@ function onFrame(f: P.FrameMsg): void {
   status.lastForce = fm;
   status.peakForce = Math.max(status.peakForce, fm);
   status.contacts = f.contacts;
+  if (f.runaways !== status.runaways) {
+    status.runaways = f.runaways;
+    healthEl.textContent = f.runaways > 0 ? `proxy resets: ${f.runaways}` : '';
+  }
   plot.push(fm);
   device.setForce(fm);
   if (f.tool !== status.tool) setTool(f.tool, false);

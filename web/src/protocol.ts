@@ -149,6 +149,8 @@ export interface FrameMsg {
   // --- the head pose (issue 14): head frame to world ---
   headPosition: [number, number, number]; // m
   headQuaternion: [number, number, number, number]; // x, y, z, w
+  // --- proxy health (issue 16) ---
+  runaways: number; // steps in which the runaway guard put the tool proxy back on the device (0 from older servers)
 }
 
 export interface ErrorMsg { code: number; message: string }
@@ -231,7 +233,9 @@ export function decodeFrame(buf: ArrayBuffer): FrameMsg {
   // --- the head pose (issue 14) ---
   const headPosition: [number, number, number] = [f32(), f32(), f32()];
   const headQuaternion: [number, number, number, number] = [f32(), f32(), f32(), f32()];
-  return { seq, time, tool, youControl, contacts, toolPosition, toolQuaternion, devicePosition, force, latticeVersion, nodes, active, samples, displacement, wetness, keptVersion, chainCounts, chainPoints, headPosition, headQuaternion };
+  // --- proxy health (issue 16): older servers end at the head pose ---
+  const runaways = o + 4 <= buf.byteLength ? u32() : 0;
+  return { seq, time, tool, youControl, contacts, toolPosition, toolQuaternion, devicePosition, force, latticeVersion, nodes, active, samples, displacement, wetness, keptVersion, chainCounts, chainPoints, headPosition, headQuaternion, runaways };
 }
 
 // --- STRANDS (issue 5: scissors) ---

@@ -51,4 +51,7 @@ pub struct HapticSnapshot {
     pub displacement: Vec<Vector3<f64>>,
     /// Lattice version the last step used.
     pub lattice_version: u64,
+    /// Steps in which the runaway guard put the tool proxy back on the device (`HapticCore::runaways`,
+    /// `HapticParams::max_proxy_lag`), since the session started.
+    pub runaways: u64,
 }

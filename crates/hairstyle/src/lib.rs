@@ -17,9 +17,11 @@ pub mod formats;
 pub mod generate;
 pub mod global;
 pub mod head;
+pub mod limits;
 pub mod render;
 
 pub use formats::{info, read_file, write_file, FormatError, HairCurves};
 pub use generate::{Curl, GenerateError, Guide, Hairstyle, HairstyleParams, RenderStrands};
 pub use global::{body_in_world, HairLattice};
 pub use head::{Head, HeadError, HeadMesh, HeadParams, ScalpPoint};
+pub use limits::LoadLimits;

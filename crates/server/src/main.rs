@@ -4,6 +4,7 @@ mod demo;
 mod device_sim_cmd;
 mod files_cmd;
 mod fit_cmd;
+mod outbox;
 mod protocol;
 mod run_cmd;
 mod serve;

@@ -452,6 +452,8 @@ pub fn encode_frame(seq: u32, lat: &LatticeSnapshot, h: &HapticSnapshot) -> Vec<
     for x in [q.i, q.j, q.k, q.w] {
         w.f32(x);
     }
+    // --- proxy health (issue 16): runaway-guard resets since the session started ---
+    w.u32(h.runaways.min(u32::MAX as u64) as u32);
     w.0
 }
 
@@ -534,11 +536,14 @@ mod tests {
         assert_eq!((f32_at(4), f32_at(8)), (0.5, 0.25));
         assert_eq!((u32_at(12), u32_at(16), u32_at(20), u32_at(24)), (2, 2, 2, 1));
         assert_eq!((f32_at(28), f32_at(28 + 8 * 4)), (1.0, 9.0));
-        assert_eq!(tail.len(), 28 + 9 * 4 + 28, "chains, then the head pose");
-        // The head pose closes FRAME: 3 f32 position, 4 f32 quaternion (x, y, z, w).
+        assert_eq!(tail.len(), 28 + 9 * 4 + 28 + 4, "chains, the head pose, the runaway count");
+        assert_eq!(u32::from_le_bytes(f[f.len() - 4..].try_into().unwrap()), 0);
+        // The head pose follows the chains: 3 f32 position, 4 f32 quaternion (x, y, z, w); then u32 runaways.
+        let h = HapticSnapshot { runaways: 7, ..h };
         let lat = LatticeSnapshot { head: nalgebra::Isometry3::new(Vector3::new(0.01, 0.02, 0.03), Vector3::new(0.0, 0.0, 0.5)), ..lat };
         let f = encode_frame(1, &lat, &h);
-        let end: Vec<f32> = (0..7).map(|k| f32::from_le_bytes(f[f.len() - 28 + 4 * k..f.len() - 24 + 4 * k].try_into().unwrap())).collect();
+        assert_eq!(u32::from_le_bytes(f[f.len() - 4..].try_into().unwrap()), 7);
+        let end: Vec<f32> = (0..7).map(|k| f32::from_le_bytes(f[f.len() - 32 + 4 * k..f.len() - 28 + 4 * k].try_into().unwrap())).collect();
         let want = [0.01, 0.02, 0.03, 0.0, 0.0, (0.25f64).sin(), (0.25f64).cos()];
         assert!(end.iter().zip(want).all(|(a, b)| (*a as f64 - b).abs() < 1e-6), "{end:?}");
         // HEAD: 6 f32; a turn of more than pi or a NaN is refused.

@@ -3,6 +3,7 @@
 //! rate, encodes one FRAME message and hands it to every viewer; each viewer's task sends it on. Several
 //! viewers may watch; the first to connect controls the tool until it leaves or another sends TAKE_CONTROL.
 
+use crate::outbox::Outbox;
 use crate::protocol::{self, ClientMessage, WireError};
 use anyhow::{anyhow, Context};
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
@@ -25,7 +26,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::Sender;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
-use tokio::sync::{mpsc, watch};
+use tokio::sync::watch;
 use tower_http::services::ServeDir;
 
 /// Arguments of `coiffure serve`.
@@ -67,6 +68,10 @@ pub struct ServeArgs {
     /// Haptic loop rate, Hz, in (0, 4000] (`SessionParams::haptic_rate_hz`).
     #[arg(long, default_value_t = 1000.0)]
     pub haptic_rate: f64,
+    /// Runaway guard distance, m (`HapticParams::max_proxy_lag`, default 0.2): a tool proxy farther than this
+    /// from the device, or non-finite, is put back on the device with zero force and counted (FRAME's runaways).
+    #[arg(long)]
+    pub max_proxy_lag: Option<f64>,
     /// A haptic device drives the tool instead of the mouse: it streams poses in the UDP protocol
     /// (docs/protocol.md) to `udp:PORT` (on 127.0.0.1) or `udp:ADDR:PORT`; port 0 takes any free port
     /// (printed). The viewers watch; the toolbar still works.
@@ -84,15 +89,16 @@ pub struct ServeArgs {
     /// are let through (with the token, when one is required).
     #[arg(long)]
     pub allow_origin: Vec<String>,
+    /// A viewer with a message waiting, or a send unfinished, for this long is disconnected, s. Default 30
+    /// (`outbox::BEHIND_LIMIT`).
+    #[arg(long)]
+    pub viewer_timeout: Option<f64>,
     /// Access token required on `/ws` (`?token=...`, which the viewer takes from its own URL). Binding to a
     /// non-loopback address without one generates one and prints the URL with it.
     #[arg(long)]
     pub token: Option<String>,
 }
 
-/// Messages a viewer's outgoing queue holds (STRANDS, CONTROL, FIT, ERROR, PONG, FILE; FRAMEs are not queued:
-/// each viewer takes the latest). A viewer that lets it fill up (it does not read) is disconnected.
-pub const OUTBOX_CAPACITY: usize = 256;
 
 /// The UDP address of `--device`: `udp:PORT` (127.0.0.1) or `udp:ADDR:PORT`.
 pub fn parse_device(spec: &str) -> anyhow::Result<SocketAddr> {
@@ -127,24 +133,7 @@ fn viewer_dir(arg: &Option<PathBuf>) -> anyhow::Result<PathBuf> {
 
 struct Control {
     controller: Option<u64>,
-    viewers: Vec<Outbox>,
-}
-
-/// One viewer's outgoing queue (bounded) and the signal that disconnects it when the queue is full.
-struct Outbox {
-    id: u64,
-    tx: mpsc::Sender<Vec<u8>>,
-    kick: Arc<tokio::sync::Notify>,
-}
-
-impl Outbox {
-    /// Queues `msg`; a full queue (a viewer that does not read) disconnects the viewer, and is counted.
-    fn post(&self, msg: Vec<u8>) {
-        if let Err(mpsc::error::TrySendError::Full(_)) = self.tx.try_send(msg) {
-            tracing::warn!("viewer {}: its outgoing queue is full ({OUTBOX_CAPACITY} messages): disconnected", self.id);
-            self.kick.notify_one();
-        }
-    }
+    viewers: Vec<Arc<Outbox>>,
 }
 
 struct App {
@@ -173,6 +162,8 @@ struct App {
     access: Access,
     /// When the last SAVE was served.
     last_save: Mutex<Option<Instant>>,
+    /// A viewer's time limit (`--viewer-timeout`).
+    viewer_timeout: Duration,
 }
 
 /// Shortest time between two SAVEs (each writes the whole hairstyle).
@@ -207,6 +198,8 @@ impl App {
 #[derive(Default)]
 struct PumpStats {
     frames: u64,
+    /// The runaway guard's count in the latest frame (of the current session).
+    runaways: u64,
     encode_seconds: f64,
     bytes: u64,
 }
@@ -227,6 +220,11 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         (None, true) => None,
     };
     let access = Access { allow_origins: args.allow_origin.clone(), token };
+    let viewer_timeout = match args.viewer_timeout {
+        None => crate::outbox::BEHIND_LIMIT,
+        Some(t) if t.is_finite() && t > 0.0 && t <= 3600.0 => Duration::from_secs_f64(t),
+        Some(t) => return Err(anyhow!("--viewer-timeout must be in (0, 3600] s, got {t}")),
+    };
     let t0 = Instant::now();
     let opts = SceneOptions { render_strands: args.render_strands, guides: args.guides, ..SceneOptions::default() };
     let scene = Arc::new(Scene::builtin(&opts).context("building the built-in scene")?);
@@ -234,8 +232,11 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let haptic_priority = (args.haptic_priority != 0).then_some(args.haptic_priority);
     let profile = device_profile(&args.device_profile)?;
     let input = if args.device.is_some() { InputKind::Device } else { InputKind::Pointer };
-    let params = SessionParams { record: args.record.is_some(), haptic_priority, hairs_per_render_strand: args.hairs_per_render_strand, haptic_rate_hz: args.haptic_rate, profile, input, ..SessionParams::default() };
-    params.validate().context("--hairs-per-render-strand, --haptic-rate")?;
+    let mut params = SessionParams { record: args.record.is_some(), haptic_priority, hairs_per_render_strand: args.hairs_per_render_strand, haptic_rate_hz: args.haptic_rate, profile, input, ..SessionParams::default() };
+    if let Some(lag) = args.max_proxy_lag {
+        params.haptic.max_proxy_lag = lag;
+    }
+    params.validate().context("--hairs-per-render-strand, --haptic-rate, --max-proxy-lag")?;
     let udp = match &args.device {
         Some(spec) => {
             let addr = parse_device(spec)?;
@@ -279,6 +280,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         session: Mutex::new(Some(session)),
         access,
         last_save: Mutex::new(None),
+        viewer_timeout,
         swap: Mutex::new(None),
         udp,
     });
@@ -321,6 +323,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
                 *g = (lat.kept.clone(), hap.active.clone(), hap.displacement.clone(), samples);
             }
             st.bytes += msg.len() as u64;
+            st.runaways = hap.runaways;
             let _ = frame_tx.send(Arc::new(msg));
             // The device's status to every viewer, about 10 times a second.
             if let Some((_, status)) = &app_p.udp {
@@ -373,8 +376,8 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let report = session.stop();
     let f = st.frames.max(1) as f64;
     println!(
-        "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame); haptic loop: {} steps at {} Hz, step mean {:.1} us, p50 {:.0} us, p99 {:.0} us, p99.9 {:.0} us, {} misses, {} step panics, real-time priority: {}; global: {} steps, mean {:.2} ms",
-        st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, report.haptic.steps, args.haptic_rate, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p50, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, report.haptic.misses, report.haptic.panics, report.haptic.realtime, report.global_steps, 1e3 * report.global_step_mean
+        "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame); haptic loop: {} steps at {} Hz, step mean {:.1} us, p50 {:.0} us, p99 {:.0} us, p99.9 {:.0} us, max {:.0} us, {} misses, {} step panics, {} runaways, real-time priority: {}; global: {} steps, mean {:.2} ms",
+        st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, report.haptic.steps, args.haptic_rate, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p50, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, 1e6 * report.haptic.step_max, report.haptic.misses, report.haptic.panics, st.runaways, report.haptic.realtime, report.global_steps, 1e3 * report.global_step_mean
     );
     if let Some((_, status)) = &app_end.udp {
         let c = status.counts();
@@ -409,7 +412,9 @@ async fn ws_handler(ws: WebSocketUpgrade, headers: axum::http::HeaderMap, query:
         tracing::warn!("refused a WebSocket: {why}");
         return (axum::http::StatusCode::FORBIDDEN, why).into_response();
     }
-    ws.max_message_size(64 << 20).max_frame_size(64 << 20).on_upgrade(move |socket| viewer(socket, app)).into_response()
+    // The largest message is a LOAD of the largest file (its 2-byte header and 9 bytes of format and options).
+    let max = app.opts.load.max_file_bytes + 16;
+    ws.max_message_size(max).max_frame_size(max).on_upgrade(move |socket| viewer(socket, app)).into_response()
 }
 
 /// Who may open `/ws`: the allowed origins besides the served one, and the token if one is required.
@@ -450,65 +455,102 @@ fn new_token() -> anyhow::Result<String> {
     Ok(b.iter().map(|x| format!("{x:02x}")).collect())
 }
 
-/// One viewer: sends the scene, then frames; handles its messages.
+/// One viewer: sends the scene, then frames; handles its messages. Its outgoing messages go through its
+/// [`Outbox`] (bounded; FRAMEs are not queued: the writer takes the latest when free); a viewer that falls
+/// behind or overflows its queue is disconnected with a close reason (policy violation, 1008), and a message
+/// over the size limit is answered by ERROR 1 and a close (message too big, 1009).
 async fn viewer(socket: WebSocket, app: Arc<App>) {
     let id = app.next_id.fetch_add(1, Ordering::Relaxed);
     let (mut sink, mut stream) = socket.split();
-    let (tx, mut rx) = mpsc::channel::<Vec<u8>>(OUTBOX_CAPACITY);
-    let kick = Arc::new(tokio::sync::Notify::new());
-    let outbox = Outbox { id, tx: tx.clone(), kick: kick.clone() };
+    let outbox = Arc::new(Outbox::new(id, app.viewer_timeout));
     {
         let mut c = app.control.lock().unwrap();
-        c.viewers.push(Outbox { id, tx: tx.clone(), kick: kick.clone() });
+        c.viewers.push(outbox.clone());
         if c.controller.is_none() {
             c.controller = Some(id);
         }
     }
-    let scene = app.scene_msg.lock().unwrap().clone();
-    if sink.send(Message::Binary((*scene).clone().into())).await.is_err() {
-        leave(&app, id);
-        return;
-    }
-    // The strands' kept points (all uncut until the first cut).
+    // The scene and the strands' kept points (all uncut until the first cut), queued first.
+    outbox.post((**app.scene_msg.lock().unwrap()).clone());
     let kept = app.latest_guides.lock().unwrap().0.clone();
-    if !kept.is_empty() && sink.send(Message::Binary(protocol::encode_strands(&kept).into())).await.is_err() {
-        leave(&app, id);
-        return;
+    if !kept.is_empty() {
+        outbox.post(protocol::encode_strands(&kept));
     }
     if let Some((_, status)) = &app.udp {
         outbox.post(protocol::encode_device(&status.counts()));
     }
     app.broadcast_control();
     let mut frames = app.frames.clone();
-    let app_w = app.clone();
+    let (app_w, out_w) = (app.clone(), outbox.clone());
+    let mut closing_w = outbox.closing();
     let mut writer = tokio::spawn(async move {
+        // Queued messages first (a STRANDS precedes the FRAME carrying its version), then the latest frame.
+        let mut cut = false;
         loop {
-            tokio::select! {
-                changed = frames.changed() => {
-                    if changed.is_err() { break; }
-                    let f = frames.borrow_and_update().clone();
-                    if f.is_empty() { continue; }
-                    let mut bytes = (*f).clone();
-                    let you = app_w.control.lock().map(|c| c.controller == Some(id)).unwrap_or(false);
-                    bytes[protocol::FRAME_FLAGS_OFFSET] = you as u8;
-                    if sink.send(Message::Binary(bytes.into())).await.is_err() { break; }
+            let bytes = match out_w.pop() {
+                Some(m) => m,
+                None if out_w.closes_after_queue() => {
+                    out_w.close_now();
+                    break;
                 }
-                m = rx.recv() => {
-                    match m {
-                        Some(b) => if sink.send(Message::Binary(b.into())).await.is_err() { break; },
-                        None => break,
+                None => tokio::select! {
+                    changed = frames.changed() => {
+                        if changed.is_err() { break; }
+                        let f = frames.borrow_and_update().clone();
+                        if f.is_empty() { continue; }
+                        let mut bytes = (*f).clone();
+                        let you = app_w.control.lock().map(|c| c.controller == Some(id)).unwrap_or(false);
+                        bytes[protocol::FRAME_FLAGS_OFFSET] = you as u8;
+                        bytes
                     }
-                }
+                    _ = out_w.ready() => continue,
+                    _ = closing_w.wait_for(Option::is_some) => break,
+                },
+            };
+            out_w.sending(true);
+            let sent = tokio::select! {
+                r = sink.send(Message::Binary(bytes.into())) => r.is_ok(),
+                _ = closing_w.wait_for(Option::is_some) => { cut = true; false }
+            };
+            out_w.sending(false);
+            if !sent {
+                break;
             }
         }
+        // Say why, unless a send was cut half way (the stream is then broken) or the socket failed.
+        let reason = closing_w.borrow().clone();
+        if let (Some(reason), false) = (reason, cut) {
+            let code = if reason.starts_with("message of") { 1009 } else { 1008 };
+            let close = Message::Close(Some(axum::extract::ws::CloseFrame { code, reason: reason.chars().take(120).collect::<String>().into() }));
+            let _ = tokio::time::timeout(Duration::from_secs(1), sink.send(close)).await;
+        }
     });
+    let mut closing = outbox.closing();
+    let mut tick = tokio::time::interval(Duration::from_millis(250));
     loop {
-        // Stop when the socket fails (the writer ends) or the viewer is disconnected because its queue is full
-        // (the kick; the writer, maybe blocked on a socket the viewer does not read, is aborted below).
+        // Stop when the socket fails (the writer ends), the viewer is behind or its queue overflowed.
         let msg = tokio::select! {
-            m = stream.next() => match m { Some(Ok(m)) => m, _ => break },
+            m = stream.next() => match m {
+                Some(Ok(m)) => m,
+                // Over the size limit (tungstenite's capacity error; the stream cannot go on): ERROR 1 naming the
+                // limit, then a close. Other errors: the socket failed.
+                Some(Err(e)) if e.to_string().contains("Space limit exceeded") => {
+                    let limit = app.opts.load.max_file_bytes + 16;
+                    let text = format!("message of more than {limit} bytes, the limit (a LOAD of a file up to {} MiB): {e}", app.opts.load.max_file_bytes >> 20);
+                    outbox.post(protocol::encode_error(&WireError { code: protocol::code::MALFORMED, message: text.clone() }));
+                    outbox.disconnect_after_queue(text);
+                    break;
+                }
+                Some(Err(_)) | None => break,
+            },
             _ = &mut writer => break,
-            _ = kick.notified() => break,
+            _ = closing.wait_for(Option::is_some) => break,
+            _ = tick.tick() => {
+                if let Some(why) = outbox.behind() {
+                    outbox.disconnect(why);
+                }
+                continue;
+            }
         };
         let reply = match msg {
             // LOAD and SAVE parse, fit and build scenes for up to seconds: on a blocking thread, so that the
@@ -526,8 +568,12 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
             outbox.post(r);
         }
     }
-    writer.abort();
+    // A disconnected viewer's writer says why (at most a second for the close); otherwise it is stopped.
     leave(&app, id);
+    let kicked = outbox.closing().borrow().is_some() || outbox.closes_after_queue();
+    if !kicked || tokio::time::timeout(Duration::from_secs(2), &mut writer).await.is_err() {
+        writer.abort();
+    }
 }
 
 fn leave(app: &App, id: u64) {
@@ -602,7 +648,7 @@ fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
             }
             let f = hairstyle::formats::Format::from_path(Path::new(&format!("x.{}", protocol::FORMATS[format]))).expect("known extension");
             let file_error = |message| Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message }));
-            match hairstyle::fit::read_and_fit(f, &bytes, &opts) {
+            match hairstyle::fit::read_and_fit(f, &bytes, &opts, &app.opts.load) {
                 Ok((c, report)) => {
                     tracing::info!("loaded hairstyle fitted: scale {:.5} m per unit, up {} front {} ({}), {:.1} % of the strands rooted on the scalp (roots median {:.2} mm, p95 {:.2} mm from it)", report.transform.scale, report.up.name(), report.front.name(), report.orientation_source.name(), 100.0 * report.rooted, 1e3 * report.rooted_distance.median, 1e3 * report.rooted_distance.p95);
                     match load(app, &c) {

@@ -5,37 +5,8 @@
 
 mod common;
 
-use common::serve;
-use std::net::TcpStream;
+use common::{first_of, open, serve};
 use std::time::{Duration, Instant};
-use tungstenite::client::IntoClientRequest;
-
-/// Opens `/ws` on `http` (host:port) with an optional Origin and query; the HTTP status of a refusal.
-fn open(http: &str, origin: Option<&str>, query: &str) -> Result<tungstenite::WebSocket<TcpStream>, u16> {
-    let mut req = format!("ws://{http}/ws{query}").into_client_request().unwrap();
-    if let Some(o) = origin {
-        req.headers_mut().insert("Origin", o.parse().unwrap());
-    }
-    let stream = TcpStream::connect(http).unwrap();
-    match tungstenite::client(req, stream) {
-        Ok((ws, _)) => Ok(ws),
-        Err(tungstenite::HandshakeError::Failure(tungstenite::Error::Http(r))) => Err(r.status().as_u16()),
-        Err(e) => panic!("handshake: {e}"),
-    }
-}
-
-/// The first binary message of type `kind`, within 20 s.
-fn first_of(ws: &mut tungstenite::WebSocket<TcpStream>, kind: u8) -> Vec<u8> {
-    let deadline = Instant::now() + Duration::from_secs(20);
-    while Instant::now() < deadline {
-        if let tungstenite::Message::Binary(b) = ws.read().unwrap() {
-            if b[0] == kind {
-                return b.to_vec();
-            }
-        }
-    }
-    panic!("no message 0x{kind:02x}");
-}
 
 #[test]
 fn only_the_served_page_and_scripts_may_connect_and_absurd_poses_are_errors() {

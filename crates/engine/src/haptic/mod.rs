@@ -342,6 +342,7 @@ impl HapticCore {
         out.force = self.coupling.force;
         out.contacts = self.last_contacts;
         out.lattice_version = lattice.version;
+        out.runaways = self.runaways;
         out.active.clear();
         out.displacement.clear();
         let ok = lattice.positions.len() == self.scene.lattice.node_count();
@@ -451,6 +452,10 @@ mod tests {
             assert!(f.iter().all(|x| x.is_finite()) && f.norm() <= 3.3 + 1e-9);
         }
         assert_eq!(core.runaways, 2);
+        // The viewer is told (FRAME carries the count).
+        let mut hs = HapticSnapshot::default();
+        core.snapshot(&snap, 1e-3, &mut hs);
+        assert_eq!(hs.runaways, 2);
     }
 
     #[test]

@@ -5,31 +5,24 @@ use super::{RenderHair, Scene, SceneOptions};
 use crate::error::SessionError;
 use lattice::ffd::FfdLattice;
 
-/// Most lattice nodes a loaded hairstyle may need (about a 1.35 m box at 5 cm cells).
+/// Most lattice nodes a loaded hairstyle may need (about a 1.35 m box at 5 cm cells; [`LoadLimits`]'s default
+/// box needs 16,128 at the default 5 cm cells).
 pub const MAX_LATTICE_NODES: usize = 20_000;
 use nalgebra::Point3;
+pub use hairstyle::LoadLimits;
 
 impl Scene {
     /// The built-in head and guides of `opts` carrying the render strands of `curves` instead of generated
     /// ones (positions in m in the head frame, root first, as the viewer saves them; at most
-    /// 10,000,000 strands): each strand resampled to `opts.render_vertices` points evenly along its
+    /// `opts.load` strands and points, every point in its box around the head): each strand resampled to `opts.render_vertices` points evenly along its
     /// length, bound to the guides whose roots are nearest its root (`hairstyle::generate::nearest_guides`), spanning
     /// its length over the nearest guide's length (capped at 1), and a lattice enclosing them all whose
     /// node masses come from the strands (the guides' linear density times their lengths).
-    /// Errors name the bad strand (empty, non-finite point) or parameter.
+    /// Errors name the bad strand (empty, non-finite or outside the box) or the bound or parameter.
     pub fn from_curves(curves: &hairstyle::HairCurves, opts: &SceneOptions) -> Result<Scene, SessionError> {
         let bad = |m: String| SessionError::Scene(m);
-        if curves.strands.is_empty() || curves.strands.len() > 10_000_000 {
-            return Err(bad(format!("a hairstyle needs 1 to 10,000,000 strands, got {}", curves.strands.len())));
-        }
-        for (i, st) in curves.strands.iter().enumerate() {
-            if st.is_empty() {
-                return Err(bad(format!("strand {i} has no point")));
-            }
-            if let Some(j) = st.iter().position(|p| !p.iter().all(|x| x.is_finite() && x.abs() < 100.0)) {
-                return Err(bad(format!("strand {i} point {j} is not finite or is over 100 m away: {:?}", st[j])));
-            }
-        }
+        opts.load.check_counts(curves).map_err(bad)?;
+        opts.load.check_box(curves).map_err(bad)?;
         let base = Scene::builtin(&SceneOptions { render_strands: 1, ..opts.clone() })?;
         let v = opts.render_vertices;
         let curves = hairstyle::formats::tfx::resample(&hairstyle::HairCurves::from_strands(curves.strands.clone()), v).map_err(|e| bad(e.to_string()))?;
@@ -114,7 +107,7 @@ mod tests {
         }
         assert!(g.positions().iter().all(|p| p.coords.iter().all(|x| x.is_finite())));
         let empty = Scene::from_curves(&hairstyle::HairCurves::from_strands(vec![]), &opts).unwrap_err().to_string();
-        assert!(empty.contains("1 to 10,000,000 strands"), "{empty}");
+        assert!(empty.contains("1 to 200000 strands"), "{empty}");
         let mut nan = strands;
         nan[7][1][2] = f32::NAN;
         let e = Scene::from_curves(&hairstyle::HairCurves::from_strands(nan), &opts).unwrap_err().to_string();
@@ -123,10 +116,32 @@ mod tests {
 
     #[test]
     fn a_hairstyle_too_large_for_a_head_is_refused() {
-        // Issue 16: one strand across a 2.7 m box (a 60-byte file) asked for a lattice of 185,193 nodes.
+        // Issue 16: one strand across a 2.7 m box (a 60-byte file) asked for a lattice of 185,193 nodes; it is
+        // outside the box around the head, and refused naming the point and the box before anything is built.
         let opts = SceneOptions { render_strands: 100, guides: 20, ..SceneOptions::default() };
         let huge = hairstyle::HairCurves::from_strands(vec![vec![[-1.35; 3], [1.35; 3]]]);
         let e = Scene::from_curves(&huge, &opts).unwrap_err().to_string();
-        assert!(e.contains("too large"), "{e}");
+        assert!(e.contains("strand 0 point 0") && e.contains("outside the box around the head"), "{e}");
+        // A strand corner to corner of the box is taken, and its lattice stays within MAX_LATTICE_NODES;
+        // 1 mm beyond a face is refused.
+        let l = opts.load;
+        let corner = |a: [f64; 3]| [a[0] as f32, a[1] as f32, a[2] as f32];
+        let diagonal = hairstyle::HairCurves::from_strands(vec![vec![corner(l.box_min), corner(l.box_max)]]);
+        let s = Scene::from_curves(&diagonal, &opts).unwrap();
+        assert!(s.lattice.node_count() <= MAX_LATTICE_NODES, "{} nodes", s.lattice.node_count());
+        for a in 0..3 {
+            let mut p = l.box_max;
+            p[a] += 1e-3;
+            let e = Scene::from_curves(&hairstyle::HairCurves::from_strands(vec![vec![[0.0; 3], corner(p)]]), &opts).unwrap_err().to_string();
+            assert!(e.contains("strand 0 point 1"), "{e}");
+        }
+        // Counts: more strands or points than the bounds are refused naming them.
+        let few = SceneOptions { load: LoadLimits { max_strands: 2, max_points: 5, ..l }, ..opts.clone() };
+        let e = Scene::from_curves(&hairstyle::HairCurves::from_strands(vec![vec![[0.0; 3]]; 3]), &few).unwrap_err().to_string();
+        assert!(e.contains("1 to 2 strands, got 3"), "{e}");
+        let e = Scene::from_curves(&hairstyle::HairCurves::from_strands(vec![vec![[0.0; 3]; 3]; 2]), &few).unwrap_err().to_string();
+        assert!(e.contains("6 points; at most 5"), "{e}");
+        assert!(l.check_size(64 << 20).is_ok());
+        assert!(l.check_size((64 << 20) + 1).unwrap_err().contains("at most 67108864 bytes (64 MiB)"));
     }
 }

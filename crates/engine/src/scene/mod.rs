@@ -6,6 +6,7 @@ mod builtin;
 mod from_curves;
 mod render;
 
+pub use from_curves::{LoadLimits, MAX_LATTICE_NODES};
 pub use render::GuideDisplacements;
 
 use lattice::ffd::FfdLattice;
@@ -58,11 +59,13 @@ pub struct SceneOptions {
     pub hair_type: String,
     /// Random seed of the hairstyle. Default 1.
     pub seed: u64,
+    /// Bounds on a loaded hairstyle ([`Scene::from_curves`], `coiffure serve`'s LOAD). Default [`LoadLimits::default`].
+    pub load: LoadLimits,
 }
 
 impl Default for SceneOptions {
     fn default() -> Self {
-        Self { render_strands: 100_000, render_vertices: 12, guides: 200, segments: 8, samples: 16, length: 0.2, curliness: 0.0, cell: 0.05, hair_type: "caucasian".into(), seed: 1 }
+        Self { render_strands: 100_000, render_vertices: 12, guides: 200, segments: 8, samples: 16, length: 0.2, curliness: 0.0, cell: 0.05, hair_type: "caucasian".into(), seed: 1, load: LoadLimits::default() }
     }
 }
 

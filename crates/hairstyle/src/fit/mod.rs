@@ -674,12 +674,19 @@ pub enum LoadError {
     /// The strands cannot be fitted.
     #[error("cannot fit the hairstyle: {0}")]
     Fit(#[from] FitError),
+    /// The file is over a bound of [`crate::LoadLimits`] (size, strands, points); says which.
+    #[error("{0}")]
+    Limit(String),
 }
 
 /// Parses `bytes` in `format` and fits the strands onto the built-in head with `opts` and the
-/// default [`FitParams`]: the one path of the viewer's load, `coiffure fit` and scenario files.
-pub fn read_and_fit(format: Format, bytes: &[u8], opts: &FitOptions) -> Result<(HairCurves, FitReport), LoadError> {
+/// default [`FitParams`]: the viewer's LOAD. The file's size is checked against `limits` before it is read,
+/// its strand and point counts before the fit (the box around the head is `engine::scene::Scene::from_curves`'
+/// check, after the fit).
+pub fn read_and_fit(format: Format, bytes: &[u8], opts: &FitOptions, limits: &crate::LoadLimits) -> Result<(HairCurves, FitReport), LoadError> {
+    limits.check_size(bytes.len()).map_err(LoadError::Limit)?;
     let (curves, meta) = format.read_with_metadata(bytes)?;
+    limits.check_counts(&curves).map_err(LoadError::Limit)?;
     Ok(fit(&curves, Some(format), &meta, opts, &Head::default(), &FitParams::default())?)
 }
 

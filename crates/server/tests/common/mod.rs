@@ -1,14 +1,16 @@
-//! A real `coiffure serve` for the end-to-end tests (tests/access.rs, tests/device.rs): started on a free port
+//! A real `coiffure serve` for the end-to-end tests (tests/access.rs, tests/device.rs, tests/robust.rs): started on a free port
 //! with a stub viewer folder, its printed addresses read from its output, killed when dropped.
 
 // Each test binary uses a part of this module.
 #![allow(dead_code)]
 
 use std::io::{BufRead, BufReader};
+use std::net::TcpStream;
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
+use tungstenite::client::IntoClientRequest;
 
 /// The `coiffure` binary under test.
 pub fn bin() -> Command {
@@ -31,8 +33,33 @@ pub struct Server {
     pub token: Option<String>,
     /// host:port of the device socket (`--device`), if any.
     pub udp: Option<String>,
-    /// Keeps the stdout reader going (the server must not see a closed pipe).
-    _lines: mpsc::Receiver<String>,
+    /// The server's later output lines (keeps the stdout reader going: the server must not see a closed pipe).
+    lines: mpsc::Receiver<String>,
+}
+
+impl Server {
+    /// The server's process id.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// Its resident memory now, bytes (VmRSS of /proc/PID/status).
+    pub fn rss(&self) -> u64 {
+        let s = std::fs::read_to_string(format!("/proc/{}/status", self.pid())).unwrap();
+        let kb: u64 = s.lines().find_map(|l| l.strip_prefix("VmRSS:")).and_then(|v| v.split_whitespace().next()?.parse().ok()).unwrap();
+        kb * 1024
+    }
+
+    /// The first later output line containing `text`, within `timeout`.
+    pub fn line_with(&self, text: &str, timeout: Duration) -> Option<String> {
+        let deadline = Instant::now() + timeout;
+        while let Ok(l) = self.lines.recv_timeout(deadline.saturating_duration_since(Instant::now())) {
+            if l.contains(text) {
+                return Some(l);
+            }
+        }
+        None
+    }
 }
 
 impl Drop for Server {
@@ -42,14 +69,15 @@ impl Drop for Server {
     }
 }
 
-/// Starts `coiffure serve --port 0 --haptic-priority 0 --duration 60 --web STUB` with `args`; returns once it
-/// printed its URL (and, with `--device`, its device address).
+/// Starts `coiffure serve --port 0 --haptic-priority 0 --web STUB` with `args` (and `--duration 60` unless they
+/// say); returns once it printed its URL (and, with `--device`, its device address).
 pub fn serve(args: &[&str]) -> Server {
     let web = scratch("web");
     std::fs::write(web.join("index.html"), "<!doctype html><title>stub</title>").unwrap();
     let mut child = bin()
-        .args(["serve", "--port", "0", "--haptic-priority", "0", "--duration", "60", "--web"])
+        .args(["serve", "--port", "0", "--haptic-priority", "0", "--web"])
         .arg(&web)
+        .args(if args.contains(&"--duration") { &[][..] } else { &["--duration", "60"][..] })
         .args(args)
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
@@ -78,5 +106,32 @@ pub fn serve(args: &[&str]) -> Server {
             token = url.split("?token=").nth(1).map(str::to_string);
         }
     }
-    Server { child, http: http.unwrap(), token, udp, _lines: rx }
+    Server { child, http: http.unwrap(), token, udp, lines: rx }
+}
+
+/// Opens `/ws` on `http` (host:port) with an optional Origin and query; the HTTP status of a refusal.
+pub fn open(http: &str, origin: Option<&str>, query: &str) -> Result<tungstenite::WebSocket<TcpStream>, u16> {
+    let mut req = format!("ws://{http}/ws{query}").into_client_request().unwrap();
+    if let Some(o) = origin {
+        req.headers_mut().insert("Origin", o.parse().unwrap());
+    }
+    let stream = TcpStream::connect(http).unwrap();
+    match tungstenite::client(req, stream) {
+        Ok((ws, _)) => Ok(ws),
+        Err(tungstenite::HandshakeError::Failure(tungstenite::Error::Http(r))) => Err(r.status().as_u16()),
+        Err(e) => panic!("handshake: {e}"),
+    }
+}
+
+/// The first binary message of type `kind`, within 20 s.
+pub fn first_of(ws: &mut tungstenite::WebSocket<TcpStream>, kind: u8) -> Vec<u8> {
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while Instant::now() < deadline {
+        if let tungstenite::Message::Binary(b) = ws.read().unwrap() {
+            if b[0] == kind {
+                return b.to_vec();
+            }
+        }
+    }
+    panic!("no message 0x{kind:02x}");
 }

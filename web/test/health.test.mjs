@@ -1,0 +1,33 @@
+// The tool proxy's health in the viewer (issue 16): the runaway guard's count (FRAME) is shown in the status
+// bar and exposed as window.coiffure.runaways. The server's guard is set to 5 cm (`--max-proxy-lag 0.05`) and
+// the pointer is put at the head's centre: the proxy stays on the scalp about 9 cm away, a runaway each step.
+import { after, before, describe, test } from 'node:test';
+import assert from 'node:assert/strict';
+import { launchBrowser, openViewer, startServer, stopServer } from './harness.mjs';
+
+describe('proxy health', () => {
+  let server, browser, page;
+  before(async () => {
+    server = await startServer(['--render-strands', '2000', '--max-proxy-lag', '0.05']);
+    browser = await launchBrowser();
+    ({ page } = await openViewer(browser, server.url));
+  });
+  after(async () => { await browser?.close(); if (server) console.log(await stopServer(server)); });
+
+  test('runaways are counted, shown and exposed', async () => {
+    await page.waitForFunction(() => window.coiffure.framesReceived > 2, null, { timeout: 60_000 });
+    assert.equal(await page.evaluate(() => window.coiffure.runaways), 0, 'none before the tool is pushed in');
+    assert.equal(await page.evaluate(() => document.getElementById('health').textContent), '');
+    await page.evaluate(() => {
+      // POSE at the head's centre, identity rotation, no buttons.
+      const b = new DataView(new ArrayBuffer(34));
+      b.setUint8(0, 0x01); b.setUint8(1, 1);
+      [0, 0, 0, 0, 0, 0, 1].forEach((x, i) => b.setFloat32(2 + 4 * i, x, true));
+      for (let k = 0; k < 10; k++) window.coiffure.send(b.buffer);
+    });
+    await page.waitForFunction(() => window.coiffure.runaways > 0, null, { timeout: 60_000 });
+    const n = await page.evaluate(() => window.coiffure.runaways);
+    await page.waitForFunction(() => /^proxy resets: \d+$/.test(document.getElementById('health').textContent), null, { timeout: 10_000 });
+    console.log('runaways shown', n, await page.evaluate(() => document.getElementById('health').textContent));
+  });
+});

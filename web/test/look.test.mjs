@@ -16,6 +16,23 @@ const lum = (px, i) => 0.2126 * px[4 * i] + 0.7152 * px[4 * i + 1] + 0.0722 * px
 const quantile = (xs, q) => { const s = Float64Array.from(xs).sort(); return s.length ? s[Math.min(s.length - 1, Math.floor(q * s.length))] : NaN; };
 const mean = (xs) => xs.reduce((a, b) => a + b, 0) / Math.max(1, xs.length);
 
+/** Pixel box (x right, y down) around world points seen from `eye` looking at `target` (z up), with the viewer's
+ * camera: 35 degree vertical field of view, square canvas of SIZE pixels. */
+function faceBox(eye, target, points) {
+  const sub = (a, b) => a.map((x, i) => x - b[i]);
+  const dot = (a, b) => a.reduce((s, x, i) => s + x * b[i], 0);
+  const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+  const unit = (a) => a.map((x) => x / Math.hypot(...a));
+  const f = unit(sub(target, eye)), r = unit(cross(f, [0, 0, 1])), u = cross(r, f);
+  const k = 1 / Math.tan((35 / 2) * Math.PI / 180);
+  const px = points.map((p) => {
+    const d = sub(p, eye), z = dot(d, f);
+    return [(1 + k * dot(d, r) / z) * SIZE / 2, (1 - k * dot(d, u) / z) * SIZE / 2];
+  });
+  const xs = px.map((p) => p[0]), ys = px.map((p) => p[1]);
+  return { x0: Math.ceil(Math.min(...xs)), x1: Math.floor(Math.max(...xs)), y0: Math.ceil(Math.min(...ys)), y1: Math.floor(Math.max(...ys)) };
+}
+
 /** Mean width (m) of a fibre of elliptical section (major-axis diameter d, ellipticity e) about its axis:
  * perimeter / pi (Cauchy), the perimeter by Ramanujan's formula. */
 const meanWidth = (d, e) => { const a = d / 2, b = d / (2 * e); return 3 * (a + b) - Math.sqrt((3 * a + b) * (a + 3 * b)); };
@@ -125,6 +142,30 @@ describe('the look (3k render strands, small canvas)', () => {
     console.log('shadow', { lit: lit.length, dark: dark.length, litMean, darkMean });
     assert.ok(lit.length > 0.05 * mask.length && dark.length > 0.05 * mask.length, `lit ${lit.length}, shadowed ${dark.length} of ${mask.length}`);
     assert.ok(darkMean < 0.6 * litMean, `shadowed hair ${darkMean} vs lit ${litMean}`);
+  });
+
+  test('the built-in hairstyle leaves the face free: seen from the front, the face is skin, not hair', async () => {
+    // The front camera of look-front.png; the face box spans the eyes (x = +-31 mm, z = -6 mm) down to the mouth
+    // (z = -62 mm) on the face (y = 0.1 m), projected with the camera's own numbers.
+    const front = { camera: [0, 0.9, 0.02], target: [0, 0, -0.03], light: [0.3, 0.8, 0.5] };
+    const withHair = await render('look-front', front);
+    const bare = await render(null, { ...front, hideHair: true });
+    const box = faceBox(front.camera, front.target, [[-0.045, 0.1, 0.005], [0.045, 0.1, 0.005], [-0.045, 0.1, -0.07], [0.045, 0.1, -0.07]]);
+    let skin = 0, unchanged = 0, n = 0;
+    for (let y = box.y0; y <= box.y1; y++) {
+      for (let x = box.x0; x <= box.x1; x++) {
+        const i = (SIZE - 1 - y) * SIZE + x; // readPixels rows start at the bottom
+        const [r, g, b] = [bare.px[4 * i], bare.px[4 * i + 1], bare.px[4 * i + 2]];
+        n++;
+        if (r > g && g > b && r > 90) skin++;
+        const d = Math.abs(withHair.px[4 * i] - r) + Math.abs(withHair.px[4 * i + 1] - g) + Math.abs(withHair.px[4 * i + 2] - b);
+        if (d < 30) unchanged++;
+      }
+    }
+    console.log('face', { box, pixels: n, skin, unchanged });
+    assert.ok(n > 200, `face box of ${n} pixels`);
+    assert.ok(skin > 0.8 * n, `the bare face box is skin: ${skin} of ${n} pixels`);
+    assert.ok(unchanged > 0.9 * n, `hair over the face: only ${unchanged} of ${n} face pixels as without hair`);
   });
 
   test('frame and GPU times are reported in window.coiffure and the status panel', async () => {

@@ -64,6 +64,10 @@ pub const CURL_RADIUS_MIN: f64 = 0.006;
 pub const CURL_INDEX_MAX: f64 = 2.5;
 /// Arc length from the root over which a render strand's curl radius fades in, m.
 pub const CURL_RAMP: f64 = 0.01;
+/// Range of the forward component of a root's unit direction from the head centre over which
+/// grooming turns from [`HairstyleParams::flow`] (below the first value: the back and the sides) to
+/// [`HairstyleParams::fringe_flow`] (above the second: the forehead), smoothstep in between.
+pub const FLOW_FRONT_BLEND: (f64, f64) = (0.5, 0.85);
 /// Smallest gap (m) kept between a render strand vertex (other than the root) and the head surface.
 pub const RENDER_GAP: f64 = 0.001;
 
@@ -133,9 +137,20 @@ pub struct HairstyleParams {
     pub clearance: f64,
     /// Direction (head frame, any length) from the head centre to the point hair is combed away
     /// from: a guide at p leaves the scalp along the projection of (p - |p| d) onto the scalp, so
-    /// hair flows away from that point over the head. Default (0, 0.6, 0.8): the front of the
-    /// hairline, giving swept-back hair that leaves the face free.
+    /// hair flows away from that point over the head. Default (0, 0.6, 0.8): 53 deg above the
+    /// front, so that the sides and the back are combed down and back. Roots towards the face are
+    /// combed along [`HairstyleParams::fringe_flow`] instead (blended over [`FLOW_FRONT_BLEND`]).
     pub flow: Vector3<f64>,
+    /// Direction (head frame, any length) the front of the scalp is combed towards, for roots on
+    /// the right (x >= 0; mirrored in x on the left): a centre parting, the fringe combed to the
+    /// sides so that it frames the face instead of hanging over it (roots between the hairline and
+    /// the `flow` point would otherwise be combed forwards, over the eyes). A root whose direction
+    /// from the head centre has the forward (+y) component c is combed along
+    /// `lerp(away from flow, fringe_flow, w)` with w = smoothstep([`FLOW_FRONT_BLEND`], c): w = 0 on
+    /// the back half and the sides (the back hair is groomed by `flow` alone), 1 at the forehead.
+    /// Default Some((1, -0.3, 0)): sideways and a little back. None: the front is combed away from
+    /// `flow` like the rest of the scalp (the fringe falls over the face).
+    pub fringe_flow: Option<Vector3<f64>>,
     /// Angle by which the hanging part of a guide leans outwards from the steepest descent,
     /// radians; increased in 5 degree steps (up to 50 degrees more) for a guide that would
     /// otherwise pass through the body. Default 5 deg.
@@ -164,6 +179,7 @@ impl Default for HairstyleParams {
             lift: 0.015,
             clearance: 0.003,
             flow: Vector3::new(0.0, 0.6, 0.8),
+            fringe_flow: Some(Vector3::new(1.0, -0.3, 0.0)),
             hang_tilt: 5f64.to_radians(),
             max_curl_amplitude: 0.015,
             seed: 1,
@@ -188,7 +204,7 @@ impl HairstyleParams {
             });
         }
         // Each rule: (holds, field, what the field must be, the value given).
-        let rules: [(bool, &'static str, &str, String); 14] = [
+        let rules: [(bool, &'static str, &str, String); 15] = [
             (
                 self.length > 0.0 && self.length <= 2.0,
                 "length",
@@ -261,6 +277,12 @@ impl HairstyleParams {
                 "flow",
                 "a finite non-zero vector",
                 format!("{:?}", self.flow),
+            ),
+            (
+                self.fringe_flow.is_none_or(|f| f.iter().all(|x| x.is_finite()) && f.norm() > 0.0),
+                "fringe_flow",
+                "a finite non-zero vector",
+                format!("{:?}", self.fringe_flow),
             ),
             (
                 self.hang_tilt.abs() <= std::f64::consts::FRAC_PI_2,
@@ -386,6 +408,26 @@ pub struct Hairstyle {
     pub render: RenderStrands,
 }
 
+/// The direction (not unit; of the order of |p| where it matters) a guide rooted at `p` (m, head
+/// frame) is combed along, before projection onto the scalp: away from [`HairstyleParams::flow`] on
+/// the back and the sides, [`HairstyleParams::fringe_flow`] (mirrored on the left) at the front.
+pub fn combing_direction(params: &HairstyleParams, p: &Vector3<f64>) -> Vector3<f64> {
+    let r = p.norm();
+    let away = p - params.flow.normalize() * r;
+    let (a, b) = FLOW_FRONT_BLEND;
+    let t = ((p.y / r.max(1e-12) - a) / (b - a)).clamp(0.0, 1.0);
+    let w = t * t * (3.0 - 2.0 * t);
+    let Some(fringe) = params.fringe_flow.filter(|_| w > 0.0) else {
+        return away;
+    };
+    let mut side = fringe.normalize();
+    if p.x < 0.0 {
+        side.x = -side.x;
+    }
+    let back = away.try_normalize(1e-9).unwrap_or(side);
+    (back + w * (side - back)) * r
+}
+
 /// Groomed coordinates of a guide: bend only (planar curve), see the module docs.
 fn groomed_bends(
     params: &HairstyleParams,
@@ -397,7 +439,7 @@ fn groomed_bends(
     let n = root.normal;
     let proj = |v: Vector3<f64>| v - n * n.dot(&v);
     let p = root.position.coords;
-    let away = p - params.flow.normalize() * p.norm();
+    let away = combing_direction(params, &p);
     let f = proj(away)
         .try_normalize(1e-6 * p.norm())
         .or_else(|| proj(-Vector3::y()).try_normalize(1e-6))

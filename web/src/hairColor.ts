@@ -33,11 +33,3 @@ export function sigmaFromMelanin(m: Melanin): [number, number, number] {
   }
   return [0, 1, 2].map((c) => m.eumelanin * EUMELANIN_SIGMA_A[c] + m.pheomelanin * PHEOMELANIN_SIGMA_A[c]) as [number, number, number];
 }
-
-/** Major-axis diameters of the server's hair types, m (crates/strand/src/hair_type.rs; 80 um if unknown). */
-export const HAIR_TYPE_DIAMETER: Record<string, number> = {
-  H1: 93.1e-6, H2: 96.1e-6, GA1: 89.5e-6, GC3: 89.3e-6, asian: 100e-6, caucasian: 80e-6, african: 85e-6,
-};
-export function hairDiameter(typeName: string | undefined): number {
-  return (typeName && HAIR_TYPE_DIAMETER[typeName]) || 80e-6;
-}

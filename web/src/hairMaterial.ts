@@ -9,7 +9,8 @@ import { marschnerGLSL } from './shaders/marschner.glsl';
 import { dualScatteringGLSL } from './shaders/dualScattering.glsl';
 import { domLookupGLSL } from './shaders/deepOpacity.glsl';
 import { displayGLSL } from './shaders/display.glsl';
-import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS, hairDiameter, sigmaFromMelanin, type Melanin } from './hairColor';
+import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS, sigmaFromMelanin, type Melanin } from './hairColor';
+import { meanFibreWidth } from './fibre';
 import type { DeepOpacityMaps } from './deepOpacityMaps';
 
 /** Parameters of the hair's look (one home; documented with meaning, unit and default). */
@@ -108,13 +109,17 @@ export class HairMaterial {
   /** Hairs one render strand stands for (>= 1). */
   readonly hairsPerStrand: number;
   private readonly samples: number;
-  private diameter = 80e-6;
+  /** The SCENE's hair types: major-axis diameter (m) and ellipticity of each. */
+  private readonly sections: { diameter: Float32Array; ellipticity: Float32Array };
+  /** Mean width of one fibre of the current hair type, m (fibre.ts). */
+  fibreWidth = 0;
 
   constructor(scene: SceneMsg, dom: DeepOpacityMaps, lighting: Record<string, THREE.IUniform>, params: Partial<HairLookParams> = {}) {
     this.params = { ...DEFAULT_HAIR_LOOK, ...params };
     const p = this.params;
     const [nx, ny, nz] = scene.latticeDims;
     this.samples = Math.max(2, scene.samples);
+    this.sections = { diameter: scene.hairTypeDiameter, ellipticity: scene.hairTypeEllipticity };
     this.hairsPerStrand = Math.max(1, p.hairsOnHead / Math.max(1, scene.strands));
     this.latticeTexture = floatTexture(nx * ny, nz);
     this.displacementTexture = floatTexture(this.samples, Math.max(1, scene.guides));
@@ -143,7 +148,7 @@ export class HairMaterial {
       uniforms: {
         ...deform,
         ...dom.uniforms,
-        strandWidth: { value: 80e-6 },
+        strandWidth: { value: 0 },
         sigmaA: { value: new THREE.Vector3() },
         cuticleTilt: { value: p.cuticleTilt },
         roughness: { value: p.roughness },
@@ -158,7 +163,7 @@ export class HairMaterial {
     });
     [this.depthMaterial, this.opacityMaterial] = dom.materials(shadowVertex, deform);
     this.setColour(HAIR_COLOURS[DEFAULT_HAIR_COLOUR]);
-    this.setHairType(scene.hairTypes[scene.hairType], dom);
+    this.setHairType(scene.hairType, dom);
   }
 
   /** Hair colour from melanin concentrations. */
@@ -166,11 +171,14 @@ export class HairMaterial {
     this.material.uniforms.sigmaA.value.set(...sigmaFromMelanin(m));
   }
 
-  /** The strand width (and the shadow maps' coverage) from the hair type's fibre diameter. */
-  setHairType(name: string | undefined, dom: DeepOpacityMaps): void {
-    this.diameter = hairDiameter(name);
-    this.material.uniforms.strandWidth.value = this.diameter * this.hairsPerStrand;
-    dom.setHair(this.hairsPerStrand, this.diameter);
+  /** The strand width (and the shadow maps' coverage) from the fibre section of the SCENE's hair type
+   * `index`: a render strand is as wide as the hairs it stands for side by side. */
+  setHairType(index: number, dom: DeepOpacityMaps): void {
+    const n = this.sections.diameter.length;
+    if (!(Number.isInteger(index) && index >= 0 && index < n)) throw new Error(`hair type ${index} unknown (the SCENE has ${n})`);
+    this.fibreWidth = meanFibreWidth(this.sections.diameter[index], this.sections.ellipticity[index]);
+    this.material.uniforms.strandWidth.value = this.fibreWidth * this.hairsPerStrand;
+    dom.setHair(this.hairsPerStrand, this.fibreWidth);
   }
 
   /** The body's metaballs at rest (head frame), captured before the first head move. */

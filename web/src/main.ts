@@ -32,6 +32,11 @@ interface Status {
   gpuTimer: boolean; // the timer query extension exists
   hairColour: string;
   strands: number;
+  /** The SCENE's hair types with their fibre sections (major-axis diameter, m; ellipticity). */
+  hairTypes: { name: string; diameter: number; ellipticity: number }[];
+  /** The drawn strands: width of one render strand (m; the hairs it stands for side by side), the mean width
+   * of one fibre of the current hair type (m) and the hairs a render strand stands for. */
+  strandWidth: () => { width: number; fibreWidth: number; hairsPerStrand: number };
   lastFile: { format: number; bytes: number } | null;
   fit: P.FitMsg | null; // how the last loaded hairstyle was placed on the head (FIT)
   device: P.DeviceMsg | null; // the haptic device's stream (DEVICE; null without `serve --device`)
@@ -59,6 +64,7 @@ const status: Status = {
   connected: false, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
   runaways: 0, lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], frameTimes: [], strands: 0,
   gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairColour: DEFAULT_HAIR_COLOUR,
+  hairTypes: [], strandWidth: () => ({ width: view.hair?.material.uniforms.strandWidth.value ?? 0, fibreWidth: view.hair?.fibreWidth ?? 0, hairsPerStrand: view.hair?.hairsPerStrand ?? 0 }),
   lastFile: null,
   fit: null,
   device: null,
@@ -100,7 +106,15 @@ ws.onmessage = (ev) => {
   const buf = ev.data as ArrayBuffer;
   const type = new Uint8Array(buf)[0];
   switch (type) {
-    case P.Server.SCENE: onScene(P.decodeScene(buf)); break;
+    case P.Server.SCENE: {
+      let msg: P.SceneMsg;
+      try { msg = P.decodeScene(buf); } catch (e) {
+        statusEl.textContent = `cannot show the scene: ${(e as Error).message}`;
+        throw e;
+      }
+      onScene(msg);
+      break;
+    }
     case P.Server.FRAME: onFrame(P.decodeFrame(buf)); break;
     case P.Server.STRANDS: onStrands(P.decodeStrands(buf)); break;
     case P.Server.DEVICE: {
@@ -151,7 +165,6 @@ ws.onmessage = (ev) => {
   }
 };
 
-let hairTypes: string[] = [];
 function onScene(msg: P.SceneMsg): void {
   view.load(msg);
   status.strands = msg.strands;
@@ -159,8 +172,8 @@ function onScene(msg: P.SceneMsg): void {
   const preset = document.getElementById('preset') as HTMLSelectElement;
   preset.innerHTML = msg.hairTypes.map((n, i) => `<option value="${i}">${n}</option>`).join('');
   preset.value = String(msg.hairType);
-  view.setHairType(msg.hairTypes[msg.hairType]);
-  hairTypes = msg.hairTypes;
+  view.setHairType(msg.hairType);
+  status.hairTypes = msg.hairTypes.map((name, i) => ({ name, diameter: msg.hairTypeDiameter[i], ellipticity: msg.hairTypeEllipticity[i] }));
   status.sceneLoaded = true;
   restNodes = null;
 }
@@ -274,7 +287,7 @@ function setColour(name: string): void {
 }
 colourEl.addEventListener('change', () => setColour(colourEl.value));
 function sendHair(): void {
-  view.setHairType(hairTypes[Number(presetEl.value) || 0] ?? '');
+  view.setHairType(Number(presetEl.value) || 0);
   const c = Number(curlEl.value);
   if (view.hair) view.hair.material.uniforms.curliness.value = c;
   status.send(P.encodeSetHair(Number(presetEl.value) || 0, c, Number(easeEl.value)));

@@ -124,6 +124,9 @@ export interface SceneMsg {
   renderGuide: Uint32Array; // guidesPerStrand per strand, nearest first
   renderWeight: Float32Array; // guidesPerStrand per strand, summing to 1
   renderSpan: Float32Array; // per strand: fraction of the guides' length it spans
+  /** Appended to SCENE after the metaballs: each hair type's fibre section (same order as hairTypes). */
+  hairTypeDiameter: Float32Array; // major-axis diameter, m
+  hairTypeEllipticity: Float32Array; // major / minor axis, >= 1
 }
 
 export interface FrameMsg {
@@ -198,7 +201,15 @@ export function decodeScene(buf: ArrayBuffer): SceneMsg {
     pushOutSkin = f32();
     metaballs = f32s(buf, o, 4 * m); o += 16 * m;
   }
-  return { verticesPerStrand, strands, guidesPerStrand, guides, samples, latticeDims, latticeOrigin, latticeH, hairTypes, hairType, headPositions, headIndices, renderPositions, renderGuide, renderWeight, renderSpan, metaballs, metaballThreshold, pushOutSkin };
+  // Appended block: the hair types' fibre sections (the server's presets; the viewer keeps no copy).
+  if (o + 4 + 8 * nTypes > buf.byteLength || v.getUint32(o, true) !== nTypes) {
+    throw new Error(`SCENE without the fibre sections of its ${nTypes} hair types (a server older than this viewer?)`);
+  }
+  o += 4;
+  const sections = f32s(buf, o, 2 * nTypes); o += 8 * nTypes;
+  const hairTypeDiameter = new Float32Array(nTypes), hairTypeEllipticity = new Float32Array(nTypes);
+  for (let i = 0; i < nTypes; i++) { hairTypeDiameter[i] = sections[2 * i]; hairTypeEllipticity[i] = sections[2 * i + 1]; }
+  return { verticesPerStrand, strands, guidesPerStrand, guides, samples, latticeDims, latticeOrigin, latticeH, hairTypes, hairType, headPositions, headIndices, renderPositions, renderGuide, renderWeight, renderSpan, metaballs, metaballThreshold, pushOutSkin, hairTypeDiameter, hairTypeEllipticity };
 }
 
 export function decodeFrame(buf: ArrayBuffer): FrameMsg {

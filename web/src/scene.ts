@@ -158,7 +158,7 @@ export class View {
     const stride = Math.max(1, Math.ceil(msg.strands / this.dom.params.maxStrands));
     this.shadowHair = shadowGeometry(g, stride, msg.strands, msg.verticesPerStrand);
     fillShadowIndex(this.shadowHair, msg.verticesPerStrand, null, msg.strands);
-    this.dom.setHair(this.hair.hairsPerStrand * stride, this.hair.material.uniforms.strandWidth.value / this.hair.hairsPerStrand);
+    this.dom.setHair(this.hair.hairsPerStrand * stride, this.hair.fibreWidth);
     for (const [m, s] of [[this.hair.depthMaterial, this.dom.depthScene], [this.hair.opacityMaterial, this.dom.opacityScene]] as const) {
       const l = new THREE.LineSegments(this.shadowHair, m);
       l.frustumCulled = false;
@@ -166,12 +166,12 @@ export class View {
     }
   }
 
-  /** Sets the hair type's strand width (by the type's name). */
-  setHairType(name: string): void {
+  /** Sets the strand width from the fibre section of the SCENE's hair type `index`. */
+  setHairType(index: number): void {
     if (!this.hair) return;
     const stride = (this.shadowHair?.userData.stride as number) ?? 1;
-    this.hair.setHairType(name, this.dom);
-    this.dom.setHair(this.hair.hairsPerStrand * stride, this.hair.material.uniforms.strandWidth.value / this.hair.hairsPerStrand);
+    this.hair.setHairType(index, this.dom);
+    this.dom.setHair(this.hair.hairsPerStrand * stride, this.hair.fibreWidth);
   }
 
   render(): void {

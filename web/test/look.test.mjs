@@ -16,6 +16,10 @@ const lum = (px, i) => 0.2126 * px[4 * i] + 0.7152 * px[4 * i + 1] + 0.0722 * px
 const quantile = (xs, q) => { const s = Float64Array.from(xs).sort(); return s.length ? s[Math.min(s.length - 1, Math.floor(q * s.length))] : NaN; };
 const mean = (xs) => xs.reduce((a, b) => a + b, 0) / Math.max(1, xs.length);
 
+/** Mean width (m) of a fibre of elliptical section (major-axis diameter d, ellipticity e) about its axis:
+ * perimeter / pi (Cauchy), the perimeter by Ramanujan's formula. */
+const meanWidth = (d, e) => { const a = d / 2, b = d / (2 * e); return 3 * (a + b) - Math.sqrt((3 * a + b) * (a + 3 * b)); };
+
 describe('the look (3k render strands, small canvas)', () => {
   let server, browser, page;
   const render = async (name, o) => {
@@ -134,5 +138,40 @@ describe('the look (3k render strands, small canvas)', () => {
       assert.equal(s.gpu, null, 'no timer query: no GPU time');
       assert.match(s.perf, /GPU n\/a/);
     }
+  });
+
+  // Last: it changes the server's hair type.
+  test('strands are as wide as the fibres of the hair type the server sends in SCENE', async () => {
+    const types = await page.evaluate(() => window.coiffure.hairTypes);
+    const options = await page.evaluate(() => [...document.querySelectorAll('#preset option')].map((o) => o.textContent));
+    console.log('hair types', types);
+    assert.deepEqual(types.map((t) => t.name), options);
+    for (const t of types) {
+      assert.ok(t.diameter > 50e-6 && t.diameter < 150e-6, `${t.name}: diameter ${t.diameter} m`);
+      assert.ok(t.ellipticity >= 1 && t.ellipticity < 3, `${t.name}: ellipticity ${t.ellipticity}`);
+    }
+    assert.ok(new Set(types.map((t) => t.diameter)).size >= 4, 'the presets have their own diameters');
+    const width = () => page.evaluate(() => window.coiffure.strandWidth());
+    const check = async (name) => {
+      const t = types.find((x) => x.name === name);
+      const w = await width();
+      const want = meanWidth(t.diameter, t.ellipticity);
+      assert.ok(Math.abs(w.fibreWidth / want - 1) < 1e-6, `${name}: fibre ${w.fibreWidth} m, want ${want} m`);
+      assert.ok(Math.abs(w.width / (want * w.hairsPerStrand) - 1) < 1e-6 && w.hairsPerStrand > 1, `${name}: strand ${w.width} m`);
+      return w.width;
+    };
+    const select = (name) => page.evaluate((i) => {
+      const el = document.getElementById('preset');
+      el.value = String(i);
+      el.dispatchEvent(new Event('change'));
+    }, types.findIndex((t) => t.name === name));
+    const start = types[Number(await page.evaluate(() => document.getElementById('preset').value))].name;
+    const other = start === 'asian' ? 'caucasian' : 'asian';
+    const w0 = await check(start);
+    await select(other);
+    const w1 = await check(other);
+    assert.notEqual(w0, w1);
+    await select(start);
+    await check(start);
   });
 });

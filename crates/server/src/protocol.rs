@@ -381,7 +381,23 @@ pub fn encode_scene(s: &Scene) -> Vec<u8> {
     }
     // Appended block: the head's metaballs (head frame) for the viewer's push-out of render vertices.
     encode_scene_metaballs(&mut w.0, &s.head, s.lattice.params.metaball.threshold);
+    // Appended block: the hair types' fibre sections, for the viewer's strand width.
+    encode_scene_hair_types(&mut w.0);
     w.0
+}
+
+/// The SCENE's appended hair-type block (docs/protocol.md), after the metaballs: u32 N (the hair types of
+/// the names list, in its order), then N x (f32 major-axis diameter (m), f32 ellipticity (major / minor
+/// axis, >= 1)) of `strand::HairType::ALL`: the fibre section the physics uses, so the viewer draws strands
+/// as wide as the hair type's fibres without a copy of the presets.
+fn encode_scene_hair_types(out: &mut Vec<u8>) {
+    let types = strand::HairType::ALL;
+    out.extend_from_slice(&(types.len() as u32).to_le_bytes());
+    for h in types {
+        for x in [h.major_diameter, h.ellipticity] {
+            out.extend_from_slice(&(x as f32).to_le_bytes());
+        }
+    }
 }
 
 /// The SCENE's appended metaball block (docs/protocol.md): u32 M, f32 threshold T, f32 push-out skin (m),
@@ -597,6 +613,53 @@ mod tests {
         assert_eq!(&b[62..66], &0.5f32.to_le_bytes());
         assert_eq!(&b[78..82], &42u32.to_le_bytes());
         assert_eq!(&b[86..90], &0.001f32.to_le_bytes()); // rooted p95
+    }
+
+    /// SCENE decoded field by field as docs/protocol.md lays it out: every byte is accounted for, and the
+    /// appended hair-type block carries each preset's fibre section (`strand::HairType::ALL`) in the order of
+    /// the names list.
+    #[test]
+    fn scene_layout_and_the_hair_types_diameters() {
+        let opts = engine::session::SceneOptions { render_strands: 200, guides: 20, hair_type: "asian".into(), ..Default::default() };
+        let scene = engine::session::Scene::builtin(&opts).unwrap();
+        let b = encode_scene(&scene);
+        assert_eq!((b[0], b[1]), (server::SCENE, VERSION));
+        let mut o = 2;
+        let mut u32_ = || { let x = u32::from_le_bytes(b[o..o + 4].try_into().unwrap()); o += 4; x as usize };
+        let (v, strands, p, g, k) = (u32_(), u32_(), u32_(), u32_(), u32_());
+        assert_eq!((v, strands, p, g, k), (scene.render.vertices_per_strand, 200, scene.render.guides_per_strand, 20, scene.samples()));
+        let f = &scene.lattice.ffd;
+        assert_eq!((u32_(), u32_(), u32_()), (f.nx, f.ny, f.nz));
+        o += 16; // lattice origin and cell size
+        let types = b[o] as usize;
+        o += 1;
+        let mut names = Vec::new();
+        for _ in 0..types {
+            let n = b[o] as usize;
+            names.push(std::str::from_utf8(&b[o + 1..o + 1 + n]).unwrap().to_string());
+            o += 1 + n;
+        }
+        let want: Vec<&str> = strand::HairType::ALL.iter().map(|h| h.name).collect();
+        assert_eq!(names, want);
+        assert_eq!(names[b[o] as usize], "asian", "the scene's hair type");
+        o = (o + 1).div_ceil(4) * 4;
+        let u = |o: usize| u32::from_le_bytes(b[o..o + 4].try_into().unwrap()) as usize;
+        let f32_ = |o: usize| f32::from_le_bytes(b[o..o + 4].try_into().unwrap()) as f64;
+        let (nh, ni) = (u(o), u(o + 4));
+        assert_eq!((nh, ni), (scene.head_mesh.positions.len(), scene.head_mesh.indices.len()));
+        o += 8 + 12 * nh + 4 * ni + 12 * strands * v + 8 * strands * p + 4 * strands;
+        let m = u(o);
+        assert_eq!(m, scene.head.balls.len());
+        o += 12 + 16 * m;
+        // The hair-type block: one (diameter, ellipticity) per name, and nothing after it.
+        assert_eq!(u(o), types);
+        o += 4;
+        for (i, h) in strand::HairType::ALL.iter().enumerate() {
+            let (d, e) = (f32_(o + 8 * i), f32_(o + 8 * i + 4));
+            assert!((d / h.major_diameter - 1.0).abs() < 1e-6 && (e / h.ellipticity - 1.0).abs() < 1e-6, "{}: {d} m, {e}", h.name);
+            assert!(d > 50e-6 && d < 150e-6 && e >= 1.0, "{}: a human hair's section", h.name);
+        }
+        assert_eq!(o + 8 * types, b.len(), "SCENE ends with the hair-type block");
     }
 
     #[test]

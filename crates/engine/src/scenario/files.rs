@@ -66,13 +66,15 @@ pub fn load_tool(s: &Scenario, dir: &Path) -> Result<(ToolShape, ToolPath), Scen
     Ok((shape, path))
 }
 
-/// Runs a scenario whose relative file names (tool shape and path files) are looked up in `dir`.
+/// Runs a scenario whose relative file names (tool shape and path files, a `[live] hairstyle`) are looked
+/// up in `dir`.
 pub fn run_in(file: &ScenarioFile, dir: &Path) -> Result<ScenarioOutput, ScenarioError> {
     match file {
         ScenarioFile::Patch(s) => {
             let (shape, path) = load_tool(s, dir)?;
             run_patch(s, shape, &path)
         }
+        ScenarioFile::Live(s) => super::run::run_live_on(s, std::sync::Arc::new(s.scene_in(dir)?)),
         other => run(other),
     }
 }

@@ -65,6 +65,40 @@ pub struct LiveSpec {
     /// before the first the head is at the first, after the last at the last. Default none (the head stays
     /// at the world origin, unrotated). The tool path is in the world frame.
     pub head: Vec<HeadWaypoint>,
+    /// A hair file (`.hair`, `.data`, `.tfx`, `.usda`) to carry instead of the generated hairstyle, placed on
+    /// the built-in head by `hairstyle::fit` as the viewer's load places it; a relative name is looked up
+    /// in the scenario file's directory. `render_strands` is then the file's strands. Default none.
+    pub hairstyle: Option<std::path::PathBuf>,
+    /// Overrides of the fit of `hairstyle` (`[live.fit]`, as `coiffure fit`'s flags). Default: detect all.
+    pub fit: LiveFit,
+}
+
+/// `[live.fit]`: what the fit of a `[live] hairstyle` file is told instead of detecting it.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LiveFit {
+    /// The file's up axis ("x", "+y", "-z", ...). Default: metadata, else detected.
+    pub up: Option<String>,
+    /// The file's facing (the direction the face looks). Default: detected.
+    pub front: Option<String>,
+    /// Units: "m", "cm", "mm", "in", "ft" or metres per unit. Default: metadata, else from the size.
+    pub units: Option<String>,
+    /// True: only the given units and axes, no detection, no ICP, no push-out (`--no-fit`). Default false.
+    pub no_fit: bool,
+}
+
+impl LiveFit {
+    /// The fit options, or the bad key named.
+    pub fn options(&self) -> Result<hairstyle::fit::FitOptions, ScenarioError> {
+        use hairstyle::fit::{parse_units, Axis, FitOptions};
+        let bad = |k: &str, e: String| ScenarioError::Invalid(format!("live.fit.{k}: {e}"));
+        Ok(FitOptions {
+            up: self.up.as_deref().map(Axis::parse).transpose().map_err(|e| bad("up", e))?,
+            front: self.front.as_deref().map(Axis::parse).transpose().map_err(|e| bad("front", e))?,
+            units: self.units.as_deref().map(parse_units).transpose().map_err(|e| bad("units", e))?,
+            fit: !self.no_fit,
+        })
+    }
 }
 
 /// One waypoint of the head's motion in a live scenario (`[[live.head]]`).
@@ -84,7 +118,7 @@ pub struct HeadWaypoint {
 
 impl Default for LiveSpec {
     fn default() -> Self {
-        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), curliness: 0.0, combing_ease: 0.0, wetness: 0.0, hair_contact: crate::params::HapticParams::default().hair_contact, head: Vec::new() }
+        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), curliness: 0.0, combing_ease: 0.0, wetness: 0.0, hair_contact: crate::params::HapticParams::default().hair_contact, head: Vec::new(), hairstyle: None, fit: LiveFit::default() }
     }
 }
 
@@ -229,11 +263,27 @@ impl LiveScenario {
         SceneOptions { render_strands: l.render_strands, guides: l.guides, hair_type: l.hair_type.clone(), curliness: l.curliness, ..SceneOptions::default() }
     }
 
-    /// Runs the scenario on a new built-in scene. Deterministic.
+    /// Runs the scenario on a new scene ([`LiveScenario::scene_in`] with relative names looked up in
+    /// the working directory). Deterministic.
     pub fn run(&self) -> Result<(ForceTrace, LiveSummary), ScenarioError> {
+        self.run_on(Arc::new(self.scene_in(std::path::Path::new("."))?))
+    }
+
+    /// The scene: the built-in one of `coiffure serve` ([`LiveScenario::scene_options`]), or with `[live]
+    /// hairstyle` that file placed on the head by `hairstyle::fit` and carried by the built-in head and
+    /// guides ([`Scene::from_curves`], as the viewer's load), a relative name looked up in `dir`.
+    pub fn scene_in(&self, dir: &std::path::Path) -> Result<Scene, ScenarioError> {
         self.validate()?;
-        let scene = Scene::builtin(&self.scene_options()).map_err(|e| ScenarioError::Invalid(format!("live scene: {e}")))?;
-        self.run_on(Arc::new(scene))
+        let opts = self.scene_options();
+        let scene = match &self.live.hairstyle {
+            None => Scene::builtin(&opts),
+            Some(name) => {
+                let path = dir.join(name);
+                let (curves, _) = hairstyle::fit::fit_file(&path, &self.live.fit.options()?).map_err(|e| ScenarioError::File { path: path.clone(), message: format!("live.hairstyle: {e}") })?;
+                Scene::from_curves(&curves, &opts)
+            }
+        };
+        scene.map_err(|e| ScenarioError::Invalid(format!("live scene: {e}")))
     }
 
     /// Runs the scenario on `scene` (built from [`LiveScenario::scene_options`]): `settle` s with no device
@@ -466,6 +516,32 @@ mod tests {
 
     fn comb() -> LiveScenario {
         toml::from_str(COMB).unwrap()
+    }
+
+    /// `[live] hairstyle`: a hair file (the TressFX Ratboy mohawk from ../shared/data, named relative to
+    /// the directory given) is fitted onto the head as the viewer's load fits it and carried by the scene:
+    /// the scene's render strands are the file's 2,228, none inside the body, and the comb stroke runs on
+    /// it through `run_in` (the CLI's and Python's path). Bad `[live.fit]` keys and a missing file are named.
+    #[test]
+    fn a_live_scenario_carries_a_fitted_hair_file() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let text = COMB.replace("[tool]", "hairstyle = \"../../../shared/data/tressfx/Ratboy_mohawk.tfx\"\n[tool]");
+        let s: LiveScenario = toml::from_str(&text).unwrap();
+        let scene = s.scene_in(dir).unwrap();
+        let r = &scene.render;
+        assert_eq!(r.positions.len() / r.vertices_per_strand, 2228);
+        let head = hairstyle::Head::default();
+        let inside = r.positions.iter().filter(|p| head.inside(&Point3::new(p[0] as f64, p[1] as f64, p[2] as f64))).count();
+        assert_eq!(inside, 0, "render vertices inside the body");
+        let out = crate::scenario::run_in(&crate::scenario::ScenarioFile::Live(s.clone()), dir).unwrap();
+        assert!(out.force.len() > 0, "no force trace");
+        let mut bad = s.clone();
+        bad.live.fit.up = Some("w".into());
+        assert!(bad.scene_in(dir).unwrap_err().to_string().contains("live.fit.up"));
+        let mut missing = s.clone();
+        missing.live.hairstyle = Some("no-such-file.tfx".into());
+        let e = missing.scene_in(dir).unwrap_err().to_string();
+        assert!(e.contains("no-such-file.tfx") && e.contains("live.hairstyle"), "{e}");
     }
 
     #[test]

@@ -105,12 +105,15 @@ pub fn run(file: &ScenarioFile) -> Result<ScenarioOutput, ScenarioError> {
             summary.wall_time_s = wall;
             Ok(ScenarioOutput { kind: "global", force: ForceTrace::default(), global_rows: out.rows, summary: ScenarioSummary::Global(summary), hair: Some((out.hairstyle, out.pieces)), wall_time_s: wall })
         }
-        ScenarioFile::Live(s) => {
-            let (force, summary) = s.run()?;
-            let wall = summary.wall_time_s;
-            Ok(ScenarioOutput { kind: "live", force, global_rows: Vec::new(), summary: ScenarioSummary::Live(summary), hair: None, wall_time_s: wall })
-        }
+        ScenarioFile::Live(s) => run_live_on(s, std::sync::Arc::new(s.scene_in(std::path::Path::new("."))?)),
     }
+}
+
+/// Runs a live scenario on `scene` (from [`LiveScenario::scene_in`]) into a [`ScenarioOutput`].
+pub fn run_live_on(s: &LiveScenario, scene: std::sync::Arc<crate::scene::Scene>) -> Result<ScenarioOutput, ScenarioError> {
+    let (force, summary) = s.run_on(scene)?;
+    let wall = summary.wall_time_s;
+    Ok(ScenarioOutput { kind: "live", force, global_rows: Vec::new(), summary: ScenarioSummary::Live(summary), hair: None, wall_time_s: wall })
 }
 
 /// Runs a patch scenario with its tool `shape` and `path` (loaded by the caller).

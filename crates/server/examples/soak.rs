@@ -26,7 +26,9 @@ type Ws = tungstenite::WebSocket<TcpStream>;
 
 fn connect(http: &str) -> Ws {
     let stream = TcpStream::connect(http).expect("connect");
-    let (ws, _) = tungstenite::client(format!("ws://{http}/ws"), stream).expect("upgrade");
+    // A 100,000-strand SCENE is 17 MB: the server's limits (64 MiB + 16) rather than tungstenite's 16 MiB frames.
+    let config = tungstenite::protocol::WebSocketConfig::default().max_message_size(Some(80 << 20)).max_frame_size(Some(80 << 20));
+    let (ws, _) = tungstenite::client::client_with_config(format!("ws://{http}/ws"), stream, Some(config)).expect("upgrade");
     ws
 }
 

@@ -539,10 +539,18 @@ pub fn solve(rows: &mut [ConstraintRows], links: &[ConstraintLink], opts: &Const
         role[a][i] = 1 + l;
         role[b][j] = SECOND;
     }
+    // A strand without links stops sweeping once its own impulses converged (as it would alone); linked strands
+    // sweep until all of them converged together.
+    let linked: Vec<bool> = role.iter().map(|r| r.iter().any(|&x| x != 0)).collect();
+    let mut done = vec![false; rows.len()];
     for _ in 0..opts.iterations.max(1) {
-        // The largest impulse and the largest change of one in this sweep, N s.
+        // The largest impulse and the largest change of one in this sweep among the linked strands, N s.
         let (mut largest, mut change) = (0.0f64, 0.0f64);
         for s in 0..rows.len() {
+            if done[s] {
+                continue;
+            }
+            let (mut own_largest, mut own_change) = (0.0f64, 0.0f64);
             for c in 0..rows[s].len() {
                 let before = rows[s].impulses[c];
                 match role[s][c] {
@@ -559,11 +567,17 @@ pub fn solve(rows: &mut [ConstraintRows], links: &[ConstraintLink], opts: &Const
                         rows[b].impulses[j] = -p;
                     }
                 }
-                largest = largest.max(rows[s].impulses[c].norm());
-                change = change.max((rows[s].impulses[c] - before).norm());
+                own_largest = own_largest.max(rows[s].impulses[c].norm());
+                own_change = own_change.max((rows[s].impulses[c] - before).norm());
+            }
+            if linked[s] {
+                largest = largest.max(own_largest);
+                change = change.max(own_change);
+            } else {
+                done[s] = own_change <= opts.tolerance * own_largest;
             }
         }
-        if change <= opts.tolerance * largest {
+        if done.iter().zip(&linked).all(|(&d, &l)| d || l) && change <= opts.tolerance * largest {
             break;
         }
     }

@@ -90,6 +90,10 @@ pub struct StepTimings {
     pub body: f64,
 }
 
+/// Membership changes after which the collision tree is rebuilt rather than refitted
+/// ([`LocalInteraction::set_strands`]).
+const TREE_REBUILD_AFTER: usize = 8;
+
 /// How a strand's constrained step stands between the stages of [`LocalInteraction::step`].
 enum Solved {
     /// Its rows, at this index of the step's rows, wait for the common solve.
@@ -150,8 +154,10 @@ pub struct LocalInteraction {
     surface_torques: Vec<Vec<PointForce>>,
     pieces: Vec<Piece>,
     bvh: Bvh,
-    /// The strands were replaced: build the tree anew at the next step rather than refit it.
+    /// Build the tree anew at the next step rather than refit it.
     rebuild_tree: bool,
+    /// Membership changes ([`LocalInteraction::set_strands`]) since the tree was last built.
+    changes_since_build: usize,
     /// Workspace: which strands' steps were prepared this step.
     prepared: Vec<bool>,
     /// Workspace: contacts of this step.
@@ -185,6 +191,7 @@ impl LocalInteraction {
             pieces,
             bvh,
             rebuild_tree: false,
+            changes_since_build: 0,
             prepared,
             contacts: Vec::new(),
         }
@@ -193,7 +200,8 @@ impl LocalInteraction {
     /// Replaces the strands by `strands`, keeping the workspaces (the batches' solver storage, the contact
     /// buffers): strand `i` of the new set was strand `from[i]` of the old one (its pending surface torques and
     /// loads and its wetness move with it), or is new (`None`, dry). The pins are released (they name old strands). The collision
-    /// tree is rebuilt at the next step. Cheaper than a new interaction when a few strands join or leave.
+    /// tree is refitted at the next step (rebuilt after a few such changes). Cheaper than a new interaction when a
+    /// few strands join or leave.
     pub fn set_strands(&mut self, strands: Vec<Strand>, from: &[Option<usize>]) {
         let mut old = std::mem::take(&mut self.surface_torques);
         self.surface_torques = (0..strands.len()).map(|i| match from.get(i).copied().flatten() {
@@ -210,9 +218,13 @@ impl LocalInteraction {
         self.lane_of.resize(strands.len(), None);
         self.pins.clear();
         self.strands = strands;
-        self.rebuild_tree = true;
-        // The hair-hair contacts' velocities come from the last step's chords of the same strands.
-        self.hair_finder = HairContactFinder::new();
+        // The collision tree is refitted over the new strands' pieces (its boxes stay valid, only looser where
+        // a strand moved in from elsewhere) and rebuilt after `TREE_REBUILD_AFTER` such changes; the hair-hair
+        // sweep's order is re-sorted from the last one.
+        self.changes_since_build += 1;
+        if self.changes_since_build >= TREE_REBUILD_AFTER {
+            self.rebuild_tree = true;
+        }
     }
 
     /// Prepares the steps of the reduced, linearly implicit strands in batches of four strands of equal size
@@ -419,6 +431,7 @@ impl LocalInteraction {
             // tree.
             self.bvh = Bvh::build(&self.pieces, reach);
             self.rebuild_tree = false;
+            self.changes_since_build = 0;
         }
         let t_sample = clock.elapsed().as_secs_f64();
         timings.sample = t_sample - t_dynamics;

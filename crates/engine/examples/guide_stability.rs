@@ -4,7 +4,8 @@
 //! when. Measured 2026-11-24 20:15 UTC: 27 of 200 (side and front guides; guide 191's twist rate grows x32 every
 //! 0.1 s from round-off, the centreline still, then the strand swings 10-13 cm to another shape): the groomed
 //! (sag-free) equilibrium is unstable for them, which the live dryer scenario shows as guides that leave their
-//! place while the tool rests beside them. Run:
+//! place while the tool rests beside them. It also prints the guides whose groomed state the statics call
+//! unstable (`hairstyle::Guide::stable`, the sag-free rest's Hessian): 110 of 200, the 27 among them. Run:
 //! `cargo run --release -p coiffure-engine --example guide_stability`
 use engine::scene::{Scene, SceneOptions};
 use strand::Strand;
@@ -24,5 +25,8 @@ fn main() {
         }
         if let Some(t) = t_grow { unstable.push((g, t)); }
     }
+    let style = hairstyle::Hairstyle::generate(&hairstyle::HairstyleParams { render_count: 20000, guide_count: opts.guides, guide_segments: opts.segments, guide_samples: opts.samples.max(16), ..Default::default() }).unwrap();
+    let flagged: Vec<usize> = style.guides.iter().enumerate().filter(|(_, g)| !g.stable).map(|(i, _)| i).collect();
+    println!("statics flags {} guides unstable: {:?}", flagged.len(), flagged);
     println!("{} of {} guides leave their groomed state within 1.5 s at rest (|qdot| > 1e-3): {:?}", unstable.len(), scene.guides.len(), unstable);
 }

@@ -1,6 +1,6 @@
 // The tool proxy's health in the viewer (issue 16): the runaway guard's count (FRAME) is shown in the status
 // bar and exposed as window.coiffure.runaways. The server's guard is set to 5 cm (`--max-proxy-lag 0.05`) and
-// the pointer is put at the head's centre: the proxy stays on the scalp about 9 cm away, a runaway each step.
+// the device point is held at the head's centre: the proxy stays on the scalp about 9 cm away, a runaway each step.
 import { after, before, describe, test } from 'node:test';
 import assert from 'node:assert/strict';
 import { launchBrowser, openViewer, startServer, stopServer } from './harness.mjs';
@@ -23,11 +23,14 @@ describe('proxy health', () => {
       const b = new DataView(new ArrayBuffer(34));
       b.setUint8(0, 0x01); b.setUint8(1, 1);
       [0, 0, 0, 0, 0, 0, 1].forEach((x, i) => b.setFloat32(2 + 4 * i, x, true));
-      for (let k = 0; k < 10; k++) window.coiffure.send(b.buffer);
+      // The viewer sends its own pointer's POSE every animation frame; the test's pose is sent every 2 ms
+      // until the count is read, so the device point stays at the head's centre.
+      window.healthPose = setInterval(() => window.coiffure.send(b.buffer), 2);
     });
     await page.waitForFunction(() => window.coiffure.runaways > 0, null, { timeout: 60_000 });
     const n = await page.evaluate(() => window.coiffure.runaways);
     await page.waitForFunction(() => /^proxy resets: \d+$/.test(document.getElementById('health').textContent), null, { timeout: 10_000 });
     console.log('runaways shown', n, await page.evaluate(() => document.getElementById('health').textContent));
+    await page.evaluate(() => clearInterval(window.healthPose));
   });
 });

@@ -97,7 +97,8 @@ fn a_simulated_device_combs_the_live_hair_and_faults_are_handled() {
     println!("poses {} answered {} ({:.1} %), round trip p50 {:.0} us p99 {:.0} us; largest force in the hair {in_hair:.3} N, anywhere {largest:.3} N", poses.len(), answered.len(), 100.0 * answered.len() as f64 / poses.len() as f64, p50 * 1e6, p99 * 1e6);
     assert!(answered.len() as f64 >= 0.95 * poses.len() as f64, "answered {} of {}", answered.len(), poses.len());
     assert!(answered.iter().all(|r| r[4].is_finite() && r[5].is_finite() && r[6].is_finite()), "finite forces");
-    assert!(largest <= 3.3 + 1e-9, "within the Omni's 3.3 N: {largest} N");
+    // The force travels as f32 components (device-sim's CSV): the magnitude carries their rounding, ~1e-7 N.
+    assert!(largest <= 3.3 * (1.0 + 1e-6), "within the Omni's 3.3 N: {largest} N");
     assert!(in_hair > 0.05, "the comb in the hair is felt: {in_hair} N");
     // Loose bounds: answers are fresh, not queued (a backlog would put the median at seconds). The 2 ms p99
     // figure on an idle machine is in bench/RESULTS.md; timing targets are not asserted in tests on a shared

@@ -10,20 +10,20 @@ import { GpuTimer } from './gpuTimer';
 import { HairCompositor } from './hairCompositor';
 import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS, sigmaFromMelanin, type Melanin } from './hairColor';
 
-/** Default direction towards the key light (head frame, x to the person's left, y forward, z up): in front,
- * to the right of the default camera and above, a portrait's key light; it lights the face and the hair's R
- * highlight band on the crown. */
-export const DEFAULT_LIGHT = new THREE.Vector3(0.5, 0.6, 0.6).normalize();
-
-/** Camera views (world, m; the head's centre is the origin, z up, the face towards +y). */
+/** Camera views (world, m; the head's centre is the origin, x to the person's left, y forward, z up), each
+ * with its key light (a direction towards it, any length). */
 export const CAMERA_VIEWS = {
-  /** The default: three-quarter front, a little above the eyes: the face and the hairstyle. */
-  portrait: { position: [0.42, 0.6, 0.1], target: [0, 0, -0.07] },
-  /** From behind and a little above, where the hair hangs (the comb tests' view). */
-  back: { position: [0.3, -0.9, 0.22], target: [0, 0, -0.05] },
-} as const satisfies Record<string, { position: readonly [number, number, number]; target: readonly [number, number, number] }>;
+  /** The default: three-quarter front, a little above the eyes: the face and the hairstyle; the key light in
+   * front, right of the camera and above (no hard nose shadow), the R highlight band on the crown. */
+  portrait: { position: [0.43, 0.6, 0.2], target: [0, 0, 0.02], light: [0.45, 0.8, 0.35] },
+  /** From behind and a little above, where the hair hangs (the comb tests' view); the light from behind,
+   * right and above, so the hanging hair shows its R highlight band. */
+  back: { position: [0.3, -0.9, 0.22], target: [0, 0, -0.05], light: [0.7, -0.55, 0.3] },
+} as const satisfies Record<string, { position: readonly [number, number, number]; target: readonly [number, number, number]; light: readonly [number, number, number] }>;
 export type CameraView = keyof typeof CAMERA_VIEWS;
 export const DEFAULT_VIEW: CameraView = 'portrait';
+/** Default direction towards the key light (unit): the default view's. */
+export const DEFAULT_LIGHT = new THREE.Vector3().fromArray(CAMERA_VIEWS[DEFAULT_VIEW].light).normalize();
 
 const UNIT_SCALE = new THREE.Vector3(1, 1, 1);
 
@@ -72,7 +72,6 @@ export class View {
     this.camera = new THREE.PerspectiveCamera(35, 1, 0.01, 10);
     this.camera.up.set(0, 0, 1); // z up, as in the simulation
     this.controls = new OrbitControls(this.camera, canvas);
-    this.setView(DEFAULT_VIEW);
     // Left button is the tool's; right button orbits; wheel zooms.
     this.controls.mouseButtons = { LEFT: null, MIDDLE: THREE.MOUSE.DOLLY, RIGHT: THREE.MOUSE.ROTATE };
     this.controls.update();
@@ -81,6 +80,7 @@ export class View {
     this.sun = new THREE.DirectionalLight(0xffffff, 1.6);
     this.sun.position.copy(DEFAULT_LIGHT);
     this.scene.add(this.sun);
+    this.setView(DEFAULT_VIEW);
     this.resize();
     window.addEventListener('resize', () => this.resize());
     const cg = new THREE.BufferGeometry();
@@ -91,13 +91,15 @@ export class View {
     this.scene.add(this.chains);
   }
 
-  /** Puts the camera at one of CAMERA_VIEWS (an unknown name is an error naming the known ones). */
+  /** Puts the camera at one of CAMERA_VIEWS and the key light where that view has it (an unknown name is an
+   * error naming the known ones). */
   setView(name: string): void {
     if (!Object.hasOwn(CAMERA_VIEWS, name)) throw new Error(`unknown view "${name}" (known: ${Object.keys(CAMERA_VIEWS).join(', ')})`);
     const v = CAMERA_VIEWS[name as CameraView];
     this.camera.position.fromArray(v.position);
     this.controls.target.fromArray(v.target);
     this.controls.update();
+    this.setLight(new THREE.Vector3().fromArray(v.light));
   }
 
   /** Shortens the strands to their kept points (STRANDS message); returns the segments drawn. */

@@ -8,7 +8,7 @@ import { join } from 'node:path';
 import { artifacts, launchBrowser, startServer, stopServer } from './harness.mjs';
 
 const SIZE = 200;
-const LIGHTS = { back: [0.7, -0.55, 0.3], side: [1.0, 0.15, 0.35] }; // back: the viewer's default
+const LIGHTS = { back: [0.7, -0.55, 0.3], side: [1.0, 0.15, 0.35] }; // back: from behind, right and above (the viewer's default before the portrait view)
 const COLOURS = ['blond', 'brown', 'black', 'red'];
 
 /** Luminance (0..255) of RGBA pixel i. */

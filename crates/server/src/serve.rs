@@ -97,6 +97,10 @@ pub struct ServeArgs {
     /// non-loopback address without one generates one and prints the URL with it.
     #[arg(long)]
     pub token: Option<String>,
+    /// Time budget of one LOAD (read, fit, build), s (`hairstyle::LoadLimits::max_seconds`, default 30): a LOAD
+    /// over it is answered by ERROR 5 and the live hairstyle stays.
+    #[arg(long)]
+    pub load_budget: Option<f64>,
 }
 
 
@@ -162,6 +166,8 @@ struct App {
     access: Access,
     /// When the last SAVE was served.
     last_save: Mutex<Option<Instant>>,
+    /// Held while a LOAD reads, fits and builds (one at a time: a second is refused, not queued).
+    loading: Mutex<()>,
     /// A viewer's time limit (`--viewer-timeout`).
     viewer_timeout: Duration,
 }
@@ -226,7 +232,12 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         Some(t) => return Err(anyhow!("--viewer-timeout must be in (0, 3600] s, got {t}")),
     };
     let t0 = Instant::now();
-    let opts = SceneOptions { render_strands: args.render_strands, guides: args.guides, ..SceneOptions::default() };
+    let mut opts = SceneOptions { render_strands: args.render_strands, guides: args.guides, ..SceneOptions::default() };
+    match args.load_budget {
+        None => {}
+        Some(t) if t.is_finite() && t >= 0.0 && t <= 3600.0 => opts.load.max_seconds = t,
+        Some(t) => return Err(anyhow!("--load-budget must be in [0, 3600] s, got {t}")),
+    }
     let scene = Arc::new(Scene::builtin(&opts).context("building the built-in scene")?);
     tracing::info!("scene: {} render strands, {} guides, {} lattice nodes, built in {:.2} s", scene.render.strands(), scene.guides.len(), scene.lattice.node_count(), t0.elapsed().as_secs_f64());
     let haptic_priority = (args.haptic_priority != 0).then_some(args.haptic_priority);
@@ -280,6 +291,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         session: Mutex::new(Some(session)),
         access,
         last_save: Mutex::new(None),
+        loading: Mutex::new(()),
         viewer_timeout,
         swap: Mutex::new(None),
         udp,
@@ -648,10 +660,18 @@ fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
             }
             let f = hairstyle::formats::Format::from_path(Path::new(&format!("x.{}", protocol::FORMATS[format]))).expect("known extension");
             let file_error = |message| Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message }));
+            // One LOAD at a time (control can move between two viewers' LOADs): a second is refused.
+            let Ok(_loading) = app.loading.try_lock() else {
+                return file_error("another hairstyle is being loaded; send the LOAD again when its SCENE has arrived".into());
+            };
+            let start = Instant::now();
             match hairstyle::fit::read_and_fit(f, &bytes, &opts, &app.opts.load) {
                 Ok((c, report)) => {
+                    if let Err(message) = app.opts.load.check_time(start, "the fit") {
+                        return file_error(message);
+                    }
                     tracing::info!("loaded hairstyle fitted: scale {:.5} m per unit, up {} front {} ({}), {:.1} % of the strands rooted on the scalp (roots median {:.2} mm, p95 {:.2} mm from it)", report.transform.scale, report.up.name(), report.front.name(), report.orientation_source.name(), 100.0 * report.rooted, 1e3 * report.rooted_distance.median, 1e3 * report.rooted_distance.p95);
-                    match load(app, &c) {
+                    match load(app, &c, start) {
                         Ok(()) => {
                             let msg = protocol::encode_fit(&report);
                             let c = app.control.lock().unwrap();
@@ -674,12 +694,13 @@ fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
 /// carrying them ([`Scene::from_curves`]), a new session on it, the new SCENE sent to every viewer, then
 /// the frame thread switched to the new session's snapshots. The old session stops. Refused while
 /// recording (a record is of one scene).
-fn load(app: &App, curves: &hairstyle::HairCurves) -> Result<(), String> {
+fn load(app: &App, curves: &hairstyle::HairCurves, t0: Instant) -> Result<(), String> {
     if app.params.record {
         return Err("cannot load a hairstyle while recording (--record): a record replays one scene".into());
     }
-    let t0 = Instant::now();
     let scene = Arc::new(Scene::from_curves(curves, &app.opts).map_err(|e| format!("cannot use the loaded hairstyle: {e}"))?);
+    // Over the budget the new scene is dropped before anything live changes.
+    app.opts.load.check_time(t0, "building the scene")?;
     let (session, io) = Session::start_with_device(scene.clone(), app.params, app.session_device()?).map_err(|e| e.to_string())?;
     let SessionIo { device, commands, lattice, haptic } = io;
     let old = app.session.lock().unwrap().replace(session);

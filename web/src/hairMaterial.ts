@@ -1,6 +1,7 @@
 // Hair strands: the geometry (rest positions, guide binding, clump centres), the lit material (Marschner
-// lobes, melanin colour, dual scattering with deep opacity map shadows, wet look, alpha-to-coverage from the
-// strand's width) and the two deep-opacity-map materials, all deforming the strands with the same shader code
+// lobes, melanin colour, dual scattering with deep opacity map shadows, wet look; one-pixel lines carrying the
+// strand's sub-pixel coverage from its width, blended in any order by hairCompositor.ts) and the two
+// deep-opacity-map materials, all deforming the strands with the same shader code
 // (shaders/hairDeform.glsl.ts): FFD by the lattice and the local strands' displacement on the GPU.
 import * as THREE from 'three';
 import type { SceneMsg } from './protocol';
@@ -9,6 +10,8 @@ import { marschnerGLSL } from './shaders/marschner.glsl';
 import { dualScatteringGLSL } from './shaders/dualScattering.glsl';
 import { domLookupGLSL } from './shaders/deepOpacity.glsl';
 import { displayGLSL } from './shaders/display.glsl';
+import { strandCoverageGLSL } from './shaders/strandCoverage.glsl';
+import { oitOutputGLSL } from './shaders/hairOit.glsl';
 import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS, sigmaFromMelanin, type Melanin } from './hairColor';
 import { meanFibreWidth } from './fibre';
 import type { DeepOpacityMaps } from './deepOpacityMaps';
@@ -32,12 +35,15 @@ export interface HairLookParams {
   /** Dual scattering densities d_f and d_b (Zinke et al. 2008). Default 0.7 each. */
   densityForward: number;
   densityBack: number;
+  /** Smallest coverage of a pixel a strand's fragment carries, [0, 1] (shaders/strandCoverage.glsl.ts): keeps
+   * a lone strand faintly visible however far the camera. Default 0.01. */
+  minCoverage: number;
 }
 
 export const DEFAULT_HAIR_LOOK: HairLookParams = {
   cuticleTilt: 2.5 * Math.PI / 180, roughness: 7 * Math.PI / 180, fibreIndex: 1.55,
   waterRoughness: 1.5 * Math.PI / 180, wetAbsorption: 0.6, clumpStrength: 0.8, hairsOnHead: 100000,
-  densityForward: 0.7, densityBack: 0.7,
+  densityForward: 0.7, densityBack: 0.7, minCoverage: 0.01,
 };
 
 // The lit pass shades per vertex (32 or so per strand; a strand is a pixel wide, so its shading varies
@@ -48,6 +54,7 @@ ${marschnerGLSL}
 ${dualScatteringGLSL}
 ${domLookupGLSL}
 ${displayGLSL}
+${strandCoverageGLSL}
 uniform vec3 lightDirection;  // unit, towards the key light
 uniform vec3 lightColor;      // key light irradiance (linear RGB)
 uniform vec3 skyColor;        // ambient irradiance from above
@@ -56,11 +63,15 @@ uniform vec3 cameraPos;
 uniform int debugView;        // 0 shaded; 1 direct transmittance exp(-n) from the deep opacity maps; 2 highlight only
 varying vec3 vColour;
 varying float vCut;
+varying float vCoverage;      // fraction of the pixel the strand covers
+varying float vDepth;         // view distance, m
 void main() {
   HairVertex h = deformHair();
   vCut = h.u - h.keep - 1e-4;
   gl_Position = projectionMatrix * modelViewMatrix * vec4(h.position, 1.0);
+  vDepth = gl_Position.w;
   vec3 T = h.tangent;
+  vCoverage = strandCoverage(h.position, gl_Position, T);
   vec3 L = normalize(lightDirection);
   vec3 V = normalize(cameraPos - h.position);
   HairAngles a = hairAngles(T, L, V);
@@ -89,11 +100,14 @@ void main() {
 
 const litFragment = /* glsl */ `
 precision highp float;
+${oitOutputGLSL}
 varying vec3 vColour;
 varying float vCut;
+varying float vCoverage;
+varying float vDepth;
 void main() {
   if (vCut > 0.0) discard; // cut off by the scissors
-  gl_FragColor = vec4(vColour, 1.0);
+  writeOit(vColour, vCoverage, vDepth);
 }
 `;
 
@@ -114,9 +128,10 @@ export class HairMaterial {
   /** Mean width of one fibre of the current hair type, m (fibre.ts). */
   fibreWidth = 0;
 
-  constructor(scene: SceneMsg, dom: DeepOpacityMaps, lighting: Record<string, THREE.IUniform>, params: Partial<HairLookParams> = {}) {
+  constructor(scene: SceneMsg, dom: DeepOpacityMaps, lighting: Record<string, THREE.IUniform>, oit: Record<string, THREE.IUniform>, params: Partial<HairLookParams> = {}) {
     this.params = { ...DEFAULT_HAIR_LOOK, ...params };
     const p = this.params;
+    if (!(p.minCoverage >= 0 && p.minCoverage <= 1)) throw new Error(`minCoverage must be in [0, 1], got ${p.minCoverage}`);
     const [nx, ny, nz] = scene.latticeDims;
     this.samples = Math.max(2, scene.samples);
     this.sections = { diameter: scene.hairTypeDiameter, ellipticity: scene.hairTypeEllipticity };
@@ -143,12 +158,19 @@ export class HairMaterial {
       ...pushOutUniforms(scene),
     };
     this.material = new THREE.ShaderMaterial({
+      glslVersion: THREE.GLSL3,
       vertexShader: litVertex,
       fragmentShader: litFragment,
+      // Order-independent: every fragment adds (hairCompositor.ts); the opaque depth hides strands behind the body.
+      depthWrite: false, blending: THREE.CustomBlending, blendEquation: THREE.AddEquation,
+      blendSrc: THREE.OneFactor, blendDst: THREE.OneFactor, blendSrcAlpha: THREE.OneFactor, blendDstAlpha: THREE.OneFactor,
       uniforms: {
         ...deform,
         ...dom.uniforms,
+        ...oit,
         strandWidth: { value: 0 },
+        viewport: { value: new THREE.Vector2(1, 1) },
+        minCoverage: { value: p.minCoverage },
         sigmaA: { value: new THREE.Vector3() },
         cuticleTilt: { value: p.cuticleTilt },
         roughness: { value: p.roughness },

@@ -1,7 +1,7 @@
 // The Coiffure viewer: connects to the server's WebSocket, draws the scene, drives the tool with the mouse.
 import * as THREE from 'three';
 import * as P from './protocol';
-import { View } from './scene';
+import { CAMERA_VIEWS, DEFAULT_VIEW, View } from './scene';
 import { ForcePlot } from './plot';
 import { MouseDevice, TOOL_NAMES, toolModel, toolQuaternion } from './tools';
 import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS } from './hairColor';
@@ -49,6 +49,9 @@ interface Status {
   setHead: (yaw: number, pitch: number, position?: [number, number, number]) => void;
   /** Largest lattice-node displacement relative to the head since the scene was loaded, now (m). */
   latticeMotion: () => number;
+  /** The camera view (CAMERA_VIEWS in scene.ts; the page's `?view=` sets it at start). */
+  view: string;
+  setView: (name: string) => void;
   send: (b: ArrayBuffer) => void;
 }
 
@@ -71,6 +74,8 @@ const status: Status = {
   toolPosition: [0, 0, 0],
   headPosition: [0, 0, 0], headQuaternion: [0, 0, 0, 1], headMode: false,
   latticeMotion: () => latticeMotion(),
+  view: DEFAULT_VIEW,
+  setView: (name) => setView(name),
   setHead: (yaw, pitch, position = [0, 0, 0]) => {
     const q = new THREE.Quaternion().setFromAxisAngle(new THREE.Vector3(0, 0, 1), yaw)
       .multiply(new THREE.Quaternion().setFromAxisAngle(new THREE.Vector3(1, 0, 0), pitch));
@@ -272,6 +277,23 @@ function setTool(t: number, send: boolean): void {
   if (send) status.send(P.encodeSelectTool(t));
 }
 
+// Camera view: the toolbar's menu and the page's ?view= (e.g. ?view=back for the hanging hair).
+const viewEl = document.getElementById('view-select') as HTMLSelectElement | null;
+function setView(name: string): void {
+  view.setView(name); // throws on an unknown name, naming the known ones
+  status.view = name;
+  if (viewEl) viewEl.value = name;
+}
+if (viewEl) {
+  viewEl.innerHTML = Object.keys(CAMERA_VIEWS).map((n) => `<option>${n}</option>`).join('');
+  viewEl.value = DEFAULT_VIEW;
+  viewEl.addEventListener('change', () => setView(viewEl.value));
+}
+const viewParam = new URLSearchParams(window.location.search).get('view');
+if (viewParam !== null) {
+  try { setView(viewParam); } catch (e) { statusEl.textContent = (e as Error).message; }
+}
+
 // Toolbar.
 document.querySelectorAll<HTMLButtonElement>('#tools button').forEach((b) => b.addEventListener('click', () => setTool(Number(b.dataset.tool), true)));
 const presetEl = document.getElementById('preset') as HTMLSelectElement;
@@ -444,6 +466,46 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     let bin = '';
     for (let i = 0; i < px.length; i += 8192) bin += String.fromCharCode(...px.subarray(i, i + 8192));
     return { width: w, height: h, pixels: btoa(bin), png, ms };
+  },
+  /** The hair's ink (sum over pixels of every strand fragment's coverage, in pixels; hairCompositor.ink) for
+   * each of `views` (camera and target in world m, `hairType`: the strands' width from that SCENE hair type),
+   * all rendered from the same hair state, the person and the tools hidden (so no strand is behind the body).
+   * The depth weight is set to 1 and everything is restored afterwards. */
+  hairInk(views: { camera: [number, number, number]; target: [number, number, number]; hairType?: number }[]) {
+    const hair = view.hair!;
+    const u = hair.material.uniforms;
+    const falloff = u.oitDepthFalloff.value;
+    const oldCam = view.camera.position.clone(), oldTarget = view.controls.target.clone();
+    const oldType = Number(presetEl.value) || 0;
+    const hidden = [view.person?.group, toolGroup, arrow, ghost, view.chains].filter((o) => o) as THREE.Object3D[];
+    const shown = hidden.map((o) => o.visible);
+    hidden.forEach((o) => { o.visible = false; });
+    u.oitDepthFalloff.value = 1e9;
+    const ink = views.map((v) => {
+      view.camera.position.set(...v.camera);
+      view.controls.target.set(...v.target);
+      view.setHairType(v.hairType ?? oldType);
+      view.render();
+      return { ink: view.compositor.ink(view.renderer), strandWidth: u.strandWidth.value as number };
+    });
+    u.oitDepthFalloff.value = falloff;
+    hidden.forEach((o, i) => { o.visible = shown[i]; });
+    view.setHairType(oldType);
+    view.camera.position.copy(oldCam);
+    view.controls.target.copy(oldTarget);
+    return ink;
+  },
+  /** The strands' rest positions (head frame, m; base64 of a Float32Array), counts, the drawing buffer size
+   * (px) and the camera's vertical field of view (deg), for computing the expected ink independently. */
+  hairRest() {
+    const g = view.hairMesh!.geometry;
+    const rest = g.getAttribute('rest').array as Float32Array;
+    const b = new Uint8Array(rest.buffer, rest.byteOffset, rest.byteLength);
+    let bin = '';
+    for (let i = 0; i < b.length; i += 8192) bin += String.fromCharCode(...b.subarray(i, i + 8192));
+    const size = view.renderer.getDrawingBufferSize(new THREE.Vector2());
+    return { rest: btoa(bin), strands: status.strands, verticesPerStrand: nv, width: size.x, height: size.y, fov: view.camera.fov,
+      minCoverage: view.hair!.params.minCoverage };
   },
   view,
   personInfo: () => view.person && { maxOutset: view.person.info.maxOutset, maxProjectionError: view.person.info.maxProjectionError },

@@ -7,11 +7,25 @@ import { HairMaterial, fillShadowIndex, hairGeometry, setKept, shadowGeometry } 
 import { DeepOpacityMaps } from './deepOpacityMaps';
 import { Person } from './person';
 import { GpuTimer } from './gpuTimer';
+import { HairCompositor } from './hairCompositor';
 import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS, sigmaFromMelanin, type Melanin } from './hairColor';
 
-/** Default direction towards the key light (head frame: from behind, right and a little above, so that the
- * default view shows the R highlight band). */
-export const DEFAULT_LIGHT = new THREE.Vector3(0.7, -0.55, 0.3).normalize();
+/** Camera views (world, m; the head's centre is the origin, x to the person's left, y forward, z up), each
+ * with its key light (a direction towards it, any length). */
+export const CAMERA_VIEWS = {
+  /** The default: three-quarter front, a little above the eyes: the face and the hairstyle; the key light in
+   * front, right of the camera and above (no hard nose shadow), the R highlight band on the crown. */
+  portrait: { position: [0.43, 0.6, 0.2], target: [0, 0, 0.02], light: [0.45, 0.8, 0.35] },
+  /** From behind and a little above, where the hair hangs (the comb tests' view); the light from behind,
+   * right and above, so the hanging hair shows its R highlight band. */
+  back: { position: [0.3, -0.9, 0.22], target: [0, 0, -0.05], light: [0.7, -0.55, 0.3] },
+} as const satisfies Record<string, { position: readonly [number, number, number]; target: readonly [number, number, number]; light: readonly [number, number, number] }>;
+export type CameraView = keyof typeof CAMERA_VIEWS;
+export const DEFAULT_VIEW: CameraView = 'portrait';
+/** Default direction towards the key light (unit): the default view's. */
+export const DEFAULT_LIGHT = new THREE.Vector3().fromArray(CAMERA_VIEWS[DEFAULT_VIEW].light).normalize();
+
+const UNIT_SCALE = new THREE.Vector3(1, 1, 1);
 
 export class View {
   readonly renderer: THREE.WebGLRenderer;
@@ -19,7 +33,16 @@ export class View {
   readonly camera: THREE.PerspectiveCamera;
   readonly controls: OrbitControls;
   hair: HairMaterial | null = null;
+  /** The strands (one draw call, one-pixel lines with sub-pixel coverage), drawn by `compositor` over the
+   * opaque `scene`. */
   hairMesh: THREE.LineSegments | null = null;
+  readonly hairScene = new THREE.Scene();
+  readonly compositor: HairCompositor;
+  /** Holds every strand at rest with room to move (head frame, m): the front of the hair for the compositing's
+   * depth weight. */
+  private readonly hairRestBounds = new THREE.Sphere(new THREE.Vector3(), 1);
+  private readonly hairBounds = new THREE.Sphere(new THREE.Vector3(), 1);
+  private readonly headMatrix = new THREE.Matrix4();
   person: Person | null = null;
   readonly dom = new DeepOpacityMaps();
   readonly gpuTimer: GpuTimer;
@@ -45,12 +68,10 @@ export class View {
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
     this.renderer.setClearColor(0x1d1f24);
     this.gpuTimer = new GpuTimer(this.renderer.getContext() as WebGL2RenderingContext);
+    this.compositor = new HairCompositor(this.renderer);
     this.camera = new THREE.PerspectiveCamera(35, 1, 0.01, 10);
     this.camera.up.set(0, 0, 1); // z up, as in the simulation
-    // Default view: from behind and a little above, where the hair hangs.
-    this.camera.position.set(0.3, -0.9, 0.22);
     this.controls = new OrbitControls(this.camera, canvas);
-    this.controls.target.set(0, 0, -0.05);
     // Left button is the tool's; right button orbits; wheel zooms.
     this.controls.mouseButtons = { LEFT: null, MIDDLE: THREE.MOUSE.DOLLY, RIGHT: THREE.MOUSE.ROTATE };
     this.controls.update();
@@ -59,6 +80,7 @@ export class View {
     this.sun = new THREE.DirectionalLight(0xffffff, 1.6);
     this.sun.position.copy(DEFAULT_LIGHT);
     this.scene.add(this.sun);
+    this.setView(DEFAULT_VIEW);
     this.resize();
     window.addEventListener('resize', () => this.resize());
     const cg = new THREE.BufferGeometry();
@@ -67,6 +89,17 @@ export class View {
     this.chains.frustumCulled = false;
     cg.setDrawRange(0, 0);
     this.scene.add(this.chains);
+  }
+
+  /** Puts the camera at one of CAMERA_VIEWS and the key light where that view has it (an unknown name is an
+   * error naming the known ones). */
+  setView(name: string): void {
+    if (!Object.hasOwn(CAMERA_VIEWS, name)) throw new Error(`unknown view "${name}" (known: ${Object.keys(CAMERA_VIEWS).join(', ')})`);
+    const v = CAMERA_VIEWS[name as CameraView];
+    this.camera.position.fromArray(v.position);
+    this.controls.target.fromArray(v.target);
+    this.controls.update();
+    this.setLight(new THREE.Vector3().fromArray(v.light));
   }
 
   /** Shortens the strands to their kept points (STRANDS message); returns the segments drawn. */
@@ -133,7 +166,7 @@ export class View {
 
   /** Builds the person and the hair from the SCENE message (replacing earlier ones). */
   load(msg: SceneMsg): void {
-    if (this.hairMesh) { this.scene.remove(this.hairMesh); this.hairMesh.geometry.dispose(); }
+    if (this.hairMesh) { this.hairScene.remove(this.hairMesh); this.hairMesh.geometry.dispose(); }
     this.shadowHair?.dispose(); // shares the hair's attributes (disposed with them just above)
     this.hair?.dispose();
     if (this.person) { this.scene.remove(this.person.group); this.person.dispose(); }
@@ -143,18 +176,19 @@ export class View {
     const box = new THREE.Box3().setFromArray(msg.renderPositions).union(new THREE.Box3().setFromArray(msg.headPositions));
     const sphere = box.getBoundingSphere(new THREE.Sphere());
     this.dom.fit(sphere.center, sphere.radius + 0.05);
+    this.hairRestBounds.set(sphere.center.clone(), sphere.radius + 0.05);
     this.person = new Person(msg, this.dom, this.lighting);
     this.person.setBrows(sigmaFromMelanin(this.colour));
     this.scene.add(this.person.group);
     this.dom.depthScene.add(this.person.depthBody);
     this.dom.opacityScene.add(this.person.opacityBody);
-    this.hair = new HairMaterial(msg, this.dom, this.lighting);
+    this.hair = new HairMaterial(msg, this.dom, this.lighting, this.compositor.uniforms);
     this.hair.setColour(this.colour);
     const g = hairGeometry(msg);
     this.hairMesh = new THREE.LineSegments(g, this.hair.material);
     this.hairMesh.frustumCulled = false;
     this.verticesPerStrand = msg.verticesPerStrand;
-    this.scene.add(this.hairMesh);
+    this.hairScene.add(this.hairMesh);
     const stride = Math.max(1, Math.ceil(msg.strands / this.dom.params.maxStrands));
     this.shadowHair = shadowGeometry(g, stride, msg.strands, msg.verticesPerStrand);
     fillShadowIndex(this.shadowHair, msg.verticesPerStrand, null, msg.strands);
@@ -182,6 +216,11 @@ export class View {
       this.dom.update(this.renderer, this.lighting.lightDirection.value);
     }
     this.renderer.render(this.scene, this.camera);
+    if (this.hair && this.hairMesh) {
+      this.renderer.getDrawingBufferSize(this.hair.material.uniforms.viewport.value as THREE.Vector2);
+      this.hairBounds.copy(this.hairRestBounds).applyMatrix4(this.headMatrix.compose(this.headPosition, this.headQuaternion, UNIT_SCALE));
+      this.compositor.render(this.renderer, this.scene, this.hairScene, this.camera, this.hairBounds);
+    }
     this.gpuTimer.end();
   }
 }

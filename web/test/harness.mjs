@@ -56,9 +56,11 @@ export async function launchBrowser() {
   });
 }
 
-/** Opens the viewer and waits until the scene is loaded and a few frames have been drawn. */
-export async function openViewer(browser, url) {
+/** Opens the viewer and waits until the scene is loaded and a few frames have been drawn. `view` (optional):
+ * the camera view (`?view=`, CAMERA_VIEWS in web/src/scene.ts; the default is the three-quarter portrait). */
+export async function openViewer(browser, url, { view } = {}) {
   const page = await browser.newPage({ viewport: { width: 1024, height: 720 } });
+  if (view) { const u = new URL(url); u.searchParams.set('view', view); url = u.href; }
   // Software rendering is slow (seconds per frame for the default scene): generous timeouts.
   page.setDefaultTimeout(180_000);
   const logs = [];

@@ -8,7 +8,7 @@ import { join } from 'node:path';
 import { artifacts, launchBrowser, startServer, stopServer } from './harness.mjs';
 
 const SIZE = 200;
-const LIGHTS = { back: [0.7, -0.55, 0.3], side: [1.0, 0.15, 0.35] }; // back: the viewer's default
+const LIGHTS = { back: [0.7, -0.55, 0.3], side: [1.0, 0.15, 0.35] }; // back: from behind, right and above (the viewer's default before the portrait view)
 const COLOURS = ['blond', 'brown', 'black', 'red'];
 
 /** Luminance (0..255) of RGBA pixel i. */
@@ -179,6 +179,79 @@ describe('the look (3k render strands, small canvas)', () => {
       assert.equal(s.gpu, null, 'no timer query: no GPU time');
       assert.match(s.perf, /GPU n\/a/);
     }
+  });
+
+  test('thin strands: the drawn ink is width x projected length, with the hair type and the camera distance', async () => {
+    // Every strand fragment carries the fraction of its pixel the strand covers (shaders/strandCoverage.glsl.ts),
+    // so the hair's ink (the sum of all fragments' coverage, pixels) must be, strand segment by segment, its
+    // width times its projected length: sum over segments of (w f / z) L_px, with f = (H / 2) / tan(fov / 2) the
+    // focal length in pixels, z the segment's view depth and L_px its length on screen. Computed here from the
+    // strands' rest positions (the GPU draws them deformed by the lattice at rest and pushed out of the body,
+    // hence a 3 % tolerance on the absolute ink; measured 0.05 % and 0.07 %), and as ratios (same hair state).
+    const r = await page.evaluate(() => window.coiffureDebug.hairRest());
+    const b = Buffer.from(r.rest, 'base64');
+    const pos = new Float32Array(b.buffer, b.byteOffset, b.byteLength / 4);
+    const nv = r.verticesPerStrand;
+    const f = (r.height / 2) / Math.tan((r.fov / 2) * Math.PI / 180);
+    const target = [0, 0, -0.05];
+    const dir = [0.3, -0.9, 0.27].map((x, _, a) => x / Math.hypot(...a)); // the back view's direction
+    const at = (d) => target.map((t, i) => t + d * dir[i]);
+    /** Expected ink for a camera at distance d, and the largest and smallest coverage of a fragment. */
+    const expected = (d, width) => {
+      const eye = at(d);
+      const sub = (a, c) => a.map((x, i) => x - c[i]);
+      const dot = (a, c) => a.reduce((s, x, i) => s + x * c[i], 0);
+      const cross = (a, c) => [a[1] * c[2] - a[2] * c[1], a[2] * c[0] - a[0] * c[2], a[0] * c[1] - a[1] * c[0]];
+      const unit = (a) => a.map((x) => x / Math.hypot(...a));
+      const fw = unit(sub(target, eye)), rt = unit(cross(fw, [0, 0, 1])), up = cross(rt, fw);
+      const project = (k) => {
+        const p = [pos[3 * k], pos[3 * k + 1], pos[3 * k + 2]];
+        const q = sub(p, eye), z = dot(q, fw);
+        return [f * dot(q, rt) / z, f * dot(q, up) / z, z];
+      };
+      let ink = 0, maxCov = 0, minCov = Infinity;
+      for (let s = 0; s < r.strands; s++) {
+        let a = project(s * nv);
+        for (let i = 1; i < nv; i++) {
+          const c = project(s * nv + i);
+          const dx = c[0] - a[0], dy = c[1] - a[1], len = Math.hypot(dx, dy);
+          const W = width * f / (0.5 * (a[2] + c[2]));
+          ink += W * len;
+          if (len > 0) {
+            const cov = W * len / Math.max(Math.abs(dx), Math.abs(dy));
+            maxCov = Math.max(maxCov, cov); minCov = Math.min(minCov, cov);
+          }
+          a = c;
+        }
+      }
+      return { ink, maxCov, minCov };
+    };
+    const types = await page.evaluate(() => window.coiffure.hairTypes);
+    const widths = types.map((t) => meanWidth(t.diameter, t.ellipticity));
+    const near = 1.6, far = 3.2;
+    const views = [{ camera: at(near), target }, { camera: at(far), target }, ...types.map((_, i) => ({ camera: at(far), target, hairType: i }))];
+    const got = await page.evaluate((v) => window.coiffureDebug.hairInk(v), views);
+    const w0 = got[0].strandWidth;
+    const eNear = expected(near, w0), eFar = expected(far, w0);
+    console.log('ink', { near: got[0].ink, expectedNear: eNear, far: got[1].ink, expectedFar: eFar, types: got.slice(2).map((g, i) => ({ type: types[i].name, ink: g.ink, width: g.strandWidth })) });
+    // The comparison is meaningful only where no fragment's coverage is clamped (to 1 or to minCoverage).
+    assert.ok(eNear.maxCov < 1 && eFar.minCov > r.minCoverage, `coverage ${eFar.minCov} to ${eNear.maxCov}`);
+    // Absolute: the ink is the strands' width times their projected length (rest geometry): 3 %.
+    for (const [g, e, d] of [[got[0], eNear, near], [got[1], eFar, far]]) {
+      assert.ok(Math.abs(g.ink / e.ink - 1) < 0.03, `${d} m: ink ${g.ink} px, expected ${e.ink} px`);
+    }
+    // Distance: the ink falls as 1 / z^2 (width and length each as 1 / z; about 4x for twice the distance,
+    // against 2x for lines of constant width): the measured ratio is the expected one within 1 %.
+    const ratio = got[0].ink / got[1].ink, want = eNear.ink / eFar.ink;
+    assert.ok(want > 3.6 && want < 4.4, `expected ratio ${want}`);
+    assert.ok(Math.abs(ratio / want - 1) < 0.01, `ink ratio near / far ${ratio}, expected ${want}`);
+    // Hair type: same strands, ink proportional to the fibre's mean width (0.5 %).
+    const ref = got[2];
+    types.forEach((t, i) => {
+      const g = got[2 + i];
+      assert.ok(Math.abs(g.strandWidth / ref.strandWidth - widths[i] / widths[0]) < 1e-5, `${t.name}: strand width ${g.strandWidth}`);
+      assert.ok(Math.abs((g.ink / ref.ink) / (widths[i] / widths[0]) - 1) < 0.005, `${t.name}: ink ${g.ink} vs ${ref.ink} (${types[0].name})`);
+    });
   });
 
   // Last: it changes the server's hair type.

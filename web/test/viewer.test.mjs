@@ -47,7 +47,7 @@ describe('a comb stroke through the hair (issue 12; 5k render strands standing f
     rmSync(record, { force: true });
     server = await startServer([...scale, '--record', record]);
     browser = await launchBrowser();
-    ({ page } = await openViewer(browser, server.url));
+    ({ page } = await openViewer(browser, server.url, { view: 'back' }));
   });
   after(async () => { await browser?.close(); if (server) console.log(await stopServer(server)); });
 
@@ -94,7 +94,7 @@ describe('interaction (5k render strands for speed in software rendering)', () =
   before(async () => {
     server = await startServer(['--render-strands', '5000']);
     browser = await launchBrowser();
-    ({ page } = await openViewer(browser, server.url));
+    ({ page } = await openViewer(browser, server.url, { view: 'back' }));
   });
   after(async () => { await browser?.close(); if (server) console.log(await stopServer(server)); });
 

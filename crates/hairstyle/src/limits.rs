@@ -19,11 +19,15 @@ pub struct LoadLimits {
     pub box_min: [f64; 3],
     /// Upper corner of that box, m. Default (0.55, 0.55, 0.45).
     pub box_max: [f64; 3],
+    /// Time budget of one LOAD (read, fit, build the scene), wall-clock s, checked after each stage; a LOAD
+    /// over it is refused and the live hairstyle stays. Default 30 s (the largest file the other bounds allow,
+    /// 200,000 strands in 60 MiB, loads in about 3 s on a 2-core machine).
+    pub max_seconds: f64,
 }
 
 impl Default for LoadLimits {
     fn default() -> Self {
-        Self { max_file_bytes: 64 << 20, max_strands: 200_000, max_points: 10_000_000, box_min: [-0.55, -0.55, -0.85], box_max: [0.55, 0.55, 0.45] }
+        Self { max_file_bytes: 64 << 20, max_strands: 200_000, max_points: 10_000_000, box_min: [-0.55, -0.55, -0.85], box_max: [0.55, 0.55, 0.45], max_seconds: 30.0 }
     }
 }
 
@@ -48,6 +52,16 @@ impl LoadLimits {
         }
         if let Some(i) = curves.strands.iter().position(|s| s.is_empty()) {
             return Err(format!("strand {i} has no point"));
+        }
+        Ok(())
+    }
+
+    /// The LOAD started at `start` is still within [`LoadLimits::max_seconds`] after `stage`; the error names
+    /// the stage, the time taken and the budget.
+    pub fn check_time(&self, start: std::time::Instant, stage: &str) -> Result<(), String> {
+        let t = start.elapsed().as_secs_f64();
+        if !(t <= self.max_seconds) {
+            return Err(format!("the load took {t:.2} s up to {stage}, over its time budget of {} s", self.max_seconds));
         }
         Ok(())
     }

@@ -10,7 +10,8 @@
 //! - two watchers that read everything, one slow viewer (a message every 100 ms), and a viewer that connects,
 //!   reads a little and leaves, every 3 s.
 //! It prints one JSON object: server resident memory (after 10 % of the run, at the end, peak), frames received
-//! by the controller and late ones (more than 100 ms after the previous), the largest force and non-finite
+//! by the controller and late ones (more than 100 ms after the previous), the same for the two watchers (with the
+//! frame numbers they never got: dropped for them, latest wins), the largest force and non-finite
 //! ones, non-finite proxies, the runaway count, and the server's own summary line (haptic loop timing).
 
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
@@ -68,6 +69,8 @@ struct Seen {
     max_lag: f64,
     runaways: u32,
     errors: u64,
+    /// The controller's connection failed (when and why): the soak goes on without it.
+    controller_lost: Option<String>,
 }
 
 fn main() {
@@ -84,10 +87,22 @@ fn main() {
         .args(["serve", "--port", "0", "--render-strands", &strands.to_string(), "--duration", &format!("{}", seconds + 5.0), "--web"])
         .arg(&web)
         .stdout(Stdio::piped())
-        .stderr(Stdio::null())
+        .stderr(Stdio::piped())
         .spawn()
         .expect("start the server");
     let pid = child.id();
+    // The server's warnings (e.g. a viewer disconnected, and why) are kept and printed in the report.
+    let warnings = Arc::new(Mutex::new(Vec::<String>::new()));
+    let err_reader = {
+        let (err, warnings) = (BufReader::new(child.stderr.take().unwrap()), warnings.clone());
+        std::thread::spawn(move || {
+            for l in err.lines().map_while(Result::ok) {
+                if l.contains("WARN") || l.contains("ERROR") {
+                    warnings.lock().unwrap().push(l);
+                }
+            }
+        })
+    };
     let out = BufReader::new(child.stdout.take().unwrap());
     let lines = Arc::new(Mutex::new(Vec::<String>::new()));
     let (url_tx, url_rx) = std::sync::mpsc::channel();
@@ -190,26 +205,54 @@ fn main() {
                     Ok(Message::Binary(b)) if b[0] == 0x83 => seen.lock().unwrap().errors += 1,
                     Ok(_) => {}
                     Err(tungstenite::Error::Io(e)) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
-                    Err(e) => panic!("controller connection: {e}"),
+                    Err(e) => {
+                        seen.lock().unwrap().controller_lost = Some(format!("at {:.1} s: {e}", t0.elapsed().as_secs_f64()));
+                        break;
+                    }
                 }
             }
         })
     };
     // Watchers, a slow viewer and churn.
     let mut others = Vec::new();
+    // A watcher's view of the frames: (received, gaps over 100 ms, largest gap s, sequence numbers skipped).
+    let watched = Arc::new(Mutex::new(Vec::<(u64, u64, f64, u64)>::new()));
     for delay in [None, None, Some(Duration::from_millis(100))] {
-        let (stop, http) = (stop.clone(), http.clone());
+        let (stop, http, watched) = (stop.clone(), http.clone(), watched.clone());
         others.push(std::thread::spawn(move || {
+            // The watchers measure the server, not this process's own scheduling: real-time when allowed.
+            let _ = haptics::realtime::request_realtime(4);
             let mut ws = connect(&http);
+            let (mut n, mut late, mut largest, mut skipped, mut last) = (0u64, 0u64, 0f64, 0u64, None::<(Instant, u32)>);
+            let mut kept = true;
             while !stop.load(Ordering::Relaxed) {
-                if ws.read().is_err() {
-                    return false;
+                match ws.read() {
+                    Ok(Message::Binary(b)) if b[0] == 0x82 && delay.is_none() => {
+                        let (now, seq) = (Instant::now(), u32::from_le_bytes(b[2..6].try_into().unwrap()));
+                        if let Some((t, q)) = last {
+                            let gap = (now - t).as_secs_f64();
+                            largest = largest.max(gap);
+                            late += (gap > 0.1) as u64;
+                            // a new session (LOAD) restarts the count; otherwise missing numbers were dropped (latest wins)
+                            skipped += seq.saturating_sub(q + 1) as u64;
+                        }
+                        n += 1;
+                        last = Some((now, seq));
+                    }
+                    Ok(_) => {}
+                    Err(_) => {
+                        kept = false;
+                        break;
+                    }
                 }
                 if let Some(d) = delay {
                     std::thread::sleep(d);
                 }
             }
-            true
+            if delay.is_none() {
+                watched.lock().unwrap().push((n, late, largest, skipped));
+            }
+            kept
         }));
     }
     let churned = Arc::new(AtomicU64::new(0));
@@ -244,6 +287,7 @@ fn main() {
     churn.join().unwrap();
     let _ = child.wait();
     reader.join().unwrap();
+    err_reader.join().unwrap();
     let summary = lines.lock().unwrap().iter().find(|l| l.contains("haptic loop:")).cloned().unwrap_or_default();
     let s = seen.lock().unwrap();
     let json = serde_json::json!({
@@ -251,9 +295,12 @@ fn main() {
         "render_strands": strands,
         "rss_mb": { "at_10_percent": early as f64 / 1048576.0, "end": end as f64 / 1048576.0, "peak": peak as f64 / 1048576.0, "end_over_early": end as f64 / early.max(1) as f64 },
         "frames": { "received": s.frames, "per_s": s.frames as f64 / seconds, "late_over_100ms": s.late, "largest_gap_s": s.largest_gap },
+        "watcher_frames": watched.lock().unwrap().iter().map(|(n, late, largest, skipped)| serde_json::json!({ "received": n, "per_s": *n as f64 / seconds, "gaps_over_100ms": late, "largest_gap_s": largest, "skipped": skipped })).collect::<Vec<_>>(),
         "forces": { "max_n": s.max_force, "non_finite": s.nonfinite_force },
         "proxy": { "non_finite": s.nonfinite_proxy, "runaways": s.runaways, "max_lag_m": s.max_lag },
         "errors_received": s.errors,
+        "controller_lost": s.controller_lost,
+        "server_warnings": warnings.lock().unwrap().iter().rev().take(20).rev().cloned().collect::<Vec<_>>(),
         "viewers_still_connected_watcher_watcher_slow": slow_kept,
         "churn_connections": churned.load(Ordering::Relaxed),
         "server_summary": summary,

@@ -61,8 +61,9 @@ pub struct ServeArgs {
     /// Stop by itself after this many seconds (for benchmarks and scripts).
     #[arg(long)]
     pub duration: Option<f64>,
-    /// Real-time (SCHED_FIFO) priority of the 1 kHz haptic thread, 1..=99, or 0 for normal priority. Needs
-    /// root or CAP_SYS_NICE; without the right the loop runs at normal priority and a warning says so.
+    /// Real-time (SCHED_FIFO) priority of the 1 kHz haptic thread, 1..=99, or 0 for normal priority (the frame
+    /// thread then runs one below it, so that FRAMEs leave on time on a busy machine). Needs root or
+    /// CAP_SYS_NICE; without the right the loop runs at normal priority and a warning says so.
     #[arg(long, default_value_t = 10)]
     pub haptic_priority: i32,
     /// Haptic loop rate, Hz, in (0, 4000] (`SessionParams::haptic_rate_hz`).
@@ -97,6 +98,10 @@ pub struct ServeArgs {
     /// non-loopback address without one generates one and prints the URL with it.
     #[arg(long)]
     pub token: Option<String>,
+    /// Time budget of one LOAD (read, fit, build), s (`hairstyle::LoadLimits::max_seconds`, default 30): a LOAD
+    /// over it is answered by ERROR 5 and the live hairstyle stays.
+    #[arg(long)]
+    pub load_budget: Option<f64>,
 }
 
 
@@ -162,6 +167,8 @@ struct App {
     access: Access,
     /// When the last SAVE was served.
     last_save: Mutex<Option<Instant>>,
+    /// Held while a LOAD reads, fits and builds (one at a time: a second is refused, not queued).
+    loading: Mutex<()>,
     /// A viewer's time limit (`--viewer-timeout`).
     viewer_timeout: Duration,
 }
@@ -202,6 +209,10 @@ struct PumpStats {
     runaways: u64,
     encode_seconds: f64,
     bytes: u64,
+    /// Frames sent more than one frame period after their scheduled time (the frame thread was not run in time).
+    late: u64,
+    /// The largest delay of a frame behind its scheduled time, s.
+    max_late: f64,
 }
 
 /// Runs the server until Ctrl-C (or `--duration`).
@@ -226,7 +237,12 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         Some(t) => return Err(anyhow!("--viewer-timeout must be in (0, 3600] s, got {t}")),
     };
     let t0 = Instant::now();
-    let opts = SceneOptions { render_strands: args.render_strands, guides: args.guides, ..SceneOptions::default() };
+    let mut opts = SceneOptions { render_strands: args.render_strands, guides: args.guides, ..SceneOptions::default() };
+    match args.load_budget {
+        None => {}
+        Some(t) if t.is_finite() && t >= 0.0 && t <= 3600.0 => opts.load.max_seconds = t,
+        Some(t) => return Err(anyhow!("--load-budget must be in [0, 3600] s, got {t}")),
+    }
     let scene = Arc::new(Scene::builtin(&opts).context("building the built-in scene")?);
     tracing::info!("scene: {} render strands, {} guides, {} lattice nodes, built in {:.2} s", scene.render.strands(), scene.guides.len(), scene.lattice.node_count(), t0.elapsed().as_secs_f64());
     let haptic_priority = (args.haptic_priority != 0).then_some(args.haptic_priority);
@@ -280,6 +296,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         session: Mutex::new(Some(session)),
         access,
         last_save: Mutex::new(None),
+        loading: Mutex::new(()),
         viewer_timeout,
         swap: Mutex::new(None),
         udp,
@@ -288,7 +305,15 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
 
     // Frame pump thread.
     let (stop_p, app_p, fps) = (stop.clone(), app.clone(), args.fps);
+    let frame_priority = haptic_priority.map(|p| (p - 1).max(1));
     let pump = std::thread::Builder::new().name("coiffure-frames".into()).spawn(move || {
+        // Frames on time on a busy machine: the frame thread (about 45 us of work per frame) runs real-time
+        // just below the haptic loop, when the haptic loop does.
+        if let Some(p) = frame_priority {
+            if let Err(why) = haptics::realtime::request_realtime(p) {
+                tracing::warn!("the frame thread runs at normal priority: {why}");
+            }
+        }
         let (mut lattice, mut haptic) = (lattice, haptic);
         let mut st = PumpStats::default();
         let mut kept_sent = 0u64;
@@ -302,6 +327,11 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
             }
             let c0 = cpu_time();
             let w0 = Instant::now();
+            let behind = w0.saturating_duration_since(start + period * st.frames as u32).as_secs_f64();
+            st.max_late = st.max_late.max(behind);
+            if behind > period.as_secs_f64() {
+                st.late += 1;
+            }
             let (lat, hap) = (lattice.read(), haptic.read());
             let msg = protocol::encode_frame(st.frames as u32, lat, hap);
             // After a scissors cut or a reset: every viewer gets the strands' kept points (STRANDS) before the frame.
@@ -376,8 +406,8 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let report = session.stop();
     let f = st.frames.max(1) as f64;
     println!(
-        "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame); haptic loop: {} steps at {} Hz, step mean {:.1} us, p50 {:.0} us, p99 {:.0} us, p99.9 {:.0} us, max {:.0} us, {} misses, {} step panics, {} runaways, real-time priority: {}; global: {} steps, mean {:.2} ms",
-        st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, report.haptic.steps, args.haptic_rate, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p50, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, 1e6 * report.haptic.step_max, report.haptic.misses, report.haptic.panics, st.runaways, report.haptic.realtime, report.global_steps, 1e3 * report.global_step_mean
+        "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame; {} more than a period late, the latest {:.1} ms behind); haptic loop: {} steps at {} Hz, step mean {:.1} us, p50 {:.0} us, p99 {:.0} us, p99.9 {:.0} us, max {:.0} us, {} misses, {} step panics, {} runaways, real-time priority: {}; global: {} steps, mean {:.2} ms",
+        st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, st.late, 1e3 * st.max_late, report.haptic.steps, args.haptic_rate, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p50, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, 1e6 * report.haptic.step_max, report.haptic.misses, report.haptic.panics, st.runaways, report.haptic.realtime, report.global_steps, 1e3 * report.global_step_mean
     );
     if let Some((_, status)) = &app_end.udp {
         let c = status.counts();
@@ -648,10 +678,18 @@ fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
             }
             let f = hairstyle::formats::Format::from_path(Path::new(&format!("x.{}", protocol::FORMATS[format]))).expect("known extension");
             let file_error = |message| Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message }));
+            // One LOAD at a time (control can move between two viewers' LOADs): a second is refused.
+            let Ok(_loading) = app.loading.try_lock() else {
+                return file_error("another hairstyle is being loaded; send the LOAD again when its SCENE has arrived".into());
+            };
+            let start = Instant::now();
             match hairstyle::fit::read_and_fit(f, &bytes, &opts, &app.opts.load) {
                 Ok((c, report)) => {
+                    if let Err(message) = app.opts.load.check_time(start, "the fit") {
+                        return file_error(message);
+                    }
                     tracing::info!("loaded hairstyle fitted: scale {:.5} m per unit, up {} front {} ({}), {:.1} % of the strands rooted on the scalp (roots median {:.2} mm, p95 {:.2} mm from it)", report.transform.scale, report.up.name(), report.front.name(), report.orientation_source.name(), 100.0 * report.rooted, 1e3 * report.rooted_distance.median, 1e3 * report.rooted_distance.p95);
-                    match load(app, &c) {
+                    match load(app, &c, start) {
                         Ok(()) => {
                             let msg = protocol::encode_fit(&report);
                             let c = app.control.lock().unwrap();
@@ -674,12 +712,13 @@ fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
 /// carrying them ([`Scene::from_curves`]), a new session on it, the new SCENE sent to every viewer, then
 /// the frame thread switched to the new session's snapshots. The old session stops. Refused while
 /// recording (a record is of one scene).
-fn load(app: &App, curves: &hairstyle::HairCurves) -> Result<(), String> {
+fn load(app: &App, curves: &hairstyle::HairCurves, t0: Instant) -> Result<(), String> {
     if app.params.record {
         return Err("cannot load a hairstyle while recording (--record): a record replays one scene".into());
     }
-    let t0 = Instant::now();
     let scene = Arc::new(Scene::from_curves(curves, &app.opts).map_err(|e| format!("cannot use the loaded hairstyle: {e}"))?);
+    // Over the budget the new scene is dropped before anything live changes.
+    app.opts.load.check_time(t0, "building the scene")?;
     let (session, io) = Session::start_with_device(scene.clone(), app.params, app.session_device()?).map_err(|e| e.to_string())?;
     let SessionIo { device, commands, lattice, haptic } = io;
     let old = app.session.lock().unwrap().replace(session);

@@ -524,6 +524,9 @@ impl ConstraintRows {
 
     /// Adds `Y_c^T p` (the generalized response to the impulse `p` at constraint `c`'s point) to `out` (dofs).
     fn add_response(&self, c: usize, p: &Vector3<f64>, out: &mut [f64]) {
+        if *p == Vector3::zeros() {
+            return;
+        }
         let size = 3 * self.dofs;
         for (o, y) in out.iter_mut().zip(self.y[c * size..(c + 1) * size].chunks_exact(3)) {
             *o += y[0] * p.x + y[1] * p.y + y[2] * p.z;
@@ -534,8 +537,12 @@ impl ConstraintRows {
     fn velocity(&self, c: usize) -> Vector3<f64> {
         let n = self.len();
         let mut u = self.u_free[c];
-        for d in 0..n {
-            u += self.w[c * n + d] * self.impulses[d];
+        let zero = Vector3::zeros();
+        // A zero impulse (a separating contact) would add exact zeros.
+        for (w, p) in self.w[c * n..(c + 1) * n].iter().zip(&self.impulses) {
+            if *p != zero {
+                u += w * p;
+            }
         }
         u
     }

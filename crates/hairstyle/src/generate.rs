@@ -8,10 +8,15 @@
 //!   [`HairstyleParams::lift`] to lie along the scalp, wraps around the head at the lifted
 //!   radius until it points as steeply down as its plane allows, then goes straight. Its plane
 //!   holds the scalp normal and the combing direction [`HairstyleParams::flow`] projected onto
-//!   the scalp; the hanging part leans out by [`HairstyleParams::hang_tilt`] (more where needed
-//!   to clear the body). The model's rest coordinates are the **sag-free rest shape** of that groomed state
+//!   the scalp, **turned towards the vertical where needed for a stable groom** ([`crate::groom`]: a
+//!   strand hanging in a plane far from upright is an unstable equilibrium); the hanging part leans
+//!   out by [`HairstyleParams::hang_tilt`] (more where needed to clear the body). The model's rest
+//!   coordinates are the **sag-free rest shape** of that groomed state
 //!   ([`strand::statics::sag_free_rest`]): the groomed guide is in static equilibrium under
-//!   gravity (the stability flag is kept in [`Guide::stable`]).
+//!   gravity, and a stable one (Hessian positive definite, kept in [`Guide::stable`]). A guide no plane
+//!   makes stable (long or heavy hair) is relaxed to the nearest stable minimum of its sag-free
+//!   model ([`strand::statics::solve_equilibrium`]) if that lies outside the body; else it is kept
+//!   with `stable = false`.
 //! - **Render strands** (>= 100,000): polylines of a fixed vertex count rooted at random scalp
 //!   points (uniform in area), each bound to its `guides_per_render` nearest guides (by root
 //!   distance, weights ~ 1/(d + 1 mm)^2, summing to 1) with a per-vertex offset, so that vertex j
@@ -42,6 +47,7 @@
 //! [`Curl`] gives the numbers for the local layer's curly strands.
 
 use crate::formats::HairCurves;
+use crate::groom::{groom_directions, groomed_state, PLANE_TILTS};
 use crate::head::{Head, HeadError, HeadParams, ScalpPoint};
 use lattice::ffd::{Binding, FfdError, FfdLattice};
 use nalgebra::{Point3, Vector3};
@@ -49,11 +55,11 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use strand::kinematics::{frame_at, segment_frames};
-use strand::statics::sag_free_rest;
-use strand::{HairType, ModelKind, RootFrame, StrandError, StrandModel, StrandState};
+use strand::statics::{sag_free_rest, solve_equilibrium, StaticOptions};
+use strand::{HairType, ModelKind, StrandError, StrandModel, StrandState};
 use thiserror::Error;
 
-pub use crate::render::{nearest_guides, RenderStrands};
+pub use crate::render::{nearest_guides, nearest_guides_where, RenderStrands};
 use crate::render::lerp_samples;
 
 /// Largest natural curl radius of the curliness map (c = 0+), m (DESIGN.md section 7).
@@ -428,59 +434,6 @@ pub fn combing_direction(params: &HairstyleParams, p: &Vector3<f64>) -> Vector3<
     (back + w * (side - back)) * r
 }
 
-/// Groomed coordinates of a guide: bend only (planar curve), see the module docs.
-fn groomed_bends(
-    params: &HairstyleParams,
-    root: &ScalpPoint,
-    length: f64,
-    segments: usize,
-    tilt: f64,
-) -> (Vector3<f64>, Vec<f64>) {
-    let n = root.normal;
-    let proj = |v: Vector3<f64>| v - n * n.dot(&v);
-    let p = root.position.coords;
-    let away = combing_direction(params, &p);
-    let f = proj(away)
-        .try_normalize(1e-6 * p.norm())
-        .or_else(|| proj(-Vector3::y()).try_normalize(1e-6))
-        .unwrap_or_else(|| proj(Vector3::x()).normalize());
-    let m = n.cross(&f);
-    // steepest descent in the plane (n, f)
-    let down = -Vector3::z();
-    let ds = down - m * m.dot(&down);
-    // turning angle from the normal to the steepest descent, going round from the normal towards f
-    let psi_end = if ds.norm() > 1e-6 {
-        ds.dot(&f)
-            .atan2(ds.dot(&n))
-            .rem_euclid(std::f64::consts::TAU)
-    } else {
-        std::f64::consts::FRAC_PI_2
-    };
-    // hang slightly outwards (tilt) rather than straight down along the body
-    let psi_end = (psi_end - tilt).max(0.0);
-    let half_pi = std::f64::consts::FRAC_PI_2;
-    let k1 = half_pi / params.lift;
-    let r1 = params.lift / half_pi;
-    let a1 = psi_end.min(half_pi) / k1;
-    let rho = root.position.coords.norm() + r1 + params.clearance;
-    let a2 = (psi_end - half_pi).max(0.0) * rho;
-    // integral of the curvature from 0 to s
-    let turned = |s: f64| -> f64 {
-        if s <= a1 {
-            k1 * s
-        } else if s <= a1 + a2 {
-            k1 * a1 + (s - a1) / rho
-        } else {
-            k1 * a1 + a2 / rho
-        }
-    };
-    let l = length / segments as f64;
-    let bends = (0..segments)
-        .map(|i| (turned((i + 1) as f64 * l) - turned(i as f64 * l)) / l)
-        .collect();
-    (m, bends)
-}
-
 fn build_guide(
     params: &HairstyleParams,
     hair: &HairType,
@@ -501,29 +454,47 @@ fn build_guide(
         hair.material().map_err(err)?,
     )
     .map_err(err)?;
-    // the groomed shape with the smallest outward tilt of the hanging part that keeps the guide
-    // outside the body (sampled at 64 points, first-order distance >= clearance / 2)
-    let mut state = None;
-    for step in 0..=10 {
-        let tilt = params.hang_tilt + step as f64 * 5f64.to_radians();
-        let (major, bends) = groomed_bends(params, &root, length, params.guide_segments, tilt);
-        let frame = RootFrame::new(root.position.coords, root.normal, major).map_err(err)?;
-        let mut s = StrandState::at_rest(&model, frame);
-        for (i, b) in bends.iter().enumerate() {
-            s.q[2 * i] = 0.0;
-            s.q[2 * i + 1] = *b;
+    // The first groom whose sag-free rest is stable (crate::groom), in order: the combing plane; the
+    // same turning out of it to hang down after the wrap, then after ever fewer wrapped segments; planes
+    // nearer the vertical (PLANE_TILTS). Each with the smallest outward tilt of the hanging part that
+    // keeps the guide outside the body (crate::groom::groomed_state).
+    let mut best = None;
+    let f0 = groom_directions(params, &root, f64::INFINITY)[0];
+    let mut candidates = vec![(f0, None)];
+    for wrap in (1..=params.guide_segments).rev() {
+        candidates.push((f0, Some(wrap)));
+    }
+    for max_plane_tilt in PLANE_TILTS {
+        for f in groom_directions(params, &root, max_plane_tilt) {
+            if !candidates.iter().any(|(g, _)| (g - f).norm() < 1e-12) {
+                candidates.push((f, None));
+            }
         }
-        let clear = sample_strand(&model, &s, 64)
-            .iter()
-            .skip(1)
-            .all(|p| head.signed_distance(p) >= 0.5 * params.clearance);
-        state = Some(s);
-        if clear {
+    }
+    for (f, turned) in candidates {
+        let state = groomed_state(params, head, &model, &root, &f, turned).map_err(err)?;
+        let (sag_free, stable) = sag_free_rest(&model, &state, &[]).map_err(err)?;
+        best = Some((sag_free, state, stable));
+        if stable {
             break;
         }
     }
-    let state = state.expect("at least one try");
-    let (model, stable) = sag_free_rest(&model, &state, &[]).map_err(err)?;
+    let (model, mut state, mut stable) = best.expect("at least one plane");
+    if !stable {
+        // last resort: the nearest stable minimum of the sag-free model, from a slightly twisted start
+        let mut start = state.clone();
+        for i in 0..model.segments {
+            start.q[2 * i] += 1e-3 * if i % 2 == 0 { 1.0 } else { -1.0 };
+        }
+        if let Ok(eq) = solve_equilibrium(&model, &start, &[], &StaticOptions::default()) {
+            let s = StrandState { q: eq.q.clone(), ..state.clone() };
+            let clear = sample_strand(&model, &s, 64).iter().skip(1).all(|p| head.signed_distance(p) >= 0.0);
+            if eq.stable && clear {
+                state = s;
+                stable = true;
+            }
+        }
+    }
     Ok(Guide {
         model,
         state,
@@ -598,6 +569,7 @@ impl Hairstyle {
             .map(|g| g.samples(params.guide_samples))
             .collect();
         let guide_roots: Vec<Point3<f64>> = guides.iter().map(|g| g.root.position).collect();
+        let guide_combs: Vec<Vector3<f64>> = guides.iter().map(|g| combing_direction(params, &g.root.position.coords)).collect();
         let v = params.render_vertices;
         let per: Vec<(Vec<u32>, Vec<f32>, f32, Vec<[f32; 3]>, Vec<[f32; 3]>)> = roots
             .par_iter()
@@ -607,8 +579,10 @@ impl Hairstyle {
                 rng.set_stream(i as u64);
                 let span = 1.0 - params.length_jitter * rng.random::<f64>();
                 let phase = std::f64::consts::TAU * rng.random::<f64>();
-                let (idx, w) =
-                    nearest_guides(&guide_roots, &root.position, params.guides_per_render);
+                let comb = combing_direction(params, &root.position.coords);
+                let (idx, w) = nearest_guides_where(&guide_roots, &root.position, params.guides_per_render, &|g| {
+                    guide_combs[g].dot(&comb) > 0.0
+                });
                 let axis: Vec<Point3<f64>> = (0..v)
                     .map(|j| {
                         let u = span * j as f64 / (v - 1) as f64;

@@ -16,6 +16,7 @@ pub mod fit;
 pub mod formats;
 pub mod generate;
 pub mod global;
+pub mod groom;
 pub mod head;
 pub mod limits;
 pub mod render;

@@ -122,8 +122,21 @@ pub(crate) fn lerp_samples(s: &[Point3<f64>], u: f64) -> Point3<f64> {
 /// distance, m; the 1 mm keeps a strand on a guide's root finite) normalised to sum to 1. The one
 /// binding law of generated hairstyles and of loaded strands (`engine::scene::Scene::from_curves`).
 pub fn nearest_guides(roots: &[Point3<f64>], p: &Point3<f64>, k: usize) -> (Vec<u32>, Vec<f32>) {
+    nearest_guides_where(roots, p, k, &|_| true)
+}
+
+/// [`nearest_guides`] among the guides `g` for which `accept(g)` holds; among all if fewer than `k` do.
+/// Generated hairstyles accept the guides combed the same way as the strand (no blending across a
+/// parting, where guides on either side leave in opposite directions).
+pub fn nearest_guides_where(roots: &[Point3<f64>], p: &Point3<f64>, k: usize, accept: &dyn Fn(usize) -> bool) -> (Vec<u32>, Vec<f32>) {
+    if (0..roots.len()).filter(|&g| accept(g)).take(k).count() < k {
+        return nearest_guides_where(roots, p, k, &|_| true);
+    }
     let mut best: Vec<(f64, usize)> = Vec::with_capacity(k + 1);
     for (g, r) in roots.iter().enumerate() {
+        if !accept(g) {
+            continue;
+        }
         let d = (r - p).norm_squared();
         if best.len() < k || d < best[best.len() - 1].0 {
             let at = best.partition_point(|&(x, _)| x <= d);

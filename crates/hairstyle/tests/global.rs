@@ -66,7 +66,7 @@ fn min_render_distance(
     (raw, min(out))
 }
 
-/// Head shake: 2000 render strands on a 4 cm lattice (9 x 9 x 11 nodes) under gravity, with the
+/// Head shake: 2000 render strands on a 4 cm lattice (11 x 8 x 11 nodes) under gravity, with the
 /// body's metaballs as obstacles, dt = 10 ms.
 /// 1. Settle 2 s with the head still: equilibrium X0 (node speeds < 1 mm/s).
 /// 2. Shake: head translated sideways y = A sin(2 pi f t), A = 3 cm, f = 2 Hz, for 1 s; then hold
@@ -87,7 +87,7 @@ fn head_shake_moves_hair_with_inertia_and_it_settles_back() {
     let (h, carry) = shake_hairstyle();
     let hl = h.lattice(&carry, LatticeParams::default()).unwrap();
     let m = &hl.model;
-    assert_eq!((m.ffd.nx, m.ffd.ny, m.ffd.nz), (9, 9, 11));
+    assert_eq!((m.ffd.nx, m.ffd.ny, m.ffd.nz), (11, 8, 11));
     let mut out = Vec::new();
     let dt = 0.01;
     let still = Isometry3::identity();

@@ -34,7 +34,7 @@
 use crate::error::{Result, StrandError};
 use crate::integrator::{Integrator, Strand};
 use crate::kinematics::{frame_at, segment_frames};
-use nalgebra::{Matrix3, Matrix3xX, Vector3};
+use nalgebra::{Matrix3, Vector3};
 
 /// What a point constraint does.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -253,6 +253,15 @@ impl Strand {
     /// blocks and the unconstrained point velocities), for [`solve`]; the step stays prepared. Errors if no
     /// step was prepared, a constraint or `opts` is invalid, or the step matrix fails.
     pub fn constraint_rows(&mut self, constraints: &[PointConstraint], opts: &ConstraintOptions) -> Result<ConstraintRows> {
+        let mut rows = ConstraintRows::default();
+        self.fill_constraint_rows(constraints, opts, &mut rows)?;
+        Ok(rows)
+    }
+
+    /// [`Strand::constraint_rows`] into `rows`, reusing its storage (no allocation once it has grown): for a
+    /// workspace kept across steps. On error `rows` is left empty.
+    pub fn fill_constraint_rows(&mut self, constraints: &[PointConstraint], opts: &ConstraintOptions, rows: &mut ConstraintRows) -> Result<()> {
+        rows.clear();
         let Some((h, _)) = self.prepared.as_ref() else {
             return Err(StrandError::InvalidParameter { field: "constraint_rows", reason: "no step was prepared (call prepare_step first)".into() });
         };
@@ -263,28 +272,50 @@ impl Strand {
         opts.validate()?;
         let root = self.state.root.clone();
         let n = constraints.len();
-        let mut rows = ConstraintRows { h, constraints: constraints.to_vec(), ..Default::default() };
-        let mut jac: Vec<Matrix3xX<f64>> = Vec::with_capacity(n);
-        for c in constraints {
-            let (j, x) = self.dynamics.point_jacobian(&self.model, &self.state, c.s);
+        let dofs = self.model.dofs();
+        let d_seg = self.model.dofs_per_segment();
+        let size = 3 * dofs;
+        rows.h = h;
+        rows.dofs = dofs;
+        rows.constraints.extend_from_slice(constraints);
+        rows.jac.resize(n * size, 0.0);
+        rows.y.resize(n * size, 0.0);
+        for (c, pc) in constraints.iter().enumerate() {
+            let jac = &mut rows.jac[c * size..(c + 1) * size];
+            let (x, span) = self.dynamics.point_jacobian_into(&self.model, &self.state, pc.s, jac);
             let bias = root.velocity + root.angular_velocity.cross(&(x - root.position));
-            rows.position.push(x);
-            let mut yc = j.clone();
-            if !self.resolve_step_matrix3(&mut yc) {
+            let yc = &mut rows.y[c * size..(c + 1) * size];
+            yc.copy_from_slice(jac);
+            if !self.resolve_step_matrix3(yc, span / d_seg) {
+                rows.clear();
                 return Err(StrandError::NotPositiveDefinite { what: "step matrix" });
             }
+            // J v over the Jacobian's nonzero columns (the others add exact zeros).
             let v = &self.prepared.as_ref().expect("checked above").1;
-            rows.u_free.push(&j * v + bias);
-            jac.push(j);
-            rows.y.push(yc);
+            let mut u = Vector3::zeros();
+            for (m, col) in jac[..3 * span].chunks_exact(3).enumerate() {
+                u += Vector3::new(col[0], col[1], col[2]) * v[m];
+            }
+            rows.u_free.push(u + bias);
+            rows.span.push(span);
+            rows.pin_error.push(match pc.kind {
+                ConstraintKind::Pin { target } => target - x,
+                ConstraintKind::Contact { .. } | ConstraintKind::Drag { .. } => Vector3::zeros(),
+            });
         }
-        // Delassus blocks W[c][d] = J_c Y_d^T (3 x 3); W is symmetric, so only c <= d is computed.
-        rows.w = vec![Matrix3::zeros(); n * n];
+        // Delassus blocks W[c][d] = J_c Y_d^T (3 x 3), over the nonzero columns of J_c (the others add exact
+        // zeros). W is symmetric, so only c <= d is computed.
+        rows.w.resize(n * n, Matrix3::zeros());
         for c in 0..n {
+            let jac = &rows.jac[c * size..c * size + 3 * rows.span[c]];
             for d in c..n {
-                let b = &jac[c] * rows.y[d].transpose();
-                rows.w[c * n + d] = b;
-                rows.w[d * n + c] = b.transpose();
+                let y = &rows.y[d * size..(d + 1) * size];
+                let mut block = Matrix3::zeros();
+                for (jm, ym) in jac.chunks_exact(3).zip(y.chunks_exact(3)) {
+                    block += Vector3::new(jm[0], jm[1], jm[2]) * nalgebra::RowVector3::new(ym[0], ym[1], ym[2]);
+                }
+                rows.w[c * n + d] = block;
+                rows.w[d * n + c] = block.transpose();
             }
         }
         let mix = opts.force_mixing(h);
@@ -292,45 +323,46 @@ impl Strand {
         // produce an impulse against the root clamp.
         let mobility = |c: usize| rows.w[c * n + c].trace();
         let max_mobility = (0..n).map(mobility).fold(0.0, f64::max);
-        rows.active = (0..n).map(|c| mobility(c).is_finite() && mobility(c) > 1e-9 * max_mobility).collect();
-        // What the sweeps need of each contact, fixed over the iterations: tangent basis, regularized normal
-        // mobility `W_nn + R` and the inverse of the regularized tangential Delassus block.
-        rows.contact_frames = (0..n)
-            .map(|c| match constraints[c].kind {
-                ConstraintKind::Contact { normal, .. } => Some(ContactFrame::new(&normal, &rows.w[c * n + c], mix)),
-                ConstraintKind::Pin { .. } | ConstraintKind::Drag { .. } => None,
-            })
-            .collect();
-        // Inverses of the pins' (and drags') regularized Delassus blocks `W + R I` (pseudo-inverses when rigid);
-        // the post-stabilization uses the pseudo-inverses of the blocks themselves.
-        let held = |c: usize| matches!(constraints[c].kind, ConstraintKind::Pin { .. } | ConstraintKind::Drag { .. });
-        rows.pin_projection = (0..n).map(|c| if held(c) { pinv3(&rows.w[c * n + c]) } else { Matrix3::zeros() }).collect();
-        rows.pin_inverse = (0..n)
-            .map(|c| match (held(c), mix > 0.0) {
-                (false, _) => Matrix3::zeros(),
-                (true, true) => (rows.w[c * n + c] + Matrix3::identity() * mix).try_inverse().unwrap_or_else(|| pinv3(&rows.w[c * n + c])),
-                (true, false) => rows.pin_projection[c],
-            })
-            .collect();
-        rows.impulses = vec![Vector3::zeros(); n];
-        Ok(rows)
+        for c in 0..n {
+            let active = mobility(c).is_finite() && mobility(c) > 1e-9 * max_mobility;
+            rows.active.push(active);
+        }
+        // What the sweeps need of each constraint, fixed over the iterations: for a contact its tangent basis,
+        // regularized normal mobility `W_nn + R` and the inverse of the regularized tangential Delassus block;
+        // for a pin or drag the inverse of its regularized Delassus block `W + R I` (pseudo-inverse when rigid),
+        // and for a pin the pseudo-inverse of the block itself (the post-stabilization's).
+        for (c, pc) in constraints.iter().enumerate() {
+            let w = rows.w[c * n + c];
+            let inverse = |projection: Matrix3<f64>| if mix > 0.0 { (w + Matrix3::identity() * mix).try_inverse().unwrap_or_else(|| pinv3(&w)) } else { projection };
+            rows.rule.push(match pc.kind {
+                ConstraintKind::Contact { normal, .. } => Rule::Contact(ContactFrame::new(&normal, &w, mix)),
+                ConstraintKind::Pin { .. } => {
+                    let projection = pinv3(&w);
+                    Rule::Pin { inverse: inverse(projection), projection }
+                }
+                ConstraintKind::Drag { .. } => Rule::Drag { inverse: inverse(pinv3(&w)) },
+            });
+        }
+        rows.impulses.resize(n, Vector3::zeros());
+        Ok(())
     }
 
     /// Completes the prepared step with the impulses [`solve`] found for `rows` (built by this strand's
-    /// [`Strand::constraint_rows`] in this step): the velocities take `Y^T p`, the state advances, and the
-    /// positions are projected back onto the pins. Returns each constraint's impulse (N s). On failure the
-    /// state is unchanged.
-    pub fn apply_constraints(&mut self, rows: ConstraintRows, opts: &ConstraintOptions) -> Result<Vec<Vector3<f64>>> {
+    /// [`Strand::constraint_rows`] in this step, given by value or by reference): the velocities take `Y^T p`,
+    /// the state advances, and the positions are projected back onto the pins. Returns each constraint's
+    /// impulse (N s). On failure the state is unchanged.
+    pub fn apply_constraints(&mut self, rows: impl std::borrow::Borrow<ConstraintRows>, opts: &ConstraintOptions) -> Result<Vec<Vector3<f64>>> {
+        let rows = rows.borrow();
         let Some((h, mut v)) = self.prepared.take() else {
             return Err(StrandError::InvalidParameter { field: "apply_constraints", reason: "no step was prepared (call prepare_step first)".into() });
         };
         let n = rows.len();
-        if rows.y.iter().any(|y| y.ncols() != v.len()) || (rows.h - h).abs() > 1e-15 * h {
+        if rows.dofs != v.len() || (rows.h - h).abs() > 1e-15 * h {
             self.prepared = Some((h, v));
             return Err(StrandError::InvalidParameter { field: "apply_constraints", reason: "the rows were not built for this strand's prepared step".into() });
         }
         for c in 0..n {
-            v += rows.y[c].transpose() * rows.impulses[c];
+            rows.add_response(c, &rows.impulses[c], v.as_mut_slice());
         }
         let saved = self.state.clone();
         self.commit_step(h, v)?;
@@ -358,22 +390,23 @@ impl Strand {
                 .collect();
             for _ in 0..opts.iterations.max(1) {
                 for (k, &c) in pins.iter().enumerate().filter(|(_, &c)| rows.active[c]) {
+                    let Rule::Pin { projection, .. } = rows.rule[c] else { continue };
                     let mut r = error[k];
                     for &d in &pins {
                         r -= rows.w[c * n + d] * lambda[d];
                     }
-                    lambda[c] += rows.pin_projection[c] * r;
+                    lambda[c] += projection * r;
                 }
             }
             for &c in &pins {
-                self.state.q += rows.y[c].transpose() * lambda[c];
+                rows.add_response(c, &lambda[c], self.state.q.as_mut_slice());
             }
         }
         if !self.state.q.iter().all(|x| x.is_finite()) {
             self.state = saved;
             return Err(StrandError::NonFinite { what: "pin projection", time: self.state.time });
         }
-        Ok(rows.impulses)
+        Ok(rows.impulses.clone())
     }
 }
 
@@ -418,25 +451,44 @@ impl ContactFrame {
     }
 }
 
+/// What the sweeps need of one constraint besides its Delassus blocks, fixed over the iterations.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Rule {
+    /// A contact's tangent basis and regularized mobilities.
+    Contact(ContactFrame),
+    /// A pin: the inverse of its regularized Delassus block `W + R I` (m/s per N s, inverted) and the
+    /// pseudo-inverse of `W` itself (the post-stabilization's).
+    Pin { inverse: Matrix3<f64>, projection: Matrix3<f64> },
+    /// A drag: the inverse of its regularized Delassus block.
+    Drag { inverse: Matrix3<f64> },
+}
+
 /// One strand's constraints in its prepared step, as the projected Gauss-Seidel sweeps of [`solve`] need them:
-/// built by [`Strand::constraint_rows`], applied by [`Strand::apply_constraints`].
+/// built by [`Strand::constraint_rows`] (or into a kept workspace by [`Strand::fill_constraint_rows`]), applied
+/// by [`Strand::apply_constraints`].
 #[derive(Debug, Clone, Default)]
 pub struct ConstraintRows {
     /// The step's time step, s.
     h: f64,
+    /// The strand's degrees of freedom.
+    dofs: usize,
     constraints: Vec<PointConstraint>,
-    /// Per constraint: `Y_c = (A^-1 J_c^T)^T` (3 x dofs).
-    y: Vec<Matrix3xX<f64>>,
+    /// Per constraint, at `c * 3 dofs`: its point's Jacobian `J_c` (3 x dofs, column-major, m per rad/m), of
+    /// which only the first `span[c]` columns can be nonzero.
+    jac: Vec<f64>,
+    span: Vec<usize>,
+    /// Per constraint, at `c * 3 dofs`: `Y_c = (A^-1 J_c^T)^T` (3 x dofs, column-major).
+    y: Vec<f64>,
     /// Delassus blocks `W[c][d]` at `c * n + d`, m/s per N s.
     w: Vec<Matrix3<f64>>,
-    /// Unconstrained point velocities, m/s, and the points, m.
+    /// Unconstrained point velocities, m/s.
     u_free: Vec<Vector3<f64>>,
-    position: Vec<Vector3<f64>>,
+    /// Per constraint: a pin's position error (target minus point, m) at the prepared state; zero for the
+    /// other kinds.
+    pin_error: Vec<Vector3<f64>>,
     /// Constraints the sweeps update (their point can move).
     active: Vec<bool>,
-    contact_frames: Vec<Option<ContactFrame>>,
-    pin_projection: Vec<Matrix3<f64>>,
-    pin_inverse: Vec<Matrix3<f64>>,
+    rule: Vec<Rule>,
     /// Impulse of each constraint on the strand over the step, N s (zero until [`solve`]).
     pub impulses: Vec<Vector3<f64>>,
 }
@@ -452,10 +504,30 @@ impl ConstraintRows {
         self.constraints.is_empty()
     }
 
+    /// Empties the rows, keeping their storage.
+    fn clear(&mut self) {
+        self.constraints.clear();
+        self.span.clear();
+        self.w.clear();
+        self.u_free.clear();
+        self.pin_error.clear();
+        self.active.clear();
+        self.rule.clear();
+        self.impulses.clear();
+    }
+
     /// Mobility of constraint `c`'s point along the unit `direction` in the prepared step: `n^T W_cc n`, m/s per
-    /// N s (as [`Strand::point_mobility`]).
+    /// N s (the velocity change of the point along `direction` per unit impulse along it).
     pub fn mobility(&self, c: usize, direction: &Vector3<f64>) -> f64 {
         direction.dot(&(self.w[c * self.len() + c] * direction))
+    }
+
+    /// Adds `Y_c^T p` (the generalized response to the impulse `p` at constraint `c`'s point) to `out` (dofs).
+    fn add_response(&self, c: usize, p: &Vector3<f64>, out: &mut [f64]) {
+        let size = 3 * self.dofs;
+        for (o, y) in out.iter_mut().zip(self.y[c * size..(c + 1) * size].chunks_exact(3)) {
+            *o += y[0] * p.x + y[1] * p.y + y[2] * p.z;
+        }
     }
 
     /// Velocity of constraint `c`'s point with the current impulses, m/s.
@@ -474,13 +546,15 @@ impl ConstraintRows {
         let capped = |x: Vector3<f64>| if x.norm() > v_max { x * (v_max / x.norm()) } else { x };
         let p = self.impulses[c];
         let new = match self.constraints[c].kind {
-            ConstraintKind::Pin { target } => {
-                let want = capped((target - self.position[c]) * beta);
-                p + self.pin_inverse[c] * (want - rel - p * mix)
+            ConstraintKind::Pin { .. } => {
+                let Rule::Pin { inverse, .. } = self.rule[c] else { return };
+                let want = capped(self.pin_error[c] * beta);
+                p + inverse * (want - rel - p * mix)
             }
             ConstraintKind::Drag { max_force } => {
+                let Rule::Drag { inverse } = self.rule[c] else { return };
                 // Aim for no relative motion, then clamp to the drag's largest impulse.
-                let mut pc = p + self.pin_inverse[c] * (-rel - p * mix);
+                let mut pc = p + inverse * (-rel - p * mix);
                 let limit = max_force * self.h;
                 if pc.norm() > limit {
                     pc *= limit / pc.norm();
@@ -488,7 +562,7 @@ impl ConstraintRows {
                 pc
             }
             ConstraintKind::Contact { normal, depth, friction } => {
-                let Some(frame) = self.contact_frames[c] else { return };
+                let Rule::Contact(frame) = self.rule[c] else { return };
                 frame.update(&normal, friction, (beta * depth).min(v_max), &rel, &p, mix)
             }
         };

@@ -476,21 +476,32 @@ impl Dynamics {
     /// position (world, m), at the state of the last [`Dynamics::sweep`] with sums: from that sweep's frames and
     /// motion subspaces, so only the point's own segment is evaluated. Equal to [`crate::kinematics::jacobian`].
     pub fn point_jacobian(&self, model: &StrandModel, state: &StrandState, s: f64) -> (Matrix3xX<f64>, Vector3<f64>) {
+        let mut jac = Matrix3xX::zeros(model.dofs());
+        let (x, _) = self.point_jacobian_into(model, state, s, jac.as_mut_slice());
+        (jac, x)
+    }
+
+    /// [`Dynamics::point_jacobian`] written into `jac` (3 x dofs, column-major: 3 entries per column, at least
+    /// `3 dofs` long). Returns the point's position (m) and the number of leading columns that can be nonzero
+    /// (the dofs of the segments from the root to the point's own; the others are set to zero).
+    pub fn point_jacobian_into(&self, model: &StrandModel, state: &StrandState, s: f64, jac: &mut [f64]) -> (Vector3<f64>, usize) {
         let d = model.dofs_per_segment();
         let origin = state.root.position;
         let (i, sigma) = crate::kinematics::locate(model, s);
         let (own, f) = own_twists(&self.frames[i], &darboux(model, &state.q, i), sigma, &origin);
         let x = f.position - origin;
-        let mut jac = Matrix3xX::zeros(model.dofs());
+        let span = (i + 1) * d;
+        let mut put = |col: usize, v: Vector3<f64>| jac[3 * col..3 * col + 3].copy_from_slice(v.as_slice());
         for j in 0..i {
             for k in 0..d {
-                jac.set_column(j * d + k, &point_velocity(&self.motion[j].column(k).into_owned(), &x));
+                put(j * d + k, point_velocity(&self.motion[j].column(k).into_owned(), &x));
             }
         }
         for k in 0..d {
-            jac.set_column(i * d + k, &point_velocity(&own.column(k).into_owned(), &x));
+            put(i * d + k, point_velocity(&own.column(k).into_owned(), &x));
         }
-        (jac, f.position)
+        jac[3 * span..3 * model.dofs()].fill(0.0);
+        (f.position, span)
     }
 
     /// Gauss points of a segment: (arc length from the segment's start in m, weight in m); the positions in
@@ -543,38 +554,38 @@ impl Dynamics {
     }
 
     /// Solves the same system as the last [`Dynamics::solve_articulated`] for another right-hand side, reusing
-    /// its elimination (articulated inertias and pivots): only the bias recursion and the back-substitution run,
-    /// O(N) with a small constant. Used for the several right-hand sides of the constraint solver.
+    /// its elimination (one column of [`Dynamics::resolve_articulated3`]).
+    #[cfg(test)]
     pub(crate) fn resolve_articulated(&mut self, model: &StrandModel, b: &mut DVector<f64>) -> bool {
-        let d = model.dofs_per_segment();
-        let n = model.segments;
-        let mut pa = Vector6::zeros();
-        for i in (0..n).rev() {
-            let s_pa = self.motion[i].tr_mul(&pa);
-            let (u, dinv, c) = &mut self.articulated[i];
-            for k in 0..d {
-                c[k] = -s_pa[k] - b[i * d + k];
-            }
-            pa += *u * (*dinv * *c);
-        }
-        self.back_substitute(d, b)
+        let mut three = Matrix3xX::zeros(b.len());
+        three.row_mut(0).copy_from(&b.transpose());
+        let ok = self.resolve_articulated3(model, three.as_mut_slice(), model.segments);
+        b.copy_from(&three.row(0).transpose());
+        ok
     }
 
-    /// [`Dynamics::resolve_articulated`] for three right-hand sides at once, the rows of `b` (3 x dofs), in
-    /// place: `b` becomes `(A^-1 b^T)^T`. The constraint solver's responses `Y = A^-1 J^T` to a point's three
-    /// directions in one pass (same arithmetic per column, a third of the passes).
-    pub(crate) fn resolve_articulated3(&mut self, model: &StrandModel, b: &mut Matrix3xX<f64>) -> bool {
+    /// Solves the system of the last [`Dynamics::solve_articulated`] for three right-hand sides at once, reusing
+    /// its elimination (articulated inertias and pivots): only the bias recursion and the back-substitution run,
+    /// O(N) with a small constant. `b` holds the right-hand sides as the rows of a 3 x dofs matrix, column-major
+    /// (3 entries per column), and becomes `(A^-1 b^T)^T`: the constraint solver's responses `Y = A^-1 J^T` to a
+    /// point's three directions in one pass. Only the columns of the first `used` segments of `b` may be
+    /// nonzero (a point's Jacobian: the segments from the root to its own), so the tip-to-root recursion starts
+    /// at segment `used - 1`.
+    pub(crate) fn resolve_articulated3(&mut self, model: &StrandModel, b: &mut [f64], used: usize) -> bool {
         let d = model.dofs_per_segment();
         let n = model.segments;
+        let used = used.min(n);
         let mut pa = SMatrix::<f64, 6, 3>::zeros();
-        for i in (0..n).rev() {
+        // Beyond `used` the right-hand sides and the bias are zero.
+        self.articulated3[used..n].fill(Matrix3::zeros());
+        for i in (0..used).rev() {
             // Rows: the segment's dofs (padded to 3); columns: the right-hand sides.
             let s_pa = self.motion[i].tr_mul(&pa);
             let (u, dinv, _) = &self.articulated[i];
             let mut c = Matrix3::zeros();
             for k in 0..d {
                 for r in 0..3 {
-                    c[(k, r)] = -s_pa[(k, r)] - b[(r, i * d + k)];
+                    c[(k, r)] = -s_pa[(k, r)] - b[3 * (i * d + k) + r];
                 }
             }
             pa += *u * (*dinv * c);
@@ -586,12 +597,12 @@ impl Dynamics {
             let x = -(*dinv * (u.tr_mul(&v) + self.articulated3[i]));
             for k in 0..d {
                 for r in 0..3 {
-                    b[(r, i * d + k)] = x[(k, r)];
+                    b[3 * (i * d + k) + r] = x[(k, r)];
                 }
             }
             v += self.motion[i] * x;
         }
-        b.iter().all(|x| x.is_finite())
+        b[..3 * n * d].iter().all(|x| x.is_finite())
     }
 
     /// Steps 2 (mass) and 3 of the pipeline: the dense mass matrix from the sums of [`Dynamics::sweep`].

@@ -78,21 +78,6 @@ impl Strand {
         self.prepared.is_some()
     }
 
-    /// Mobility of the prepared step at arc length `s` (m) along the unit `direction`: the velocity change of that
-    /// centreline point along `direction` per unit impulse along it, `n^T J A^-1 J^T n`, m/s per N s (the
-    /// diagonal Delassus term of a contact there; the constraint solver's `W_nn`). None if no step was
-    /// prepared (or the step matrix fails). O(N): reuses the prepared step's elimination.
-    pub fn point_mobility(&mut self, s: f64, direction: &nalgebra::Vector3<f64>) -> Option<f64> {
-        self.prepared.as_ref()?;
-        let (j, _) = self.dynamics.point_jacobian(&self.model, &self.state, s);
-        let mut b: DVector<f64> = j.tr_mul(direction);
-        if !self.resolve_step_matrix(&mut b) {
-            return None;
-        }
-        let w = direction.dot(&(&j * &b));
-        (w.is_finite() && w >= 0.0).then_some(w)
-    }
-
     /// Total energy (kinetic + gravity + elastic) at the current state, J.
     pub fn energy(&mut self) -> f64 {
         self.dynamics.evaluate(&self.model, &self.state, &[], false);
@@ -149,15 +134,11 @@ impl Strand {
         Ok(())
     }
 
-    /// Solves `A x = b` for the three rows of `b` (3 x dofs) in place with the matrix of the last linearly
-    /// implicit step, reusing its elimination.
-    pub(crate) fn resolve_step_matrix3(&mut self, b: &mut nalgebra::Matrix3xX<f64>) -> bool {
-        self.dynamics.resolve_articulated3(&self.model, b)
-    }
-
-    /// Solves `A x = b` in place with the matrix of the last linearly implicit step, reusing its elimination.
-    pub(crate) fn resolve_step_matrix(&mut self, b: &mut DVector<f64>) -> bool {
-        self.dynamics.resolve_articulated(&self.model, b)
+    /// Solves `A x = b` in place for the three rows of `b` (3 x dofs, column-major) with the matrix of the last
+    /// linearly implicit step, reusing its elimination; only the first `used` segments' columns of `b` may be
+    /// nonzero.
+    pub(crate) fn resolve_step_matrix3(&mut self, b: &mut [f64], used: usize) -> bool {
+        self.dynamics.resolve_articulated3(&self.model, b, used)
     }
 
     /// Solves `A x = b` in place with the linearly implicit step's matrix `A = M (1 + h c) + (h tau + h^2) K` at

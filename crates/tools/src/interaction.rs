@@ -52,7 +52,7 @@ pub struct StepResult {
     /// Linearisation of `force` in the tool's velocity (constraint model): the effective damping
     /// `D = -dF/dv`, N s/m, symmetric positive semi-definite. Each pressing contact (normal impulse > 0)
     /// adds its compliant response `g = 1 / (h (W_nn + R))` (the strand point's mobility `W_nn` in the
-    /// prepared step, [`Strand::point_mobility`], and the solver's force mixing `R`) along its normal,
+    /// prepared step, [`ConstraintRows::mobility`], and the solver's force mixing `R`) along its normal,
     /// `g n n^T`, and the friction's share `mu g (I - n n^T)` across it. Coupling between contacts is left
     /// out, and so are the entanglement drags ([`Entanglement`]: a sliding Coulomb drag does not change with
     /// the speed). Zero with the paper's model. Used to couple the tool proxy implicitly
@@ -162,6 +162,21 @@ pub struct LocalInteraction {
     prepared: Vec<bool>,
     /// Workspace: contacts of this step.
     contacts: Vec<Contact>,
+    /// Workspace: each strand's hair-hair contacts this step, with the pair side each stands for.
+    hair_rows: Vec<Vec<(HairSide, PointConstraint)>>,
+    /// Workspace: per hair-hair pair, where its first and second strand's rows went (rows index, constraint
+    /// index).
+    hair_slots: Vec<[Option<(usize, usize)>; 2]>,
+    /// Workspace: the constrained strands' rows of this step (the first ones in use), storage kept.
+    rows: Vec<ConstraintRows>,
+}
+
+/// One side of a hair-hair contact: the `pair`-th pair of the step ([`HairContactFinder::contacts`]), at its first
+/// strand's point or (`second`) at its second strand's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct HairSide {
+    pair: usize,
+    second: bool,
 }
 
 impl LocalInteraction {
@@ -194,6 +209,9 @@ impl LocalInteraction {
             changes_since_build: 0,
             prepared,
             contacts: Vec::new(),
+            hair_rows: Vec::new(),
+            hair_slots: Vec::new(),
+            rows: Vec::new(),
         }
     }
 
@@ -466,7 +484,12 @@ impl LocalInteraction {
         let wisp_radius = self.wisp_radius(radius);
         // Hair-hair contacts (constraint model): each pair's two points, solved together below. Only between
         // strands whose step was prepared (the others take a step of their own).
-        let mut hair_rows: Vec<Vec<(usize, PointConstraint)>> = vec![Vec::new(); self.strands.len()];
+        let mut hair_rows = std::mem::take(&mut self.hair_rows);
+        hair_rows.iter_mut().for_each(Vec::clear);
+        hair_rows.resize_with(self.strands.len(), Vec::new);
+        // Where each pair's two rows went (the first and second strand's): (rows index, constraint index).
+        let mut hair_slots = std::mem::take(&mut self.hair_slots);
+        hair_slots.clear();
         if hair_on {
             let friction = self.hair_contact.map_or(0.0, |hc| hc.friction);
             for (l, pair) in self.hair_finder.contacts().enumerate() {
@@ -475,16 +498,17 @@ impl LocalInteraction {
                     continue;
                 }
                 let contact = |s: f64, normal: Vector3<f64>| PointConstraint { s, kind: ConstraintKind::Contact { normal, depth: pair.depth, friction }, velocity: Vector3::zeros() };
-                hair_rows[a].push((2 * l, contact(pair.s.0, pair.normal)));
-                hair_rows[b].push((2 * l + 1, contact(pair.s.1, -pair.normal)));
+                hair_rows[a].push((HairSide { pair: l, second: false }, contact(pair.s.0, pair.normal)));
+                hair_rows[b].push((HairSide { pair: l, second: true }, contact(pair.s.1, -pair.normal)));
+                hair_slots.resize(l + 1, [None; 2]);
             }
         }
         // Stage 1, per strand: its constraints (tool contacts and drags, pins, body and hair contacts) and their
-        // rows in the prepared step; the paper's model and unprepared strands step here.
+        // rows in the prepared step (in the kept workspace `rows[..used]`); the paper's model and unprepared
+        // strands step here.
         let mut pending: Vec<Pending> = Vec::new();
-        let mut rows: Vec<ConstraintRows> = Vec::new();
-        // Where each hair-contact row went: (rows index, constraint index), by the pair side's number.
-        let mut hair_slot: Vec<Option<(usize, usize)>> = Vec::new();
+        let mut rows = std::mem::take(&mut self.rows);
+        let mut used = 0;
         let mut forces: Vec<(Vector3<f64>, Vector3<f64>)> = Vec::new();
         for (k, strand) in self.strands.iter_mut().enumerate() {
             let t_strand = clock.elapsed().as_secs_f64();
@@ -593,15 +617,15 @@ impl LocalInteraction {
                             (false, Some((b, j))) => self.batches[b].hand_over(j, strand),
                             _ => Ok(()),
                         };
-                        handed.and_then(|()| strand.constraint_rows(&cons, &options)).map(|r| {
+                        if rows.len() <= used {
+                            rows.push(ConstraintRows::default());
+                        }
+                        handed.and_then(|()| strand.fill_constraint_rows(&cons, &options, &mut rows[used])).map(|()| {
                             for (i, (side, _)) in hair_rows[k].iter().enumerate() {
-                                if hair_slot.len() <= *side {
-                                    hair_slot.resize(side + 1, None);
-                                }
-                                hair_slot[*side] = Some((rows.len(), first_hair + i));
+                                hair_slots[side.pair][side.second as usize] = Some((used, first_hair + i));
                             }
-                            rows.push(r);
-                            Solved::Rows(rows.len() - 1)
+                            used += 1;
+                            Solved::Rows(used - 1)
                         })
                     } else {
                         let twisting = std::mem::take(&mut self.surface_torques[k]);
@@ -627,26 +651,26 @@ impl LocalInteraction {
         // linking the two strands' rows (both strands' responses in each, no lag of a step).
         if let ForceModel::Constraint { friction, options } = self.model {
             let t_solve = clock.elapsed().as_secs_f64();
-            let links: Vec<ConstraintLink> = hair_slot
-                .chunks(2)
+            // A pair whose other strand failed to build its rows is no link: the strand that built its rows
+            // solves that contact alone, against a still strand.
+            let links: Vec<ConstraintLink> = hair_slots
+                .iter()
                 .filter_map(|pair| match pair {
                     [Some(first), Some(second)] => Some(ConstraintLink { first: *first, second: *second }),
                     _ => None,
                 })
                 .collect();
-            solve(&mut rows, &links, &options);
-            // A strand whose rows were dropped from a link (the other strand failed) still solved its own.
+            solve(&mut rows[..used], &links, &options);
             timings.constrained += clock.elapsed().as_secs_f64() - t_solve;
             // Stage 3, per strand: apply the impulses and commit the step; the tool feels the tool constraints'.
             let mix = options.force_mixing(dt);
-            let mut taken: Vec<Option<ConstraintRows>> = rows.into_iter().map(Some).collect();
             for job in pending {
                 let t_strand = clock.elapsed().as_secs_f64();
                 let strand = &mut self.strands[job.strand];
                 let outcome = match job.solved {
                     Solved::Stepped(p) => Ok((p, vec![0.0; job.touching.len()])),
                     Solved::Rows(i) => {
-                        let r = taken[i].take().expect("each strand's rows once");
+                        let r = &rows[i];
                         // The tool contacts' mobilities in the prepared step, for the tool's damping.
                         let mobility: Vec<f64> = job.touching.iter().enumerate().map(|(c, t)| t.map_or(0.0, |t| r.mobility(c, &t.normal))).collect();
                         strand.apply_constraints(r, &options).map(|p| (p, mobility))
@@ -687,6 +711,9 @@ impl LocalInteraction {
                 }
             }
         }
+        self.rows = rows;
+        self.hair_rows = hair_rows;
+        self.hair_slots = hair_slots;
         for (f, lever) in forces {
             result.force -= f;
             result.torque -= lever.cross(&f);

@@ -348,8 +348,10 @@ mod tests {
     #[test]
     fn the_dryer_jet_moves_the_soft_lattice_and_it_falls_back() {
         // The same dryer held at the side of the hair in two sessions, blowing in one of them for 2 s: the jet
-        // moves the lattice by >= 5 mm more than the nozzle's presence alone, and 2.3 s after it stops the two
-        // lattices are within 1 mm of each other.
+        // moves the lattice by >= 5 mm more than the nozzle's presence alone, and 4.3 s after it stops the two
+        // lattices are within 1 mm of each other. Measured 2026-11-24 with the stable grooms (issue 12; the side
+        // hair hangs further out, nearer the nozzle): largest difference 6.5 cm, then 3.9 mm 2.3 s after,
+        // 1.5 mm 3.3 s after, 0.58 mm 4.3 s after, 4e-6 m 8.3 s after (it falls back; time constant ~0.8 s).
         let scene = small_scene();
         let p = SessionParams::default();
         let (mut blown, mut held) = (GlobalCore::new(scene.clone(), &p), GlobalCore::new(scene.clone(), &p));
@@ -357,14 +359,14 @@ mod tests {
         let mut input = ToolInput { tool: Tool::Dryer, present: true, position: Vector3::new(0.13, 0.0, 0.0), rotation: rot, pressed: true, cuts: 0, ..ToolInput::default() };
         let gap = |a: &GlobalCore, b: &GlobalCore| a.positions().iter().zip(b.positions()).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max);
         let mut most = 0.0f64;
-        for k in 0..430 {
+        for k in 0..630 {
             input.pressed = k < 200;
             blown.step(0.01, &input);
             held.step(0.01, &ToolInput { pressed: false, ..input });
             most = most.max(gap(&blown, &held));
         }
         let after = gap(&blown, &held);
-        eprintln!("jet: largest difference {most:.4} m, 2.3 s after {after:.2e} m");
+        eprintln!("jet: largest difference {most:.4} m, 4.3 s after {after:.2e} m");
         assert!(most >= 5e-3, "the jet moves the lattice: {most} m");
         assert!(after <= 1e-3, "it falls back: {after} m");
     }

@@ -75,7 +75,7 @@ fn main() {
     let n = rows.len() as f64;
     let mean = |f: &dyn Fn(&StepPhases) -> f64| rows.iter().map(|r| f(&r.2)).sum::<f64>() / n * 1e6;
     println!(
-        "mean per stage: coupling {:.0} us, active set {:.0} us, actions {:.0} us, interaction {:.0} us (dynamics {:.0}, sample {:.0}, detect {:.0}, constrained {:.0} (body contacts {:.0}), free {:.0}), tracking {:.0} us",
+        "mean per stage: coupling {:.0} us, active set {:.0} us, actions {:.0} us, interaction {:.0} us (dynamics {:.0}, sample {:.0}, detect {:.0} (hair-hair {:.0}), constrained {:.0} (body contacts {:.0}), free {:.0}), tracking {:.0} us",
         mean(&|p| p.coupling),
         mean(&|p| p.active),
         mean(&|p| p.actions),
@@ -83,16 +83,17 @@ fn main() {
         mean(&|p| p.local.dynamics),
         mean(&|p| p.local.sample),
         mean(&|p| p.local.detect),
+        mean(&|p| p.local.hair_detect),
         mean(&|p| p.local.constrained),
         mean(&|p| p.local.body),
         mean(&|p| p.local.free),
         mean(&|p| p.tracking)
     );
     rows.sort_by(|a, b| b.1.total_cmp(&a.1));
-    println!("| step | wall us | coupling | active set (choose, rebuild) | actions | interaction | dynamics | sample | detect | constrained (body) | free | tracking | active | contacts |");
+    println!("| step | wall us | coupling | active set (choose, rebuild) | actions | interaction | dynamics | sample | detect (hair) | constrained (body) | free | tracking | active | contacts |");
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (k, w, p, a, c) in rows.iter().take(slowest) {
         let us = |x: f64| format!("{:.0}", x * 1e6);
-        println!("| {k} | {} | {} | {} ({}, {}) | {} | {} | {} | {} | {} | {} ({}) | {} | {} | {a} | {c} |", us(*w), us(p.coupling), us(p.active), us(p.choose), us(p.rebuild), us(p.actions), us(p.interaction), us(p.local.dynamics), us(p.local.sample), us(p.local.detect), us(p.local.constrained), us(p.local.body), us(p.local.free), us(p.tracking));
+        println!("| {k} | {} | {} | {} ({}, {}) | {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {a} | {c} |", us(*w), us(p.coupling), us(p.active), us(p.choose), us(p.rebuild), us(p.actions), us(p.interaction), us(p.local.dynamics), us(p.local.sample), us(p.local.detect), us(p.local.hair_detect), us(p.local.constrained), us(p.local.body), us(p.local.free), us(p.tracking));
     }
 }

@@ -79,6 +79,8 @@ pub struct StepTimings {
     pub sample: f64,
     /// Contact detection, s.
     pub detect: f64,
+    /// Of `detect`: the hair-hair contacts ([`HairContactFinder`]), s.
+    pub hair_detect: f64,
     /// Strands with contacts: constraint assembly, projected Gauss-Seidel and commit (paper model: the strand
     /// steps with contact forces), s.
     pub constrained: f64,
@@ -460,11 +462,13 @@ impl LocalInteraction {
         let mut hair_pairs = 0;
         let hair_on = matches!(self.model, ForceModel::Constraint { .. }) && self.hair_contact.is_some();
         if let (Some(hc), true) = (self.hair_contact, hair_on) {
+            let t_hair = clock.elapsed().as_secs_f64();
             hc.validate()?;
             let strands = &self.strands;
             let per_chord = |k: usize| strands[k].dynamics.quadrature_nodes().len() + 1;
             self.hair_finder.detect(&hc, &self.pieces, per_chord, strands.len(), hc.distance(radius));
             hair_pairs = self.hair_finder.pairs();
+            timings.hair_detect = clock.elapsed().as_secs_f64() - t_hair;
         }
         let t_detect = clock.elapsed().as_secs_f64();
         timings.detect = t_detect - t_sample;

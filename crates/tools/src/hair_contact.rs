@@ -6,7 +6,7 @@
 //!    (the segment's start to its end), with a box grown by half the contact distance.
 //! 2. **Broad phase**: sweep and prune (Baraff 1992; Cohen et al. 1995) along the axis on which the chords are
 //!    spread widest relative to their boxes' size: the chords are kept sorted by their boxes' lower end on that
-//!    axis (insertion sort from the last step's order: O(n) while the strands move little), and each chord is
+//!    axis (a stable sort from the last step's order: about O(n) while the strands move little), and each chord is
 //!    tested against the following ones until their boxes start beyond its own (a hashed uniform grid of
 //!    chord-sized cells was tried first: on the haptic-loop bench it cost more, see bench/RESULTS.md).
 //! 3. **Narrow phase**: closest points of the two chords; closer than the contact distance, a contact.
@@ -210,14 +210,12 @@ impl HairContactFinder {
             self.order.sort_unstable_by(|&x, &y| key(x).total_cmp(&key(y)));
             self.axis = axis;
         } else {
-            // Insertion sort from last step's order (nearly sorted: about O(n)).
-            for i in 1..n {
-                let mut j = i;
-                while j > 0 && key(self.order[j - 1]) > key(self.order[j]) {
-                    self.order.swap(j - 1, j);
-                    j -= 1;
-                }
-            }
+            // A stable sort from last step's order: the order an insertion sort would give, found in about O(n)
+            // from the sorted runs (nearly sorted while the strands move little), and without the insertion
+            // sort's O(n) walk of each chord of a strand that joined far from the one it replaced.
+            // (-0 and +0 compare equal, as in the insertion sort's `>`; a total order, so no NaN can upset it.)
+            let flat = |i: usize| if key(i) == 0.0 { 0.0 } else { key(i) };
+            self.order.sort_by(|&x, &y| flat(x).total_cmp(&flat(y)));
         }
         // Reduction workspace.
         self.cap = params.max_per_strand;

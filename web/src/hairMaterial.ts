@@ -38,12 +38,15 @@ export interface HairLookParams {
   /** Smallest coverage of a pixel a strand's fragment carries, [0, 1] (shaders/strandCoverage.glsl.ts): keeps
    * a lone strand faintly visible however far the camera. Default 0.01. */
   minCoverage: number;
+  /** Most parallel one-pixel lines a strand wider than a pixel is drawn with (each a draw of all the strands,
+   * only when the strands near the camera are that wide; shaders/strandCoverage.glsl.ts). Default 4. */
+  maxLines: number;
 }
 
 export const DEFAULT_HAIR_LOOK: HairLookParams = {
   cuticleTilt: 2.5 * Math.PI / 180, roughness: 7 * Math.PI / 180, fibreIndex: 1.55,
   waterRoughness: 1.5 * Math.PI / 180, wetAbsorption: 0.6, clumpStrength: 0.8, hairsOnHead: 100000,
-  densityForward: 0.7, densityBack: 0.7, minCoverage: 0.01,
+  densityForward: 0.7, densityBack: 0.7, minCoverage: 0.01, maxLines: 4,
 };
 
 // The lit pass shades per vertex (32 or so per strand; a strand is a pixel wide, so its shading varies
@@ -68,10 +71,10 @@ varying float vDepth;         // view distance, m
 void main() {
   HairVertex h = deformHair();
   vCut = h.u - h.keep - 1e-4;
-  gl_Position = projectionMatrix * modelViewMatrix * vec4(h.position, 1.0);
-  vDepth = gl_Position.w;
+  vec4 clip = projectionMatrix * modelViewMatrix * vec4(h.position, 1.0);
+  vDepth = clip.w;
   vec3 T = h.tangent;
-  vCoverage = strandCoverage(h.position, gl_Position, T);
+  gl_Position = strandLine(h.position, clip, T, vCoverage);
   vec3 L = normalize(lightDirection);
   vec3 V = normalize(cameraPos - h.position);
   HairAngles a = hairAngles(T, L, V);
@@ -106,7 +109,7 @@ varying float vCut;
 varying float vCoverage;
 varying float vDepth;
 void main() {
-  if (vCut > 0.0) discard; // cut off by the scissors
+  if (vCut > 0.0 || vCoverage <= 0.0) discard; // cut off by the scissors; a line this strand does not need
   writeOit(vColour, vCoverage, vDepth);
 }
 `;
@@ -132,6 +135,7 @@ export class HairMaterial {
     this.params = { ...DEFAULT_HAIR_LOOK, ...params };
     const p = this.params;
     if (!(p.minCoverage >= 0 && p.minCoverage <= 1)) throw new Error(`minCoverage must be in [0, 1], got ${p.minCoverage}`);
+    if (!(Number.isInteger(p.maxLines) && p.maxLines >= 1)) throw new Error(`maxLines must be an integer >= 1, got ${p.maxLines}`);
     const [nx, ny, nz] = scene.latticeDims;
     this.samples = Math.max(2, scene.samples);
     this.sections = { diameter: scene.hairTypeDiameter, ellipticity: scene.hairTypeEllipticity };
@@ -171,6 +175,8 @@ export class HairMaterial {
         strandWidth: { value: 0 },
         viewport: { value: new THREE.Vector2(1, 1) },
         minCoverage: { value: p.minCoverage },
+        lineIndex: { value: 0 },
+        lineCount: { value: 1 },
         sigmaA: { value: new THREE.Vector3() },
         cuticleTilt: { value: p.cuticleTilt },
         roughness: { value: p.roughness },

@@ -256,6 +256,9 @@ function onFrame(f: P.FrameMsg): void {
   device.setForce(fm);
   if (f.tool !== status.tool) setTool(f.tool, false);
   // Pseudo-haptic cursor: the tool is drawn where the proxy is, which lags behind the mouse under force.
+  // The tool appears once something drives it (the pointer on the canvas, or a haptic device): at rest it
+  // waits behind the head, where the portrait view would show it floating beside the face.
+  toolGroup.visible = ghost.visible = toolDriven || status.device !== null;
   toolGroup.position.set(...f.toolPosition);
   toolGroup.quaternion.set(...f.toolQuaternion);
   ghost.position.set(...f.devicePosition);
@@ -354,7 +357,10 @@ window.addEventListener('keydown', (e) => {
   status.headMode = !status.headMode;
   if (headEl) headEl.textContent = status.headMode ? 'head mode (H): drag to turn and nod the head' : '';
 });
+let toolDriven = false;
+canvas.addEventListener('pointerenter', () => { toolDriven = true; });
 canvas.addEventListener('pointerdown', (e) => {
+  toolDriven = true;
   if (e.button !== 0) return;
   canvas.setPointerCapture(e.pointerId);
   if (status.headMode) { headDrag = { x: e.clientX, y: e.clientY, yaw: headYaw, pitch: headPitch }; return; }
@@ -368,6 +374,7 @@ canvas.addEventListener('pointermove', (e) => {
     if (status.youControl) status.setHead(headYaw, headPitch);
     return;
   }
+  toolDriven = true;
   device.move(e); sendPose();
 });
 
@@ -432,7 +439,7 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
   /** Renders the scene without the tool with a colour preset, every strand at `wetness`, the key light towards `light` and the
    * debug view (0 shaded, 1 deep-opacity transmittance, 2 highlight only); returns the RGBA pixels (base64)
    * and a PNG data URL. Restores the live state afterwards (no server message is handled in between). */
-  look(o: { colour?: string; wetness?: number; light?: [number, number, number]; view?: number; camera?: [number, number, number]; target?: [number, number, number]; hideHair?: boolean }) {
+  look(o: { colour?: string; wetness?: number; light?: [number, number, number]; view?: number; camera?: [number, number, number]; target?: [number, number, number]; hideHair?: boolean; lines?: number }) {
     const hair = view.hair!;
     const u = hair.material.uniforms;
     const oldColour = status.hairColour;
@@ -447,8 +454,11 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     if (o.hideHair && view.hairMesh) view.hairMesh.visible = false;
     const toolsShown = [toolGroup.visible, arrow.visible, ghost.visible];
     toolGroup.visible = arrow.visible = ghost.visible = false;
+    view.forceLines = o.lines ?? null;
     const t0 = performance.now();
     view.render();
+    const lines = view.lineCount;
+    view.forceLines = null;
     const gl = view.renderer.getContext();
     const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
     const px = new Uint8Array(4 * w * h);
@@ -465,13 +475,14 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     view.controls.target.copy(oldTarget);
     let bin = '';
     for (let i = 0; i < px.length; i += 8192) bin += String.fromCharCode(...px.subarray(i, i + 8192));
-    return { width: w, height: h, pixels: btoa(bin), png, ms };
+    return { width: w, height: h, pixels: btoa(bin), png, ms, lines };
   },
   /** The hair's ink (sum over pixels of every strand fragment's coverage, in pixels; hairCompositor.ink) for
    * each of `views` (camera and target in world m, `hairType`: the strands' width from that SCENE hair type),
-   * all rendered from the same hair state, the person and the tools hidden (so no strand is behind the body).
+   * `fov` the vertical field of view, deg, `lines` forces the parallel lines per strand, `size` a square drawing buffer of that many pixels), all rendered from the
+   * same hair state, the person and the tools hidden (so no strand is behind the body).
    * The depth weight is set to 1 and everything is restored afterwards. */
-  hairInk(views: { camera: [number, number, number]; target: [number, number, number]; hairType?: number }[]) {
+  hairInk(views: { camera: [number, number, number]; target: [number, number, number]; hairType?: number; fov?: number; lines?: number; size?: number }[]) {
     const hair = view.hair!;
     const u = hair.material.uniforms;
     const falloff = u.oitDepthFalloff.value;
@@ -481,13 +492,22 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     const shown = hidden.map((o) => o.visible);
     hidden.forEach((o) => { o.visible = false; });
     u.oitDepthFalloff.value = 1e9;
+    const fov = view.camera.fov;
     const ink = views.map((v) => {
       view.camera.position.set(...v.camera);
       view.controls.target.set(...v.target);
+      view.camera.fov = v.fov ?? fov;
+      view.camera.updateProjectionMatrix();
       view.setHairType(v.hairType ?? oldType);
+      view.forceLines = v.lines ?? null;
+      if (v.size) { view.renderer.setSize(v.size, v.size, false); view.camera.aspect = 1; }
+      view.camera.updateProjectionMatrix();
       view.render();
-      return { ink: view.compositor.ink(view.renderer), strandWidth: u.strandWidth.value as number };
+      return { ink: view.compositor.ink(view.renderer), strandWidth: u.strandWidth.value as number, lines: view.lineCount };
     });
+    view.forceLines = null;
+    view.camera.fov = fov;
+    view.resize();
     u.oitDepthFalloff.value = falloff;
     hidden.forEach((o, i) => { o.visible = shown[i]; });
     view.setHairType(oldType);

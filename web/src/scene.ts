@@ -37,6 +37,14 @@ export class View {
    * opaque `scene`. */
   hairMesh: THREE.LineSegments | null = null;
   readonly hairScene = new THREE.Scene();
+  /** Draws 2 .. maxLines of the same strands (parallel lines for strands wider than a pixel), shown per frame. */
+  private hairLines: THREE.LineSegments[] = [];
+  /** Rest positions of up to 256 strand vertices (head frame, m): the nearest hair's depth for the line count. */
+  private hairSamples = new Float32Array(0);
+  /** Parallel lines per strand in the last frame (1 unless strands near the camera are wider than a pixel). */
+  lineCount = 1;
+  /** Forces the line count (tests, benchmarks); null: chosen per frame. */
+  forceLines: number | null = null;
   readonly compositor: HairCompositor;
   /** Holds every strand at rest with room to move (head frame, m): the front of the hair for the compositing's
    * depth weight. */
@@ -166,7 +174,8 @@ export class View {
 
   /** Builds the person and the hair from the SCENE message (replacing earlier ones). */
   load(msg: SceneMsg): void {
-    if (this.hairMesh) { this.hairScene.remove(this.hairMesh); this.hairMesh.geometry.dispose(); }
+    if (this.hairMesh) { this.hairScene.remove(this.hairMesh, ...this.hairLines); this.hairMesh.geometry.dispose(); }
+    this.hairLines = [];
     this.shadowHair?.dispose(); // shares the hair's attributes (disposed with them just above)
     this.hair?.dispose();
     if (this.person) { this.scene.remove(this.person.group); this.person.dispose(); }
@@ -189,6 +198,20 @@ export class View {
     this.hairMesh.frustumCulled = false;
     this.verticesPerStrand = msg.verticesPerStrand;
     this.hairScene.add(this.hairMesh);
+    const material = this.hair.material;
+    const lineDraw = (i: number) => () => { material.uniforms.lineIndex.value = i; material.uniformsNeedUpdate = true; };
+    this.hairMesh.onBeforeRender = lineDraw(0);
+    for (let i = 1; i < this.hair.params.maxLines; i++) {
+      const l = new THREE.LineSegments(g, material);
+      l.frustumCulled = false;
+      l.onBeforeRender = lineDraw(i);
+      l.visible = false;
+      this.hairLines.push(l);
+      this.hairScene.add(l);
+    }
+    const n = msg.renderPositions.length / 3, step = Math.max(1, Math.floor(n / 256));
+    this.hairSamples = new Float32Array(3 * Math.ceil(n / step));
+    for (let k = 0, v = 0; v < n; v += step, k++) this.hairSamples.set(msg.renderPositions.subarray(3 * v, 3 * v + 3), 3 * k);
     const stride = Math.max(1, Math.ceil(msg.strands / this.dom.params.maxStrands));
     this.shadowHair = shadowGeometry(g, stride, msg.strands, msg.verticesPerStrand);
     fillShadowIndex(this.shadowHair, msg.verticesPerStrand, null, msg.strands);
@@ -208,6 +231,22 @@ export class View {
     this.dom.setHair(this.hair.hairsPerStrand * stride, this.hair.fibreWidth);
   }
 
+  /** Parallel lines per strand for this frame: the width in pixels (rounded up, at most maxLines) of a strand
+   * at the nearest sampled hair vertex (rest positions moved with the head). */
+  private linesNeeded(height: number): number {
+    if (!this.hair) return 1;
+    const f = 0.5 * height * this.camera.projectionMatrix.elements[5];
+    const view = this.camera.matrixWorldInverse, p = this.scratch;
+    let nearest = Infinity;
+    for (let k = 0; k < this.hairSamples.length; k += 3) {
+      p.fromArray(this.hairSamples, k).applyQuaternion(this.headQuaternion).add(this.headPosition).applyMatrix4(view);
+      nearest = Math.min(nearest, -p.z);
+    }
+    const width = this.hair.material.uniforms.strandWidth.value * f / Math.max(this.camera.near, nearest);
+    return Math.min(this.hair.params.maxLines, Math.max(1, Math.ceil(width)));
+  }
+  private readonly scratch = new THREE.Vector3();
+
   render(): void {
     this.controls.update();
     this.lighting.cameraPos.value.copy(this.camera.position);
@@ -217,7 +256,10 @@ export class View {
     }
     this.renderer.render(this.scene, this.camera);
     if (this.hair && this.hairMesh) {
-      this.renderer.getDrawingBufferSize(this.hair.material.uniforms.viewport.value as THREE.Vector2);
+      const viewport = this.renderer.getDrawingBufferSize(this.hair.material.uniforms.viewport.value as THREE.Vector2);
+      this.lineCount = this.forceLines ?? this.linesNeeded(viewport.y);
+      this.hair.material.uniforms.lineCount.value = this.lineCount;
+      this.hairLines.forEach((l, i) => { l.visible = this.hairMesh!.visible && i + 1 < this.lineCount; });
       this.hairBounds.copy(this.hairRestBounds).applyMatrix4(this.headMatrix.compose(this.headPosition, this.headQuaternion, UNIT_SCALE));
       this.compositor.render(this.renderer, this.scene, this.hairScene, this.camera, this.hairBounds);
     }

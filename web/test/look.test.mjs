@@ -192,12 +192,13 @@ describe('the look (3k render strands, small canvas)', () => {
     const b = Buffer.from(r.rest, 'base64');
     const pos = new Float32Array(b.buffer, b.byteOffset, b.byteLength / 4);
     const nv = r.verticesPerStrand;
-    const f = (r.height / 2) / Math.tan((r.fov / 2) * Math.PI / 180);
     const target = [0, 0, -0.05];
     const dir = [0.3, -0.9, 0.27].map((x, _, a) => x / Math.hypot(...a)); // the back view's direction
     const at = (d) => target.map((t, i) => t + d * dir[i]);
-    /** Expected ink for a camera at distance d, and the largest and smallest coverage of a fragment. */
-    const expected = (d, width) => {
+    /** Expected ink for a camera at distance d (drawing buffer H pixels high), and the largest and smallest
+     * extent of a strand across its major axis (px; the coverage of its fragments on one line). */
+    const expected = (d, width, H = r.height) => {
+      const f = (H / 2) / Math.tan((r.fov / 2) * Math.PI / 180);
       const eye = at(d);
       const sub = (a, c) => a.map((x, i) => x - c[i]);
       const dot = (a, c) => a.reduce((s, x, i) => s + x * c[i], 0);
@@ -229,11 +230,15 @@ describe('the look (3k render strands, small canvas)', () => {
     const types = await page.evaluate(() => window.coiffure.hairTypes);
     const widths = types.map((t) => meanWidth(t.diameter, t.ellipticity));
     const near = 1.6, far = 3.2;
-    const views = [{ camera: at(near), target }, { camera: at(far), target }, ...types.map((_, i) => ({ camera: at(far), target, hairType: i }))];
+    // Wide strands: a 480-pixel buffer at 1 m, where the strands are about 1.7 px wide, drawn as 4 parallel
+    // lines (forced: none is then wider than the lines) and with the line count the viewer chooses.
+    const wide = 1.0, size = 480;
+    const views = [{ camera: at(near), target }, { camera: at(far), target }, ...types.map((_, i) => ({ camera: at(far), target, hairType: i })),
+      { camera: at(wide), target, size, lines: 4 }, { camera: at(wide), target, size }];
     const got = await page.evaluate((v) => window.coiffureDebug.hairInk(v), views);
     const w0 = got[0].strandWidth;
     const eNear = expected(near, w0), eFar = expected(far, w0);
-    console.log('ink', { near: got[0].ink, expectedNear: eNear, far: got[1].ink, expectedFar: eFar, types: got.slice(2).map((g, i) => ({ type: types[i].name, ink: g.ink, width: g.strandWidth })) });
+    console.log('ink', { near: got[0].ink, expectedNear: eNear, far: got[1].ink, expectedFar: eFar, types: got.slice(2, 2 + types.length).map((g, i) => ({ type: types[i].name, ink: g.ink, width: g.strandWidth })) });
     // The comparison is meaningful only where no fragment's coverage is clamped (to 1 or to minCoverage).
     assert.ok(eNear.maxCov < 1 && eFar.minCov > r.minCoverage, `coverage ${eFar.minCov} to ${eNear.maxCov}`);
     // Absolute: the ink is the strands' width times their projected length (rest geometry): 3 %.
@@ -247,11 +252,20 @@ describe('the look (3k render strands, small canvas)', () => {
     assert.ok(Math.abs(ratio / want - 1) < 0.01, `ink ratio near / far ${ratio}, expected ${want}`);
     // Hair type: same strands, ink proportional to the fibre's mean width (0.5 %).
     const ref = got[2];
+    const [forced, auto] = got.slice(2 + types.length);
     types.forEach((t, i) => {
       const g = got[2 + i];
       assert.ok(Math.abs(g.strandWidth / ref.strandWidth - widths[i] / widths[0]) < 1e-5, `${t.name}: strand width ${g.strandWidth}`);
       assert.ok(Math.abs((g.ink / ref.ink) / (widths[i] / widths[0]) - 1) < 0.005, `${t.name}: ink ${g.ink} vs ${ref.ink} (${types[0].name})`);
     });
+    // Strands wider than a pixel: parallel lines, their coverages summing to the strand's extent, so the ink
+    // law holds (3 %); the viewer chooses more than one line there, and one line at the distances above.
+    const eWide = expected(wide, w0, size);
+    console.log('wide strands', { forced, auto, expected: eWide });
+    assert.ok(eWide.maxCov > 1.5 && eWide.maxCov < 4, `widest strand ${eWide.maxCov} px`);
+    assert.ok(Math.abs(forced.ink / eWide.ink - 1) < 0.03, `wide strands: ink ${forced.ink} px, expected ${eWide.ink} px`);
+    assert.ok(auto.lines >= 2 && auto.lines <= 4, `lines chosen for ${eWide.minCov}-${eWide.maxCov} px wide strands: ${auto.lines}`);
+    assert.ok(got.slice(0, 2 + types.length).every((g) => g.lines === 1), 'one line for strands below a pixel');
   });
 
   // Last: it changes the server's hair type.

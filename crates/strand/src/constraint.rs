@@ -186,6 +186,17 @@ fn pinv3(w: &Matrix3<f64>) -> Matrix3<f64> {
     w.pseudo_inverse(tol).unwrap_or_else(|_| Matrix3::zeros())
 }
 
+/// `w p` for a 3 x 3 block, written out: the same sums in the same order as nalgebra's product (column by
+/// column), without its generic loops.
+#[inline(always)]
+fn mul3(w: &Matrix3<f64>, p: &Vector3<f64>) -> Vector3<f64> {
+    Vector3::new(
+        w[(0, 0)] * p.x + w[(0, 1)] * p.y + w[(0, 2)] * p.z,
+        w[(1, 0)] * p.x + w[(1, 1)] * p.y + w[(1, 2)] * p.z,
+        w[(2, 0)] * p.x + w[(2, 1)] * p.y + w[(2, 2)] * p.z,
+    )
+}
+
 /// Two unit vectors orthogonal to `n` and to each other.
 fn tangents(n: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
     let helper = if n.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
@@ -524,6 +535,9 @@ impl ConstraintRows {
 
     /// Adds `Y_c^T p` (the generalized response to the impulse `p` at constraint `c`'s point) to `out` (dofs).
     fn add_response(&self, c: usize, p: &Vector3<f64>, out: &mut [f64]) {
+        if p.x == 0.0 && p.y == 0.0 && p.z == 0.0 {
+            return;
+        }
         let size = 3 * self.dofs;
         for (o, y) in out.iter_mut().zip(self.y[c * size..(c + 1) * size].chunks_exact(3)) {
             *o += y[0] * p.x + y[1] * p.y + y[2] * p.z;
@@ -534,8 +548,11 @@ impl ConstraintRows {
     fn velocity(&self, c: usize) -> Vector3<f64> {
         let n = self.len();
         let mut u = self.u_free[c];
-        for d in 0..n {
-            u += self.w[c * n + d] * self.impulses[d];
+        // A zero impulse (a separating contact) would add exact zeros.
+        for (w, p) in self.w[c * n..(c + 1) * n].iter().zip(&self.impulses) {
+            if p.x != 0.0 || p.y != 0.0 || p.z != 0.0 {
+                u += mul3(w, p);
+            }
         }
         u
     }
@@ -641,9 +658,11 @@ pub fn solve(rows: &mut [ConstraintRows], links: &[ConstraintLink], opts: &Const
                         rows[b].impulses[j] = -p;
                     }
                 }
-                own_largest = own_largest.max(rows[s].impulses[c].norm());
-                own_change = own_change.max((rows[s].impulses[c] - before).norm());
+                // Squared norms: the square root of the largest equals the largest square root.
+                own_largest = own_largest.max(rows[s].impulses[c].norm_squared());
+                own_change = own_change.max((rows[s].impulses[c] - before).norm_squared());
             }
+            let (own_largest, own_change) = (own_largest.sqrt(), own_change.sqrt());
             if linked[s] {
                 largest = largest.max(own_largest);
                 change = change.max(own_change);

@@ -572,37 +572,47 @@ impl Dynamics {
     /// nonzero (a point's Jacobian: the segments from the root to its own), so the tip-to-root recursion starts
     /// at segment `used - 1`.
     pub(crate) fn resolve_articulated3(&mut self, model: &StrandModel, b: &mut [f64], used: usize) -> bool {
-        let d = model.dofs_per_segment();
+        if model.dofs_per_segment() == 2 {
+            self.resolve_articulated3_d::<2>(model, b, used)
+        } else {
+            self.resolve_articulated3_d::<3>(model, b, used)
+        }
+    }
+
+    /// [`Dynamics::resolve_articulated3`] for `D` coordinates per segment: the padded rows and columns of the
+    /// workspace (zero in `U`, `S` and `c`, identity in `D^-1`) would only add exact zeros.
+    fn resolve_articulated3_d<const D: usize>(&mut self, model: &StrandModel, b: &mut [f64], used: usize) -> bool {
         let n = model.segments;
         let used = used.min(n);
         let mut pa = SMatrix::<f64, 6, 3>::zeros();
         // Beyond `used` the right-hand sides and the bias are zero.
         self.articulated3[used..n].fill(Matrix3::zeros());
         for i in (0..used).rev() {
-            // Rows: the segment's dofs (padded to 3); columns: the right-hand sides.
-            let s_pa = self.motion[i].tr_mul(&pa);
+            // Rows: the segment's dofs; columns: the right-hand sides.
+            let s = self.motion[i].fixed_columns::<D>(0);
+            let s_pa = s.tr_mul(&pa);
             let (u, dinv, _) = &self.articulated[i];
             let mut c = Matrix3::zeros();
-            for k in 0..d {
+            for k in 0..D {
                 for r in 0..3 {
-                    c[(k, r)] = -s_pa[(k, r)] - b[3 * (i * d + k) + r];
+                    c[(k, r)] = -s_pa[(k, r)] - b[3 * (i * D + k) + r];
                 }
             }
-            pa += *u * (*dinv * c);
+            pa += u.fixed_columns::<D>(0) * (dinv.fixed_view::<D, D>(0, 0) * c.fixed_rows::<D>(0));
             self.articulated3[i] = c;
         }
         let mut v = SMatrix::<f64, 6, 3>::zeros();
         for i in 0..n {
             let (u, dinv, _) = &self.articulated[i];
-            let x = -(*dinv * (u.tr_mul(&v) + self.articulated3[i]));
-            for k in 0..d {
+            let x = -(dinv.fixed_view::<D, D>(0, 0) * (u.fixed_columns::<D>(0).tr_mul(&v) + self.articulated3[i].fixed_rows::<D>(0)));
+            for k in 0..D {
                 for r in 0..3 {
-                    b[3 * (i * d + k) + r] = x[(k, r)];
+                    b[3 * (i * D + k) + r] = x[(k, r)];
                 }
             }
-            v += self.motion[i] * x;
+            v += self.motion[i].fixed_columns::<D>(0) * x;
         }
-        b[..3 * n * d].iter().all(|x| x.is_finite())
+        b[..3 * n * D].iter().all(|x| x.is_finite())
     }
 
     /// Steps 2 (mass) and 3 of the pipeline: the dense mass matrix from the sums of [`Dynamics::sweep`].

@@ -79,8 +79,11 @@ impl Aabb {
     }
 
     /// Whether the boxes overlap (touching counts).
+    #[inline]
     pub fn overlaps(&self, o: &Aabb) -> bool {
-        (0..3).all(|i| self.min[i] <= o.max[i] && o.min[i] <= self.max[i])
+        let (a, b) = (&self.min, &self.max);
+        let (c, d) = (&o.min, &o.max);
+        (a.x <= d.x && c.x <= b.x) && (a.y <= d.y && c.y <= b.y) && (a.z <= d.z && c.z <= b.z)
     }
 
     /// Centre, m.

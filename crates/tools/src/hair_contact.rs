@@ -123,6 +123,8 @@ pub struct HairContactFinder {
     chords: Vec<Chord>,
     /// Chord indices sorted by their boxes' lower end along `axis` (kept between steps).
     order: Vec<usize>,
+    /// The chords' boxes and strands in that order, packed for the sweep's inner loop.
+    sorted: Vec<(Aabb, usize)>,
     axis: usize,
     /// Per strand: `max_per_strand` slots and how many are filled.
     slots: Vec<Slot>,
@@ -226,18 +228,20 @@ impl HairContactFinder {
         self.slots.resize(strands * self.cap, empty);
         self.pairs = 0;
         self.tested = 0;
+        self.sorted.clear();
+        self.sorted.extend(self.order.iter().map(|&i| (self.chords[i].bounds, self.chords[i].strand)));
         for x in 0..n {
-            let nx = self.order[x];
-            let p = &self.chords[nx];
+            let (pb, ps) = self.sorted[x];
             for y in x + 1..n {
-                let ny = self.order[y];
-                let q = &self.chords[ny];
-                if q.bounds.min[axis] > p.bounds.max[axis] {
+                let (qb, qs) = &self.sorted[y];
+                if qb.min[axis] > pb.max[axis] {
                     break;
                 }
-                if p.strand == q.strand || !p.bounds.overlaps(&q.bounds) {
+                if ps == *qs || !pb.overlaps(qb) {
                     continue;
                 }
+                let (nx, ny) = (self.order[x], self.order[y]);
+                let (p, q) = (&self.chords[nx], &self.chords[ny]);
                 self.tested += 1;
                 let (u, v) = closest_segment_params(&p.a, &p.b, &q.a, &q.b);
                 let (xp, xq) = (p.a + (p.b - p.a) * u, q.a + (q.b - q.a) * v);

@@ -256,6 +256,9 @@ function onFrame(f: P.FrameMsg): void {
   device.setForce(fm);
   if (f.tool !== status.tool) setTool(f.tool, false);
   // Pseudo-haptic cursor: the tool is drawn where the proxy is, which lags behind the mouse under force.
+  // The tool appears once something drives it (the pointer on the canvas, or a haptic device): at rest it
+  // waits behind the head, where the portrait view would show it floating beside the face.
+  toolGroup.visible = ghost.visible = toolDriven || status.device !== null;
   toolGroup.position.set(...f.toolPosition);
   toolGroup.quaternion.set(...f.toolQuaternion);
   ghost.position.set(...f.devicePosition);
@@ -354,7 +357,10 @@ window.addEventListener('keydown', (e) => {
   status.headMode = !status.headMode;
   if (headEl) headEl.textContent = status.headMode ? 'head mode (H): drag to turn and nod the head' : '';
 });
+let toolDriven = false;
+canvas.addEventListener('pointerenter', () => { toolDriven = true; });
 canvas.addEventListener('pointerdown', (e) => {
+  toolDriven = true;
   if (e.button !== 0) return;
   canvas.setPointerCapture(e.pointerId);
   if (status.headMode) { headDrag = { x: e.clientX, y: e.clientY, yaw: headYaw, pitch: headPitch }; return; }
@@ -368,6 +374,7 @@ canvas.addEventListener('pointermove', (e) => {
     if (status.youControl) status.setHead(headYaw, headPitch);
     return;
   }
+  toolDriven = true;
   device.move(e); sendPose();
 });
 

@@ -80,10 +80,12 @@ describe('a comb stroke through the hair (issue 12; 5k render strands standing f
     assert.ok(s.in_hair_steps > 500, `steps with the comb in the hair: ${s.in_hair_steps}`);
     assert.ok(s.final_max_displacement_m <= 0.03, `displacement at the end ${s.final_max_displacement_m} m`);
     assert.ok(s.in_hair_force_share >= 0.6, `share of in-hair steps above 5 mN ${s.in_hair_force_share}`);
-    // Not met yet in the browser's stroke (the headless acceptance stroke meets them): issue 12 asks for at most
-    // 0.08 m during the stroke and 0.1 N per step; measured 0.085 m (strands dragged by the comb as the
-    // released button lifts it 6 cm out of the hair, which the in-hair measure still counts) and 0.13 N.
-    // Asserted as regression bounds until then: 0.1 m and 0.2 N (before this change: 3.3 N steps).
+    // Not always met in the browser's stroke (the headless acceptance stroke meets them): issue 12 asks for at
+    // most 0.08 m during the stroke and 0.1 N per step. With stable grooms and hair-hair contact on (2026-11-24):
+    // 0.072 m / 0.103 N and 0.086 m / 0.155 N in two runs; each largest step is one stick-slip release (18-26
+    // teeth contacts let go at once, the proxy's velocity jumps by about 0.01 m/s, and the coupling's damper,
+    // 10 N s/m, passes it to the hand); every other step stayed under 0.08 N. Asserted as regression bounds
+    // until then: 0.1 m and 0.2 N (before issue 12's work: 3.3 N steps).
     assert.ok(s.stroke_max_displacement_m <= 0.1, `displacement during the stroke ${s.stroke_max_displacement_m} m`);
     assert.ok(s.max_force_change_n <= 0.2, `largest one-step change ${s.max_force_change_n} N`);
   });
@@ -174,12 +176,18 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     // Head turn of 30 degrees (key H's drag sends the same HEAD message), then back.
     await page.evaluate(() => window.coiffure.setHead(0.5236, 0));
     await page.waitForFunction(() => Math.abs(window.coiffure.headQuaternion[2] - Math.sin(0.2618)) < 1e-3, null, { timeout: 10_000 });
-    let swing = 0;
-    for (let k = 0; k < 4; k++) {
-      swing = Math.max(swing, await motion());
-      if (k === 1) await page.screenshot({ path: join(artifacts, 'head-turn-during.png') });
-      await page.waitForTimeout(100);
-    }
+    // The swing's peak, read at every animation frame for 0.8 s (four reads 100 ms apart once caught 22 mm of a
+    // swing that peaks higher, against 11 mm settled), then a picture.
+    const swing = await page.evaluate(() => new Promise((resolve) => {
+      const until = performance.now() + 800;
+      let peak = 0;
+      const look = () => {
+        peak = Math.max(peak, window.coiffure.latticeMotion());
+        if (performance.now() < until) requestAnimationFrame(look); else resolve(peak);
+      };
+      look();
+    }));
+    await page.screenshot({ path: join(artifacts, 'head-turn-during.png') });
     await page.waitForTimeout(2000);
     const settled = await motion();
     await page.screenshot({ path: join(artifacts, 'head-turn-after.png') });

@@ -1,11 +1,12 @@
 //! Diagnostic (issue 12): does each guide of the built-in scene stay at its groomed state when the haptic layer
 //! simulates it at rest, alone (no tool, no body, no neighbours; linearly implicit steps of 1 ms, the live
 //! session's minimum air drag)? Prints the guides whose generalized velocity grows past 1e-3 within 1.5 s, and
-//! when. Measured 2026-11-24 20:15 UTC: 27 of 200 (side and front guides; guide 191's twist rate grows x32 every
-//! 0.1 s from round-off, the centreline still, then the strand swings 10-13 cm to another shape): the groomed
-//! (sag-free) equilibrium is unstable for them, which the live dryer scenario shows as guides that leave their
-//! place while the tool rests beside them. It also prints the guides whose groomed state the statics call
-//! unstable (`hairstyle::Guide::stable`, the sag-free rest's Hessian): 110 of 200, the 27 among them. Run:
+//! when; the largest centreline displacement of any guide from its groom over that time; and the guides whose
+//! groomed state the statics call unstable (`hairstyle::Guide::stable`, the sag-free rest's Hessian).
+//! Measured 2026-11-24 20:15 UTC with planar grooms in the combing plane: 28 of 200 guides left their groom within
+//! 0.65-1.5 s (side and front guides; guide 191's twist rate grew x32 every 0.1 s from round-off, the centreline
+//! still, then the strand swung 10-13 cm), 112 of 200 flagged unstable. With the stable grooms
+//! (`hairstyle::groom`, 2026-11-24 22:00 UTC): 0 flagged, 0 leave, largest displacement 5.8e-15 m in 1.5 s. Run:
 //! `cargo run --release -p coiffure-engine --example guide_stability`
 use engine::scene::{Scene, SceneOptions};
 use strand::Strand;

@@ -105,13 +105,16 @@ mod tests {
 
     #[test]
     fn the_live_hair_contact_is_a_wisp_of_the_guides_hairs_with_the_wet_friction() {
-        // Off by default; on, each guide is a wisp of the real hairs it stands for, and its fibre-fibre friction
-        // follows the wetness by the wetness model's law (dry 0.25; soaked, times the model's friction ratio) and
-        // the combing ease by the one combing-ease law; the interaction takes it (and keeps it on a new one).
+        // On by default (off: none); on, each guide is a wisp of the real hairs it stands for, and its fibre-fibre
+        // friction follows the wetness by the wetness model's law (dry 0.25; soaked, times the model's friction
+        // ratio) and the combing ease by the one combing-ease law; the interaction takes it (and keeps it on a
+        // new one).
         let scene = small_scene();
-        assert!(HapticCore::new(scene.clone(), SessionParams::default()).unwrap().interaction.hair_contact.is_none());
-        let mut params = SessionParams::default();
-        params.haptic.hair_contact = true;
+        let mut off = SessionParams::default();
+        off.haptic.hair_contact = false;
+        assert!(HapticCore::new(scene.clone(), off).unwrap().interaction.hair_contact.is_none());
+        let params = SessionParams::default();
+        assert!(params.haptic.hair_contact);
         let mut core = HapticCore::new(scene, params).unwrap();
         let dry = core.hair_contact(0.0).unwrap();
         assert_eq!(dry.fibres, core.hairs_per_guide());

@@ -53,6 +53,18 @@ pub fn closest_segment_params(p0: &Vector3<f64>, p1: &Vector3<f64>, q0: &Vector3
     (s, t)
 }
 
+/// The smaller of two numbers, as nalgebra's componentwise `inf` takes it (`a` when they compare equal).
+#[inline(always)]
+fn lower(a: f64, b: f64) -> f64 {
+    if a <= b { a } else { b }
+}
+
+/// The larger of two numbers, as nalgebra's componentwise `sup` takes it (`a` when they compare equal).
+#[inline(always)]
+fn upper(a: f64, b: f64) -> f64 {
+    if a >= b { a } else { b }
+}
+
 /// Axis-aligned bounding box, m.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Aabb {
@@ -69,13 +81,24 @@ impl Aabb {
     }
 
     /// Box around a segment, grown by `margin` (m) on every side.
+    #[inline]
     pub fn of_segment(a: &Vector3<f64>, b: &Vector3<f64>, margin: f64) -> Self {
-        Self { min: a.inf(b).add_scalar(-margin), max: a.sup(b).add_scalar(margin) }
+        let m = -margin;
+        Self {
+            min: Vector3::new(lower(a.x, b.x) + m, lower(a.y, b.y) + m, lower(a.z, b.z) + m),
+            max: Vector3::new(upper(a.x, b.x) + margin, upper(a.y, b.y) + margin, upper(a.z, b.z) + margin),
+        }
     }
 
     /// Smallest box containing both.
+    #[inline]
     pub fn merge(&self, o: &Aabb) -> Self {
-        Self { min: self.min.inf(&o.min), max: self.max.sup(&o.max) }
+        let (a, b) = (&self.min, &o.min);
+        let (c, d) = (&self.max, &o.max);
+        Self {
+            min: Vector3::new(lower(a.x, b.x), lower(a.y, b.y), lower(a.z, b.z)),
+            max: Vector3::new(upper(c.x, d.x), upper(c.y, d.y), upper(c.z, d.z)),
+        }
     }
 
     /// Whether the boxes overlap (touching counts).

@@ -187,6 +187,12 @@ pub struct HapticParams {
     /// from their settled place during the stroke and 2.4 mm 1.2 s after, force above 5 mN in 65 % of the
     /// in-hair steps; measured 2026-11-24, docs/scenarios.md).
     pub hair_contact: bool,
+    /// Guides that overlap in the groom keep that overlap: two local strands closer than their contact
+    /// distance in their groomed shapes touch only closer than their groomed distance (`tools::hair_contact`'s
+    /// rest shapes, set when a strand joins the simulation). The groomed guides are independent curves and 68
+    /// pairs of the built-in 200 lie closer than the contact distance; pushed apart they moved guides 13.4 cm
+    /// with a dryer held still beside the hair (issue 12). Default true.
+    pub groomed_overlap: bool,
     /// The tool drags through the local strands against the fibres it parts (`tools::entanglement`, the tress
     /// scenarios' law: bending of the parted fibres and, wet, the water bridges on the tooth; each guide's
     /// drag times the real hairs it stands for). Default false: on, the `[live]` acceptance stroke
@@ -198,7 +204,7 @@ pub struct HapticParams {
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, entanglement: false }
+        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false }
     }
 }
 

@@ -86,6 +86,9 @@ struct Chord {
     length: f64,
     a: Vector3<f64>,
     b: Vector3<f64>,
+    /// The chord in the strand's rest shape (NaN: none; see [`HairContactFinder::detect`]), m.
+    rest_a: Vector3<f64>,
+    rest_b: Vector3<f64>,
     bounds: Aabb,
 }
 
@@ -167,7 +170,13 @@ impl HairContactFinder {
     /// Finds the contacts between the `strands` strands whose centreline `pieces` are given (contiguous per
     /// strand, in order from the root; `pieces_per_chord(k)` pieces of strand k make one chord, e.g. the pieces
     /// of one helical segment), for wisps whose centrelines touch at `distance` (m).
-    pub fn detect(&mut self, params: &HairContact, pieces: &[Piece], pieces_per_chord: impl Fn(usize) -> usize, strands: usize, distance: f64) {
+    ///
+    /// `rest` (empty, or one piece per piece of `pieces`, NaN where a strand has none) gives the strands' rest
+    /// shapes: two chords that are closer than `distance` at rest touch only closer than their rest distance
+    /// (wisps that overlap in the groom keep that overlap instead of being pushed apart; the depth is measured
+    /// from it).
+    pub fn detect(&mut self, params: &HairContact, pieces: &[Piece], rest: &[Piece], pieces_per_chord: impl Fn(usize) -> usize, strands: usize, distance: f64) {
+        let has_rest = rest.len() == pieces.len();
         self.chords.clear();
         let half = 0.5 * distance;
         let mut i = 0;
@@ -184,7 +193,8 @@ impl HairContactFinder {
             }
             let (a, b) = (pieces[i].a, pieces[j].b);
             let length = pieces[j].s + pieces[j].length - pieces[i].s;
-            self.chords.push(Chord { strand: k, index, s: pieces[i].s, length, a, b, bounds: Aabb::of_segment(&a, &b, half) });
+            let (rest_a, rest_b) = if has_rest { (rest[i].a, rest[j].b) } else { (Vector3::repeat(f64::NAN), Vector3::repeat(f64::NAN)) };
+            self.chords.push(Chord { strand: k, index, s: pieces[i].s, length, a, b, rest_a, rest_b, bounds: Aabb::of_segment(&a, &b, half) });
             index += 1;
             i = j + 1;
         }
@@ -248,8 +258,17 @@ impl HairContactFinder {
                 if dist >= distance || dist < 1e-12 * distance {
                     continue;
                 }
+                // Closer than the contact distance at rest (both rest chords known): the rest distance is theirs.
+                let mut limit = distance;
+                if p.rest_a.x.is_finite() && q.rest_a.x.is_finite() {
+                    let (u0, v0) = closest_segment_params(&p.rest_a, &p.rest_b, &q.rest_a, &q.rest_b);
+                    limit = limit.min(((p.rest_a + (p.rest_b - p.rest_a) * u0) - (q.rest_a + (q.rest_b - q.rest_a) * v0)).norm());
+                    if dist >= limit {
+                        continue;
+                    }
+                }
                 self.pairs += 1;
-                let depth = distance - dist;
+                let depth = limit - dist;
                 let normal = gap / dist;
                 let (sp, sq) = (p.s + u * p.length, q.s + v * q.length);
                 let (kp, kq, ip, iq) = (p.strand, q.strand, p.index, q.index);
@@ -339,7 +358,7 @@ mod tests {
         let params = HairContact { max_per_strand: 1000, ..Default::default() };
         let mut grid = HairContactFinder::new();
         for distance in [2e-4, 2e-4, 1e-3, 1e-3, 3e-3] {
-            grid.detect(&params, &pieces, |_| 3, xs.len(), distance);
+            grid.detect(&params, &pieces, &[], |_| 3, xs.len(), distance);
             let want = brute(&pieces, distance);
             println!("distance {distance}: {} pairs (brute force {want}), {} tested", grid.pairs(), grid.tested());
             assert!(want > 0);
@@ -360,7 +379,7 @@ mod tests {
         let pieces = strands(&xs, 4);
         let params = HairContact { max_per_strand: 2, ..Default::default() };
         let mut grid = HairContactFinder::new();
-        grid.detect(&params, &pieces, |_| 3, xs.len(), 1.5e-3);
+        grid.detect(&params, &pieces, &[], |_| 3, xs.len(), 1.5e-3);
         let all: Vec<HairPair> = grid.contacts().collect();
         let of = |k: usize| all.iter().filter(move |p| p.strands.0 == k || p.strands.1 == k);
         let zero: Vec<&HairPair> = of(0).collect();
@@ -381,6 +400,42 @@ mod tests {
                 let mirrored = HairPair { strands: (q.strands.1, q.strands.0), s: (q.s.1, q.s.0), ..*q };
                 assert!(!same(p, q) && !same(p, &mirrored), "{p:?} listed twice");
             }
+        }
+    }
+
+    #[test]
+    fn wisps_overlapping_at_rest_touch_only_closer_than_their_rest_distance() {
+        // Two strands 0.5 mm apart at rest (contact distance 1.5 mm). With their rest shapes given, in the rest
+        // shape there is no contact; moved to 0.3 mm apart the overlap is measured from the rest distance
+        // (0.5 - 0.3 mm, to round-off); a third strand that is 1 mm from strand 0 now and had no rest shape
+        // (NaN) is measured against the full distance. Without rest shapes the rest configuration is in contact.
+        let params = HairContact::default();
+        let rest = strands(&[(0.0, 0.0), (0.0005, 0.0), (0.01, 0.0)], 2);
+        let mut grid = HairContactFinder::new();
+        grid.detect(&params, &rest, &rest, |_| 3, 3, 1.5e-3);
+        assert_eq!(grid.contacts().count(), 0, "at rest, overlapping wisps are left as they are");
+        grid.detect(&params, &rest, &[], |_| 3, 3, 1.5e-3);
+        assert!(grid.contacts().count() > 0, "without rest shapes they are in contact");
+        let now = strands(&[(0.0, 0.0), (0.0003, 0.0), (0.001, 0.0)], 2);
+        let mut with_nan = rest.clone();
+        for p in with_nan.iter_mut().filter(|p| p.strand == 2) {
+            p.a = Vector3::repeat(f64::NAN);
+            p.b = Vector3::repeat(f64::NAN);
+        }
+        grid.detect(&params, &now, &with_nan, |_| 3, 3, 1.5e-3);
+        let tilt = (1.0f64 + 0.02 * 0.02).sqrt();
+        let all: Vec<HairPair> = grid.contacts().collect();
+        let pair = |a: usize, b: usize| all.iter().filter(move |p| p.strands == (a, b));
+        assert!(pair(0, 1).count() > 0 && pair(0, 2).count() > 0, "{all:?}");
+        // Parallel chords are 0.3 / tilt mm apart now and 0.5 / tilt at rest; chords meeting end to end at the
+        // same arc length 0.3 and 0.5 mm: the overlap from the rest distance is one of the two.
+        for p in pair(0, 1) {
+            let (lo, hi) = ((0.5e-3 - 0.3e-3) / tilt, 0.5e-3 - 0.3e-3);
+            assert!(p.depth > lo - 1e-12 && p.depth < hi + 1e-12, "depth from the rest distance: {} want {lo}..{hi}", p.depth);
+        }
+        for p in pair(0, 2) {
+            let want = 1.5e-3 - 1e-3 / tilt;
+            assert!((p.depth - want).abs() < 1e-12, "no rest shape: depth from the contact distance: {} want {want}", p.depth);
         }
     }
 }

@@ -148,6 +148,12 @@ pub struct LocalInteraction {
     pub wetness: Vec<f64>,
     /// Workspace: hair-hair contact detection ([`crate::hair_contact`]).
     hair_finder: HairContactFinder,
+    /// Each strand's rest shape for hair-hair contact, as centreline pieces (empty: none), set by
+    /// [`LocalInteraction::set_rest_shape`]: wisps closer than the contact distance at rest touch only closer
+    /// than their rest distance ([`HairContactFinder::detect`]).
+    rest_shapes: Vec<Vec<Piece>>,
+    /// Workspace: the rest pieces aligned with `pieces` (NaN where a strand has none).
+    rest_pieces: Vec<Piece>,
     /// Workspaces of the batches, and each strand's (batch, lane) this step.
     batches: Vec<StrandBatch>,
     lane_of: Vec<Option<(usize, usize)>>,
@@ -190,6 +196,7 @@ impl LocalInteraction {
         let surface_torques = vec![Vec::new(); strands.len()];
         let prepared = vec![false; strands.len()];
         let lane_of = vec![None; strands.len()];
+        let strands_len = strands.len();
         Self {
             strands,
             shape,
@@ -202,6 +209,8 @@ impl LocalInteraction {
             entanglement: None,
             wetness: Vec::new(),
             hair_finder: HairContactFinder::new(),
+            rest_shapes: vec![Vec::new(); strands_len],
+            rest_pieces: Vec::new(),
             batches: Vec::new(),
             lane_of,
             surface_torques,
@@ -232,6 +241,15 @@ impl LocalInteraction {
             let wet = std::mem::take(&mut self.wetness);
             self.wetness = (0..strands.len()).map(|i| from.get(i).copied().flatten().and_then(|j| wet.get(j).copied()).unwrap_or(0.0)).collect();
         }
+        let mut rest = std::mem::take(&mut self.rest_shapes);
+        self.rest_shapes = (0..strands.len()).map(|i| match from.get(i).copied().flatten() {
+            Some(j) if j < rest.len() => {
+                let mut r = std::mem::take(&mut rest[j]);
+                r.iter_mut().for_each(|p| p.strand = i);
+                r
+            }
+            _ => Vec::new(),
+        }).collect();
         self.prepared.clear();
         self.prepared.resize(strands.len(), false);
         self.lane_of.clear();
@@ -244,6 +262,17 @@ impl LocalInteraction {
         self.changes_since_build += 1;
         if self.changes_since_build >= TREE_REBUILD_AFTER {
             self.rebuild_tree = true;
+        }
+    }
+
+    /// Gives strand `k` its rest shape for hair-hair contact: `rest`'s centreline (the same model and
+    /// segments as strand `k`; e.g. its groomed state), so that wisps overlapping at rest keep that overlap
+    /// rather than being pushed apart ([`HairContactFinder::detect`]). Kept while the strand stays
+    /// ([`LocalInteraction::set_strands`] carries it over); a strand whose pieces no longer match (cut) has none.
+    pub fn set_rest_shape(&mut self, k: usize, rest: &Strand) {
+        if let Some(r) = self.rest_shapes.get_mut(k) {
+            r.clear();
+            Self::sample_strand(k, rest, r);
         }
     }
 
@@ -466,7 +495,22 @@ impl LocalInteraction {
             hc.validate()?;
             let strands = &self.strands;
             let per_chord = |k: usize| strands[k].dynamics.quadrature_nodes().len() + 1;
-            self.hair_finder.detect(&hc, &self.pieces, per_chord, strands.len(), hc.distance(radius));
+            // The rest pieces aligned with this step's pieces (a strand without a matching rest shape: NaN).
+            self.rest_pieces.clear();
+            if self.rest_shapes.iter().any(|r| !r.is_empty()) {
+                let nan = Vector3::repeat(f64::NAN);
+                let mut i = 0;
+                while i < self.pieces.len() {
+                    let k = self.pieces[i].strand;
+                    let n = self.pieces[i..].iter().take_while(|p| p.strand == k).count();
+                    match self.rest_shapes.get(k).filter(|r| r.len() == n) {
+                        Some(r) => self.rest_pieces.extend_from_slice(r),
+                        None => self.rest_pieces.extend(self.pieces[i..i + n].iter().map(|p| Piece { a: nan, b: nan, ..*p })),
+                    }
+                    i += n;
+                }
+            }
+            self.hair_finder.detect(&hc, &self.pieces, &self.rest_pieces, per_chord, strands.len(), hc.distance(radius));
             hair_pairs = self.hair_finder.pairs();
             timings.hair_detect = clock.elapsed().as_secs_f64() - t_hair;
         }

@@ -80,13 +80,13 @@ describe('a comb stroke through the hair (issue 12; 5k render strands standing f
     assert.ok(s.in_hair_steps > 500, `steps with the comb in the hair: ${s.in_hair_steps}`);
     assert.ok(s.final_max_displacement_m <= 0.03, `displacement at the end ${s.final_max_displacement_m} m`);
     assert.ok(s.in_hair_force_share >= 0.6, `share of in-hair steps above 5 mN ${s.in_hair_force_share}`);
-    // Not always met in the browser's stroke (the headless acceptance stroke meets them): issue 12 asks for at
-    // most 0.08 m during the stroke and 0.1 N per step. With stable grooms and hair-hair contact on (2026-11-24):
-    // 0.072 m / 0.103 N and 0.086 m / 0.155 N in two runs; each largest step is one stick-slip release (18-26
-    // teeth contacts let go at once, the proxy's velocity jumps by about 0.01 m/s, and the coupling's damper,
-    // 10 N s/m, passes it to the hand); every other step stayed under 0.08 N. Asserted as regression bounds
-    // until then: 0.1 m and 0.2 N (before issue 12's work: 3.3 N steps).
-    assert.ok(s.stroke_max_displacement_m <= 0.1, `displacement during the stroke ${s.stroke_max_displacement_m} m`);
+    // Issue 12's bounds: at most 0.08 m during the stroke (met: with stable grooms, hair-hair contact and the
+    // groomed overlap kept, 0.045 and 0.058 m in two runs, 2026-11-24) and 0.1 N per step (not always met:
+    // 0.122 and 0.072 N in the same runs; each largest step is one stick-slip release, 18-26 teeth contacts
+    // letting go at once, the proxy's velocity jumping by about 0.01 m/s and the coupling's damper, 10 N s/m,
+    // passing it to the hand). The step is asserted as a regression bound until then: 0.2 N (before issue 12's
+    // work: 3.3 N steps).
+    assert.ok(s.stroke_max_displacement_m <= 0.08, `displacement during the stroke ${s.stroke_max_displacement_m} m`);
     assert.ok(s.max_force_change_n <= 0.2, `largest one-step change ${s.max_force_change_n} N`);
   });
 });

@@ -68,6 +68,17 @@ fn error_of(ws: &mut tungstenite::WebSocket<std::net::TcpStream>) -> (u16, Strin
     (u16::from_le_bytes([e[2], e[3]]), String::from_utf8_lossy(&e[6..]).into_owned())
 }
 
+/// A LOAD of a one-strand `.data` file through `points` (m), taken as metres in the head frame without fitting
+/// (docs/protocol.md: format 1 with options; up and facing detected, flags 1 = no fit, 1 m per unit).
+fn data_load_as_metres(points: &[[f32; 3]]) -> Vec<u8> {
+    let mut load = vec![0x06, 1, 0x80 | 1, 0, 0, 1, 0];
+    load.extend_from_slice(&1f32.to_le_bytes());
+    load.extend_from_slice(&1u32.to_le_bytes());
+    load.extend_from_slice(&(points.len() as u32).to_le_bytes());
+    points.iter().flatten().for_each(|x| load.extend_from_slice(&x.to_le_bytes()));
+    load
+}
+
 #[test]
 fn a_load_beyond_the_bounds_is_refused_naming_the_bound() {
     let _one = serial();
@@ -76,12 +87,7 @@ fn a_load_beyond_the_bounds_is_refused_naming_the_bound() {
     first_of(&mut ws, 0x84);
     // The audit's small file: one .data strand from (-1.35, -1.35, -1.35) to (1.35, 1.35, 1.35) m, loaded as
     // metres without fitting. It asked for a 185,193-node lattice; now the box around the head refuses it.
-    let mut load = vec![0x06, 1, 0x80 | 1, 0, 0, 1, 0];
-    load.extend_from_slice(&1f32.to_le_bytes());
-    load.extend_from_slice(&1u32.to_le_bytes());
-    load.extend_from_slice(&2u32.to_le_bytes());
-    [-1.35f32, -1.35, -1.35, 1.35, 1.35, 1.35].iter().for_each(|x| load.extend_from_slice(&x.to_le_bytes()));
-    ws.send(tungstenite::Message::Binary(load.into())).unwrap();
+    ws.send(tungstenite::Message::Binary(data_load_as_metres(&[[-1.35, -1.35, -1.35], [1.35, 1.35, 1.35]]).into())).unwrap();
     let (code, text) = error_of(&mut ws);
     assert_eq!(code, 5, "{text}");
     assert!(text.contains("strand 0 point 0") && text.contains("outside the box around the head"), "{text}");
@@ -106,12 +112,7 @@ fn a_load_over_its_time_budget_is_refused_and_the_hairstyle_stays() {
     let mut ws = open(&s.http, None, "").unwrap();
     first_of(&mut ws, 0x84);
     // A valid .data file: one strand hanging 10 cm from the top of the head (metres, head frame, not fitted).
-    let mut load = vec![0x06, 1, 0x80 | 1, 0, 0, 1, 0];
-    load.extend_from_slice(&1f32.to_le_bytes());
-    load.extend_from_slice(&1u32.to_le_bytes());
-    load.extend_from_slice(&3u32.to_le_bytes());
-    [0.0f32, 0.0, 0.095, 0.0, -0.05, 0.09, 0.0, -0.1, 0.05].iter().for_each(|x| load.extend_from_slice(&x.to_le_bytes()));
-    ws.send(tungstenite::Message::Binary(load.into())).unwrap();
+    ws.send(tungstenite::Message::Binary(data_load_as_metres(&[[0.0, 0.0, 0.095], [0.0, -0.05, 0.09], [0.0, -0.1, 0.05]]).into())).unwrap();
     let (code, text) = error_of(&mut ws);
     assert_eq!(code, 5, "{text}");
     assert!(text.contains("over its time budget of 0 s"), "{text}");

@@ -152,8 +152,11 @@ pub struct LocalInteraction {
     /// [`LocalInteraction::set_rest_shape`]: wisps closer than the contact distance at rest touch only closer
     /// than their rest distance ([`HairContactFinder::detect`]).
     rest_shapes: Vec<Vec<Piece>>,
-    /// Workspace: the rest pieces aligned with `pieces` (NaN where a strand has none).
+    /// Workspace: the rest pieces aligned with `pieces` (NaN where a strand has none; empty when no strand has a
+    /// rest shape), rebuilt only when the strands, their rest shapes or their number of pieces change.
     rest_pieces: Vec<Piece>,
+    /// `rest_pieces` must be rebuilt (strands or rest shapes changed).
+    rest_stale: bool,
     /// Workspaces of the batches, and each strand's (batch, lane) this step.
     batches: Vec<StrandBatch>,
     lane_of: Vec<Option<(usize, usize)>>,
@@ -211,6 +214,7 @@ impl LocalInteraction {
             hair_finder: HairContactFinder::new(),
             rest_shapes: vec![Vec::new(); strands_len],
             rest_pieces: Vec::new(),
+            rest_stale: false,
             batches: Vec::new(),
             lane_of,
             surface_torques,
@@ -250,6 +254,7 @@ impl LocalInteraction {
             }
             _ => Vec::new(),
         }).collect();
+        self.rest_stale = true;
         self.prepared.clear();
         self.prepared.resize(strands.len(), false);
         self.lane_of.clear();
@@ -273,6 +278,28 @@ impl LocalInteraction {
         if let Some(r) = self.rest_shapes.get_mut(k) {
             r.clear();
             Self::sample_strand(k, rest, r);
+            self.rest_stale = true;
+        }
+    }
+
+    /// Aligns the strands' rest shapes with this step's pieces into `rest_pieces` (NaN for a strand whose rest
+    /// shape is missing or has another number of pieces; empty when no strand has one).
+    fn rebuild_rest_pieces(&mut self) {
+        self.rest_stale = false;
+        self.rest_pieces.clear();
+        if self.rest_shapes.iter().all(|r| r.is_empty()) {
+            return;
+        }
+        let nan = Vector3::repeat(f64::NAN);
+        let mut i = 0;
+        while i < self.pieces.len() {
+            let k = self.pieces[i].strand;
+            let n = self.pieces[i..].iter().take_while(|p| p.strand == k).count();
+            match self.rest_shapes.get(k).filter(|r| r.len() == n) {
+                Some(r) => self.rest_pieces.extend_from_slice(r),
+                None => self.rest_pieces.extend(self.pieces[i..i + n].iter().map(|p| Piece { a: nan, b: nan, ..*p })),
+            }
+            i += n;
         }
     }
 
@@ -493,23 +520,13 @@ impl LocalInteraction {
         if let (Some(hc), true) = (self.hair_contact, hair_on) {
             let t_hair = clock.elapsed().as_secs_f64();
             hc.validate()?;
+            // The rest pieces aligned with this step's pieces, when the strands, their rest shapes or their pieces
+            // (a cut) changed.
+            if self.rest_stale || (!self.rest_pieces.is_empty() && self.rest_pieces.len() != self.pieces.len()) {
+                self.rebuild_rest_pieces();
+            }
             let strands = &self.strands;
             let per_chord = |k: usize| strands[k].dynamics.quadrature_nodes().len() + 1;
-            // The rest pieces aligned with this step's pieces (a strand without a matching rest shape: NaN).
-            self.rest_pieces.clear();
-            if self.rest_shapes.iter().any(|r| !r.is_empty()) {
-                let nan = Vector3::repeat(f64::NAN);
-                let mut i = 0;
-                while i < self.pieces.len() {
-                    let k = self.pieces[i].strand;
-                    let n = self.pieces[i..].iter().take_while(|p| p.strand == k).count();
-                    match self.rest_shapes.get(k).filter(|r| r.len() == n) {
-                        Some(r) => self.rest_pieces.extend_from_slice(r),
-                        None => self.rest_pieces.extend(self.pieces[i..i + n].iter().map(|p| Piece { a: nan, b: nan, ..*p })),
-                    }
-                    i += n;
-                }
-            }
             self.hair_finder.detect(&hc, &self.pieces, &self.rest_pieces, per_chord, strands.len(), hc.distance(radius));
             hair_pairs = self.hair_finder.pairs();
             timings.hair_detect = clock.elapsed().as_secs_f64() - t_hair;

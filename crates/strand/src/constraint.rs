@@ -93,7 +93,10 @@ pub struct ConstraintOptions {
     /// root of an H1 fibre the bending stiffness `3 EI / s^3` reaches it at s = 0.6 mm, so only points that
     /// can hardly move are softened. `f64::INFINITY` gives rigid constraints.
     pub max_stiffness: f64,
-    /// Most projected Gauss-Seidel sweeps. Default 30.
+    /// Most projected Gauss-Seidel sweeps per solve. Default 10: the local interaction starts each solve from the
+    /// last step's impulses ([`ConstraintRows::warm_start`]), so the sweeps of successive steps add up while the
+    /// contacts persist (with hair-hair contacts the linked solve seldom reaches `tolerance`; 30 cold sweeps a
+    /// step cost a third of the haptic step, bench/HISTORY.md).
     pub iterations: usize,
     /// The sweeps stop early once a whole sweep changed no impulse by more than `tolerance` times the largest
     /// impulse (dimensionless, >= 0; 0 always runs `iterations` sweeps). Default 1e-6.

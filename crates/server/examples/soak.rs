@@ -9,10 +9,12 @@
 //!   RESET every 60 s, a NaN pose and a 2 m teleport every 5 s, one burst of 1,000 RESETs at a third of the run;
 //! - two watchers that read everything, one slow viewer (a message every 100 ms), and a viewer that connects,
 //!   reads a little and leaves, every 3 s.
-//! It prints one JSON object: server resident memory (after 10 % of the run, at the end, peak), frames received
-//! by the controller and late ones (more than 100 ms after the previous), the same for the two watchers (with the
-//! frame numbers they never got: dropped for them, latest wins), the largest force and non-finite
-//! ones, non-finite proxies, the runaway count, and the server's own summary line (haptic loop timing).
+//! It prints one JSON object: server resident memory (after 10 % of the run, at the end, peak); for the
+//! controller and each watcher, FRAMEs received, skipped (latest wins), gaps over 100 ms split into the viewer's
+//! own stalls and the server's (`Watch`), lateness behind the schedule, and whether it was on time
+//! (docs/protocol.md, "Frames on time"); `frames_on_time` (every watcher on time and the server's frame thread
+//! never a period late); the largest force and non-finite ones, non-finite proxies, the runaway count, and the
+//! server's own summary line (haptic loop timing, the writers' pickup delays).
 
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 use std::io::{BufRead, BufReader};

@@ -62,9 +62,10 @@ pub struct ServeArgs {
     /// Stop by itself after this many seconds (for benchmarks and scripts).
     #[arg(long)]
     pub duration: Option<f64>,
-    /// Real-time (SCHED_FIFO) priority of the 1 kHz haptic thread, 1..=99, or 0 for normal priority (the frame
-    /// thread then runs one below it, so that FRAMEs leave on time on a busy machine). Needs root or
-    /// CAP_SYS_NICE; without the right the loop runs at normal priority and a warning says so.
+    /// Real-time (SCHED_FIFO) priority of the 1 kHz haptic thread, 1..=99, or 0 for normal priority (when
+    /// real-time, the frame thread runs one below it and the network threads that write FRAMEs two below, so
+    /// that FRAMEs leave on time on a busy machine). Needs root or CAP_SYS_NICE; without the right the loop runs
+    /// at normal priority and a warning says so.
     #[arg(long, default_value_t = 10)]
     pub haptic_priority: i32,
     /// Haptic loop rate, Hz, in (0, 4000] (`SessionParams::haptic_rate_hz`).

@@ -34,8 +34,7 @@ fn main() {
         if let Some(t) = t_grow { unstable.push((g, t)); }
     }
     println!("largest centreline displacement of any guide from its groomed state within 1.5 s: {worst:.3e} m");
-    let style = hairstyle::Hairstyle::generate(&hairstyle::HairstyleParams { render_count: 20000, guide_count: opts.guides, guide_segments: opts.segments, guide_samples: opts.samples.max(16), ..Default::default() }).unwrap();
-    let flagged: Vec<usize> = style.guides.iter().enumerate().filter(|(_, g)| !g.stable).map(|(i, _)| i).collect();
+    let flagged: Vec<usize> = scene.guides.iter().enumerate().filter(|(_, g)| !g.stable).map(|(i, _)| i).collect();
     println!("statics flags {} guides unstable: {:?}", flagged.len(), flagged);
     println!("{} of {} guides leave their groomed state within 1.5 s at rest (|qdot| > 1e-3): {:?}", unstable.len(), scene.guides.len(), unstable);
 }

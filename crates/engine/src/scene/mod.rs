@@ -34,6 +34,9 @@ pub struct Guide {
     /// The groomed centreline, [`Scene::samples`] points from root to tip evenly in arc length, head frame,
     /// m. Displacements are measured from this shape mapped through the lattice.
     pub reference: Vec<Vector3<f64>>,
+    /// Whether the groomed state is a stable equilibrium of the sag-free model under gravity (the hairstyle
+    /// generator's statics flag, `hairstyle::Guide::stable`).
+    pub stable: bool,
 }
 
 /// Options of the built-in scene. Defaults give the README's default scene.

@@ -93,7 +93,10 @@ pub struct ConstraintOptions {
     /// root of an H1 fibre the bending stiffness `3 EI / s^3` reaches it at s = 0.6 mm, so only points that
     /// can hardly move are softened. `f64::INFINITY` gives rigid constraints.
     pub max_stiffness: f64,
-    /// Most projected Gauss-Seidel sweeps. Default 30.
+    /// Most projected Gauss-Seidel sweeps per solve. Default 10: the local interaction starts each solve from the
+    /// last step's impulses ([`ConstraintRows::warm_start`]), so the sweeps of successive steps add up while the
+    /// contacts persist (with hair-hair contacts the linked solve seldom reaches `tolerance`; 30 cold sweeps a
+    /// step cost a third of the haptic step, bench/HISTORY.md).
     pub iterations: usize,
     /// The sweeps stop early once a whole sweep changed no impulse by more than `tolerance` times the largest
     /// impulse (dimensionless, >= 0; 0 always runs `iterations` sweeps). Default 1e-6.
@@ -102,7 +105,7 @@ pub struct ConstraintOptions {
 
 impl Default for ConstraintOptions {
     fn default() -> Self {
-        Self { time_constant: 0.004, damping_ratio: 1.0, max_correction_speed: 0.05, max_stiffness: 100.0, iterations: 30, tolerance: 1e-6 }
+        Self { time_constant: 0.004, damping_ratio: 1.0, max_correction_speed: 0.05, max_stiffness: 100.0, iterations: 10, tolerance: 1e-6 }
     }
 }
 
@@ -256,7 +259,7 @@ impl Strand {
             return self.commit_step(h, v).map(|_| vec![]);
         }
         let mut rows = self.constraint_rows(constraints, opts)?;
-        solve(std::slice::from_mut(&mut rows), &[], opts);
+        let _ = solve(std::slice::from_mut(&mut rows), &[], opts);
         self.apply_constraints(rows, opts)
     }
 
@@ -545,6 +548,33 @@ impl ConstraintRows {
     }
 
     /// Velocity of constraint `c`'s point with the current impulses, m/s.
+    /// Starts the solve of row `c` from the impulse `p` (N s; e.g. the same contact's impulse at the last step)
+    /// instead of zero, projected onto what the row allows now: a contact's normal part >= 0 and its tangential part
+    /// within the Coulomb cone (its current normal and friction), a drag's within its largest force. Ignored for a
+    /// row the solve skips (no mobility), a non-finite `p` or a missing row. Call after the rows are built
+    /// ([`Strand::fill_constraint_rows`]) and before [`solve`]; a linked contact's second row must hold minus
+    /// the first's.
+    pub fn warm_start(&mut self, c: usize, p: &Vector3<f64>) {
+        if c >= self.len() || !self.active[c] || !p.iter().all(|x| x.is_finite()) {
+            return;
+        }
+        self.impulses[c] = match self.constraints[c].kind {
+            ConstraintKind::Contact { normal, friction, .. } => {
+                let pn = p.dot(&normal).max(0.0);
+                let mut pt = p - normal * p.dot(&normal);
+                if pt.norm() > friction * pn {
+                    pt *= friction * pn / pt.norm().max(1e-300);
+                }
+                normal * pn + pt
+            }
+            ConstraintKind::Drag { max_force } => {
+                let limit = max_force * self.h;
+                if p.norm() > limit { p * (limit / p.norm()) } else { *p }
+            }
+            ConstraintKind::Pin { .. } => *p,
+        };
+    }
+
     fn velocity(&self, c: usize) -> Vector3<f64> {
         let n = self.len();
         let mut u = self.u_free[c];
@@ -605,9 +635,10 @@ pub struct ConstraintLink {
 /// contacts with each other), so that both strands' responses enter each such contact in the same sweep
 /// (implicitly, with no lag of a step). Unlinked strands are solved as they would be alone. A link naming a
 /// missing row, a row of its own strand, a row already linked or a first row that is not a contact is ignored.
-/// The impulses are left in each [`ConstraintRows::impulses`].
-pub fn solve(rows: &mut [ConstraintRows], links: &[ConstraintLink], opts: &ConstraintOptions) {
-    let Some(h) = rows.first().map(|r| r.h) else { return };
+/// The impulses are left in each [`ConstraintRows::impulses`]; the sweeps start from the impulses the rows hold
+/// (zero, or a warm start: [`ConstraintRows::warm_start`]). Returns the number of sweeps run.
+pub fn solve(rows: &mut [ConstraintRows], links: &[ConstraintLink], opts: &ConstraintOptions) -> usize {
+    let Some(h) = rows.first().map(|r| r.h) else { return 0 };
     let beta = opts.error_reduction_rate(h);
     let v_max = opts.max_correction_speed;
     let mix = opts.force_mixing(h);
@@ -634,7 +665,9 @@ pub fn solve(rows: &mut [ConstraintRows], links: &[ConstraintLink], opts: &Const
     // sweep until all of them converged together.
     let linked: Vec<bool> = role.iter().map(|r| r.iter().any(|&x| x != 0)).collect();
     let mut done = vec![false; rows.len()];
+    let mut sweeps = 0;
     for _ in 0..opts.iterations.max(1) {
+        sweeps += 1;
         // The largest impulse and the largest change of one in this sweep among the linked strands, N s.
         let (mut largest, mut change) = (0.0f64, 0.0f64);
         for s in 0..rows.len() {
@@ -674,4 +707,5 @@ pub fn solve(rows: &mut [ConstraintRows], links: &[ConstraintLink], opts: &Const
             break;
         }
     }
+    sweeps
 }

@@ -90,6 +90,8 @@ pub struct StepTimings {
     pub touched_strands: usize,
     /// Of `constrained` and `free`: finding the strands' body contacts, s.
     pub body: f64,
+    /// Projected Gauss-Seidel sweeps of the common solve (0 without constraints).
+    pub sweeps: usize,
 }
 
 /// Membership changes after which the collision tree is rebuilt rather than refitted
@@ -108,6 +110,8 @@ enum Solved {
 /// (m) and contacts (the first `levers.len()` constraints are the tool's), and whether it had constraints.
 struct Pending {
     strand: usize,
+    /// What each of its constraints is, to warm-start the next step's solve.
+    tags: Vec<(WarmTag, f64)>,
     levers: Vec<Vector3<f64>>,
     touching: Vec<Option<Contact>>,
     solved: Solved,
@@ -180,6 +184,9 @@ pub struct LocalInteraction {
     hair_slots: Vec<[Option<(usize, usize)>; 2]>,
     /// Workspace: the constrained strands' rows of this step (the first ones in use), storage kept.
     rows: Vec<ConstraintRows>,
+    /// Each strand's constraint impulses of the last step: the next solve starts from them
+    /// ([`LocalInteraction::warm_start`]).
+    warm: Vec<Vec<Warm>>,
 }
 
 /// One side of a hair-hair contact: the `pair`-th pair of the step ([`HairContactFinder::contacts`]), at its first
@@ -188,6 +195,29 @@ pub struct LocalInteraction {
 struct HairSide {
     pair: usize,
     second: bool,
+    /// The pair's other strand.
+    other: usize,
+}
+
+/// What a strand's constraint is, to find the same constraint at the next step (with its arc length): a tool
+/// contact or drag on a capsule, a pin (its index among the pins), a body contact, a hair-hair contact with another
+/// strand.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum WarmTag {
+    Tool(usize),
+    Drag(usize),
+    Pin(usize),
+    Body,
+    Hair(usize),
+}
+
+/// A constraint's impulse at the last step (N s), with what it was and where (arc length, m): the solve of the
+/// next step starts from it ([`LocalInteraction::warm_start`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Warm {
+    tag: WarmTag,
+    s: f64,
+    impulse: Vector3<f64>,
 }
 
 impl LocalInteraction {
@@ -227,6 +257,7 @@ impl LocalInteraction {
             hair_rows: Vec::new(),
             hair_slots: Vec::new(),
             rows: Vec::new(),
+            warm: vec![Vec::new(); strands_len],
         }
     }
 
@@ -255,6 +286,33 @@ impl LocalInteraction {
             _ => Vec::new(),
         }).collect();
         self.rest_stale = true;
+        // The last impulses move with their strands; a hair-hair contact's other strand is renamed (dropped if it left).
+        let mut new_index = vec![None; self.warm.len()];
+        for (i, f) in from.iter().enumerate().take(strands.len()) {
+            if let Some(j) = *f {
+                if let Some(slot) = new_index.get_mut(j) {
+                    *slot = Some(i);
+                }
+            }
+        }
+        let mut warm = std::mem::take(&mut self.warm);
+        self.warm = (0..strands.len()).map(|i| match from.get(i).copied().flatten() {
+            Some(j) if j < warm.len() => {
+                let mut w = std::mem::take(&mut warm[j]);
+                w.retain_mut(|x| match x.tag {
+                    WarmTag::Hair(o) => match new_index.get(o).copied().flatten() {
+                        Some(n) => {
+                            x.tag = WarmTag::Hair(n);
+                            true
+                        }
+                        None => false,
+                    },
+                    _ => true,
+                });
+                w
+            }
+            _ => Vec::new(),
+        }).collect();
         self.prepared.clear();
         self.prepared.resize(strands.len(), false);
         self.lane_of.clear();
@@ -460,6 +518,27 @@ impl LocalInteraction {
         push(strand.model.length, dy.frames[strand.model.segments].position);
     }
 
+    /// Warm start: each constraint of `rows` (what each is and where: `tags`) starts the solve from the impulse of
+    /// the same constraint at the last step (`last`): the same kind on the same capsule, pin or other strand, the
+    /// nearest in arc length within a quarter of a segment (`segment`, m; each impulse of the last step is used
+    /// once). The solve then needs fewer sweeps while the contacts persist.
+    fn warm_start(last: &[Warm], tags: &[(WarmTag, f64)], segment: f64, rows: &mut ConstraintRows) {
+        if last.is_empty() {
+            return;
+        }
+        let mut used = [false; 64];
+        let within = 0.25 * segment;
+        for (c, &(tag, s)) in tags.iter().enumerate() {
+            let best = last.iter().enumerate().filter(|(i, w)| w.tag == tag && !used.get(*i).copied().unwrap_or(false) && (w.s - s).abs() <= within).min_by(|a, b| (a.1.s - s).abs().total_cmp(&(b.1.s - s).abs()));
+            if let Some((i, w)) = best {
+                if let Some(u) = used.get_mut(i) {
+                    *u = true;
+                }
+                rows.warm_start(c, &w.impulse);
+            }
+        }
+    }
+
     /// Moves the tool to `pose` over `dt` seconds and steps every strand. On a strand's failure the error is
     /// returned; the other strands have stepped.
     ///
@@ -563,8 +642,8 @@ impl LocalInteraction {
                     continue;
                 }
                 let contact = |s: f64, normal: Vector3<f64>| PointConstraint { s, kind: ConstraintKind::Contact { normal, depth: pair.depth, friction }, velocity: Vector3::zeros() };
-                hair_rows[a].push((HairSide { pair: l, second: false }, contact(pair.s.0, pair.normal)));
-                hair_rows[b].push((HairSide { pair: l, second: true }, contact(pair.s.1, -pair.normal)));
+                hair_rows[a].push((HairSide { pair: l, second: false, other: b }, contact(pair.s.0, pair.normal)));
+                hair_rows[b].push((HairSide { pair: l, second: true, other: a }, contact(pair.s.1, -pair.normal)));
                 hair_slots.resize(l + 1, [None; 2]);
             }
         }
@@ -638,6 +717,7 @@ impl LocalInteraction {
                     let mut cons: Vec<PointConstraint> = Vec::with_capacity(2 * mine.len());
                     let mut levers: Vec<Vector3<f64>> = Vec::with_capacity(2 * mine.len());
                     let mut touching: Vec<Option<Contact>> = Vec::with_capacity(2 * mine.len());
+                    let mut tags: Vec<(WarmTag, f64)> = Vec::with_capacity(2 * mine.len());
                     let r_f = strand.model.section.semi_major;
                     let ei = strand.model.material.young_modulus * strand.model.section.i_soft();
                     let w = self.wetness.get(k).copied().unwrap_or(0.0);
@@ -649,6 +729,7 @@ impl LocalInteraction {
                             cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Contact { normal: c.normal, depth: fibre_depth, friction }, velocity: c.tool_velocity });
                             levers.push(c.lever);
                             touching.push(Some(**c));
+                            tags.push((WarmTag::Tool(c.primitive), c.s));
                         }
                         // One drag per crossing of a capsule and the wisp: the deepest of the strand's contacts
                         // with that capsule (neighbouring pieces near the crossing are found too).
@@ -662,20 +743,25 @@ impl LocalInteraction {
                                 cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Drag { max_force }, velocity: c.tool_velocity });
                                 levers.push(c.lever);
                                 touching.push(None);
+                                tags.push((WarmTag::Drag(c.primitive), c.s));
                             }
                         }
                     }
-                    for &(_, s, offset) in self.pins.iter().filter(|p| p.0 == k) {
+                    for (i, &(_, s, offset)) in self.pins.iter().enumerate().filter(|p| p.1 .0 == k) {
                         let target = pose.position + pose.rotation * offset;
                         let before = self.pose.position + self.pose.rotation * offset;
                         cons.push(PointConstraint { s, kind: ConstraintKind::Pin { target }, velocity: (target - before) / dt });
                         levers.push(target - pose.position);
+                        tags.push((WarmTag::Pin(i), s));
                     }
                     // After the tool's and the pins' constraints: their impulses are not the tool's (the
                     // reactions pair impulses with `levers` and `touching` only).
                     cons.extend(resting.iter().cloned());
+                    tags.extend(resting.iter().map(|c| (WarmTag::Body, c.s)));
                     let first_hair = cons.len();
                     cons.extend(hair_rows[k].iter().map(|(_, c)| *c));
+                    tags.extend(hair_rows[k].iter().map(|(side, c)| (WarmTag::Hair(side.other), c.s)));
+                    let last = std::mem::take(&mut self.warm[k]);
                     let outcome = if self.prepared[k] {
                         // A batched strand with constraints takes over its lane's solver workspace.
                         let handed = match (cons.is_empty(), self.lane_of[k]) {
@@ -696,8 +782,13 @@ impl LocalInteraction {
                         let twisting = std::mem::take(&mut self.surface_torques[k]);
                         strand.step_constrained(dt, &twisting, &cons, &options).map(Solved::Stepped)
                     };
+                    if let Ok(Solved::Rows(i)) = &outcome {
+                        Self::warm_start(&last, &tags, strand.model.segment_length(), &mut rows[*i]);
+                    }
+                    self.warm[k] = last;
+                    self.warm[k].clear();
                     match outcome {
-                        Ok(solved) => pending.push(Pending { strand: k, levers, touching, solved, touched }),
+                        Ok(solved) => pending.push(Pending { strand: k, tags, levers, touching, solved, touched }),
                         Err(e) => {
                             first_error.get_or_insert(e);
                         }
@@ -725,7 +816,12 @@ impl LocalInteraction {
                     _ => None,
                 })
                 .collect();
-            solve(&mut rows[..used], &links, &options);
+            // A linked contact's second row starts from minus its first's (warm starts).
+            for link in &links {
+                let p = rows[link.first.0].impulses[link.first.1];
+                rows[link.second.0].impulses[link.second.1] = -p;
+            }
+            timings.sweeps = solve(&mut rows[..used], &links, &options);
             timings.constrained += clock.elapsed().as_secs_f64() - t_solve;
             // Stage 3, per strand: apply the impulses and commit the step; the tool feels the tool constraints'.
             let mix = options.force_mixing(dt);
@@ -741,6 +837,11 @@ impl LocalInteraction {
                         strand.apply_constraints(r, &options).map(|p| (p, mobility))
                     }
                 };
+                if let Ok((p, _)) = &outcome {
+                    let warm = &mut self.warm[job.strand];
+                    warm.clear();
+                    warm.extend(job.tags.iter().zip(p).map(|(&(tag, s), &impulse)| Warm { tag, s, impulse }));
+                }
                 match outcome {
                     Ok((p, mobility)) => {
                         // Friction acts on the hair's surface, a radius away from the centreline towards the tool:

@@ -9,10 +9,12 @@
 //!   RESET every 60 s, a NaN pose and a 2 m teleport every 5 s, one burst of 1,000 RESETs at a third of the run;
 //! - two watchers that read everything, one slow viewer (a message every 100 ms), and a viewer that connects,
 //!   reads a little and leaves, every 3 s.
-//! It prints one JSON object: server resident memory (after 10 % of the run, at the end, peak), frames received
-//! by the controller and late ones (more than 100 ms after the previous), the same for the two watchers (with the
-//! frame numbers they never got: dropped for them, latest wins), the largest force and non-finite
-//! ones, non-finite proxies, the runaway count, and the server's own summary line (haptic loop timing).
+//! It prints one JSON object: server resident memory (after 10 % of the run, at the end, peak); for the
+//! controller and each watcher, FRAMEs received, skipped (latest wins), gaps over 100 ms split into the viewer's
+//! own stalls and the server's (`Watch`), lateness behind the schedule, and whether it was on time
+//! (docs/protocol.md, "Frames on time"); `frames_on_time` (every watcher on time and the server's frame thread
+//! never a period late); the largest force and non-finite ones, non-finite proxies, the runaway count, and the
+//! server's own summary line (haptic loop timing, the writers' pickup delays).
 
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 use std::io::{BufRead, BufReader};
@@ -58,11 +60,92 @@ fn rss(pid: u32) -> u64 {
         .map_or(0, |kb| kb * 1024)
 }
 
-#[derive(Default, Debug)]
+/// The frame rate the soak asks of the server (`--fps`), and so the FRAMEs' schedule: FRAME n is due n / FPS s
+/// after the server's first.
+const FPS: f64 = 60.0;
+/// A gap between FRAMEs over this is not on time (docs/protocol.md, "Frames on time").
+const ON_TIME: f64 = 0.1;
+/// How long a watcher's read waits before it returns to say the watcher is running (its own scheduling probe).
+const POLL: Duration = Duration::from_millis(5);
+
+/// One reading viewer's account of the FRAMEs (the controller and the watchers): when each arrived, and the
+/// viewer's own stalls (its thread not running), so that a gap caused by the client is told apart from one
+/// caused by the server. On time (docs/protocol.md): at a viewer that reads, no gap over [`ON_TIME`] between
+/// FRAMEs other than the viewer's own stall; skipped frames (latest wins) are counted.
+#[derive(Default)]
+struct Watch {
+    /// (received, s after the soak's start; sequence number) of every FRAME.
+    frames: Vec<(f64, u32)>,
+    /// When the loop last came back from a read (or the previous frame), and the largest own stall since the last FRAME, s.
+    last_return: Option<Instant>,
+    stall_since_frame: f64,
+    largest_stall: f64,
+    stalls_over_50ms: u64,
+    /// Gaps over [`ON_TIME`]: (at s, gap s, frames skipped in it, own stall in it s).
+    gaps: Vec<(f64, f64, u32, f64)>,
+}
+
+impl Watch {
+    /// Notes that the loop is back from a read at `now`, after asking to wait at most `poll`: the time beyond is
+    /// the viewer's own stall (its thread not scheduled, or busy with its own work).
+    fn back(&mut self, now: Instant, poll: Duration) {
+        if let Some(prev) = self.last_return {
+            let stall = (now - prev).saturating_sub(poll).as_secs_f64();
+            self.stall_since_frame = self.stall_since_frame.max(stall);
+            self.largest_stall = self.largest_stall.max(stall);
+            self.stalls_over_50ms += (stall > 0.05) as u64;
+        }
+        self.last_return = Some(now);
+    }
+
+    /// A FRAME with sequence `seq` arrived at `now`.
+    fn frame(&mut self, t0: Instant, now: Instant, seq: u32) {
+        let at = (now - t0).as_secs_f64();
+        if let Some(&(prev, q)) = self.frames.last() {
+            let gap = at - prev;
+            if gap > ON_TIME {
+                self.gaps.push((at, gap, seq.saturating_sub(q + 1), self.stall_since_frame));
+            }
+        }
+        self.stall_since_frame = 0.0;
+        self.frames.push((at, seq));
+    }
+
+    /// The report: counts, gaps split into the viewer's own (the gap less its own stall is within [`ON_TIME`])
+    /// and the server's, and each FRAME's latency behind its schedule (less the smallest one: loopback's transit).
+    fn report(&self, seconds: f64) -> serde_json::Value {
+        let skipped: u64 = self.frames.windows(2).map(|w| w[1].1.saturating_sub(w[0].1 + 1) as u64).sum();
+        let server_gaps: Vec<_> = self.gaps.iter().filter(|g| g.1 - g.3 > ON_TIME).collect();
+        let lat: Vec<f64> = self.frames.iter().map(|&(t, q)| t - q as f64 / FPS).collect();
+        let floor = lat.iter().copied().fold(f64::INFINITY, f64::min);
+        let mut lat: Vec<f64> = lat.iter().map(|l| 1e3 * (l - floor)).collect();
+        lat.sort_by(f64::total_cmp);
+        let pct = |p: f64| lat.get(((lat.len() as f64 - 1.0) * p).round() as usize).copied().unwrap_or(0.0);
+        let late: Vec<f64> = self.frames.iter().filter(|&&(t, q)| t - q as f64 / FPS - floor > 0.02).map(|f| f.0).collect();
+        let largest_gap = self.frames.windows(2).map(|w| w[1].0 - w[0].0).fold(0.0, f64::max);
+        serde_json::json!({
+            "received": self.frames.len(),
+            "per_s": self.frames.len() as f64 / seconds,
+            "skipped": skipped,
+            "largest_gap_ms": 1e3 * largest_gap,
+            "gaps_over_100ms": self.gaps.len(),
+            "gaps_over_100ms_server_side": server_gaps.len(),
+            "on_time": server_gaps.is_empty(),
+            "own_largest_stall_ms": 1e3 * self.largest_stall,
+            "own_stalls_over_50ms": self.stalls_over_50ms,
+            "latency_ms_p50_p99_p999_max": [pct(0.5), pct(0.99), pct(0.999), pct(1.0)],
+            "latency_over_20ms": { "frames": late.len(), "first_s": late.first(), "last_s": late.last() },
+            "gaps": self.gaps.iter().take(12).map(|g| serde_json::json!({ "at_s": g.0, "gap_ms": 1e3 * g.1, "skipped": g.2, "own_stall_ms": 1e3 * g.3 })).collect::<Vec<_>>(),
+        })
+    }
+}
+
+#[derive(Default)]
 struct Seen {
-    frames: u64,
-    late: u64,
-    largest_gap: f64,
+    /// The controller's account of the FRAMEs.
+    watch: Watch,
+    /// FRAMEs that told the controller it controls the tool (flags bit 0).
+    frames_in_control: u64,
     max_force: f64,
     nonfinite_force: u64,
     nonfinite_proxy: u64,
@@ -84,7 +167,7 @@ fn main() {
     std::fs::create_dir_all(&web).unwrap();
     std::fs::write(web.join("index.html"), "<!doctype html><title>soak</title>").unwrap();
     let mut child = Command::new(&bin)
-        .args(["serve", "--port", "0", "--render-strands", &strands.to_string(), "--duration", &format!("{}", seconds + 5.0), "--web"])
+        .args(["serve", "--port", "0", "--fps", &FPS.to_string(), "--render-strands", &strands.to_string(), "--duration", &format!("{}", seconds + 5.0), "--web"])
         .arg(&web)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -126,6 +209,8 @@ fn main() {
         let (stop, seen, http) = (stop.clone(), seen.clone(), http.clone());
         std::thread::spawn(move || {
             let mut ws = connect(&http);
+            // Control, whichever viewer registered first (the watchers connect at the same time).
+            ws.send(Message::Binary(vec![0x02, 1].into())).expect("TAKE_CONTROL");
             ws.get_mut().set_read_timeout(Some(Duration::from_millis(2))).unwrap();
             let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[Vector3::x(), Vector3::z(), -Vector3::y()])));
             let mut rng = 0x9e37_79b9_7f4a_7c15u64;
@@ -135,7 +220,7 @@ fn main() {
                 rng ^= rng << 17;
                 (rng >> 11) as f64 / (1u64 << 53) as f64 - 0.5
             };
-            let (mut next_pose, mut last_frame, mut burst_done) = (Instant::now(), None::<Instant>, false);
+            let (mut next_pose, mut burst_done) = (Instant::now(), false);
             let (mut last_tool, mut last_hair, mut last_reset, mut last_fault) = (u64::MAX, 0u64, 0u64, 0u64);
             while !stop.load(Ordering::Relaxed) {
                 let t = t0.elapsed().as_secs_f64();
@@ -176,20 +261,15 @@ fn main() {
                         }
                     }
                 }
-                match ws.read() {
+                let read = ws.read();
+                let now = Instant::now();
+                seen.lock().unwrap().watch.back(now, Duration::from_millis(2));
+                match read {
                     Ok(Message::Binary(b)) if b[0] == 0x82 => {
-                        let now = Instant::now();
                         let (_, proxy, device, force, runaways) = frame_tool(&b);
                         let mut s = seen.lock().unwrap();
-                        s.frames += 1;
-                        if let Some(prev) = last_frame {
-                            let gap = (now - prev).as_secs_f64();
-                            s.largest_gap = s.largest_gap.max(gap);
-                            if gap > 0.1 {
-                                s.late += 1;
-                            }
-                        }
-                        last_frame = Some(now);
+                        s.watch.frame(t0, now, u32::from_le_bytes(b[2..6].try_into().unwrap()));
+                        s.frames_in_control += (b[11] & 1) as u64;
                         if force.iter().all(|x| x.is_finite()) {
                             s.max_force = s.max_force.max(force.norm());
                         } else {
@@ -215,31 +295,30 @@ fn main() {
     };
     // Watchers, a slow viewer and churn.
     let mut others = Vec::new();
-    // A watcher's view of the frames: (received, gaps over 100 ms, largest gap s, sequence numbers skipped).
-    let watched = Arc::new(Mutex::new(Vec::<(u64, u64, f64, u64)>::new()));
+    // The watchers' accounts of the FRAMEs.
+    let watched = Arc::new(Mutex::new(Vec::<Watch>::new()));
     for delay in [None, None, Some(Duration::from_millis(100))] {
         let (stop, http, watched) = (stop.clone(), http.clone(), watched.clone());
         others.push(std::thread::spawn(move || {
-            // The watchers measure the server, not this process's own scheduling: real-time when allowed.
+            // The watchers measure the server, not this process's own scheduling: real-time when allowed (and
+            // their own stalls are measured all the same: `Watch::back`).
             let _ = haptics::realtime::request_realtime(4);
             let mut ws = connect(&http);
-            let (mut n, mut late, mut largest, mut skipped, mut last) = (0u64, 0u64, 0f64, 0u64, None::<(Instant, u32)>);
+            if delay.is_none() {
+                ws.get_mut().set_read_timeout(Some(POLL)).unwrap();
+            }
+            let mut w = Watch::default();
             let mut kept = true;
             while !stop.load(Ordering::Relaxed) {
-                match ws.read() {
-                    Ok(Message::Binary(b)) if b[0] == 0x82 && delay.is_none() => {
-                        let (now, seq) = (Instant::now(), u32::from_le_bytes(b[2..6].try_into().unwrap()));
-                        if let Some((t, q)) = last {
-                            let gap = (now - t).as_secs_f64();
-                            largest = largest.max(gap);
-                            late += (gap > 0.1) as u64;
-                            // a new session (LOAD) restarts the count; otherwise missing numbers were dropped (latest wins)
-                            skipped += seq.saturating_sub(q + 1) as u64;
-                        }
-                        n += 1;
-                        last = Some((now, seq));
-                    }
+                let read = ws.read();
+                let now = Instant::now();
+                if delay.is_none() {
+                    w.back(now, POLL);
+                }
+                match read {
+                    Ok(Message::Binary(b)) if b[0] == 0x82 && delay.is_none() => w.frame(t0, now, u32::from_le_bytes(b[2..6].try_into().unwrap())),
                     Ok(_) => {}
+                    Err(tungstenite::Error::Io(e)) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
                     Err(_) => {
                         kept = false;
                         break;
@@ -250,7 +329,7 @@ fn main() {
                 }
             }
             if delay.is_none() {
-                watched.lock().unwrap().push((n, late, largest, skipped));
+                watched.lock().unwrap().push(w);
             }
             kept
         }));
@@ -289,15 +368,19 @@ fn main() {
     reader.join().unwrap();
     err_reader.join().unwrap();
     let summary = lines.lock().unwrap().iter().find(|l| l.contains("haptic loop:")).cloned().unwrap_or_default();
+    // The server's own count of FRAMEs more than a period behind their schedule (its summary line).
+    let server_late = summary.split(" more than a period late").next().and_then(|h| h.rsplit("; ").next()).and_then(|v| v.trim().parse::<u64>().ok());
     let s = seen.lock().unwrap();
     let json = serde_json::json!({
         "seconds": seconds,
         "render_strands": strands,
         "rss_mb": { "at_10_percent": early as f64 / 1048576.0, "end": end as f64 / 1048576.0, "peak": peak as f64 / 1048576.0, "end_over_early": end as f64 / early.max(1) as f64 },
-        "frames": { "received": s.frames, "per_s": s.frames as f64 / seconds, "late_over_100ms": s.late, "largest_gap_s": s.largest_gap },
-        "watcher_frames": watched.lock().unwrap().iter().map(|(n, late, largest, skipped)| serde_json::json!({ "received": n, "per_s": *n as f64 / seconds, "gaps_over_100ms": late, "largest_gap_s": largest, "skipped": skipped })).collect::<Vec<_>>(),
+        "frames_on_time": watched.lock().unwrap().iter().all(|w| w.report(seconds)["on_time"] == true) && server_late == Some(0),
+        "controller_frames": s.watch.report(seconds),
+        "watcher_frames": watched.lock().unwrap().iter().map(|w| w.report(seconds)).collect::<Vec<_>>(),
         "forces": { "max_n": s.max_force, "non_finite": s.nonfinite_force },
         "proxy": { "non_finite": s.nonfinite_proxy, "runaways": s.runaways, "max_lag_m": s.max_lag },
+        "controller_frames_in_control": s.frames_in_control,
         "errors_received": s.errors,
         "controller_lost": s.controller_lost,
         "server_warnings": warnings.lock().unwrap().iter().rev().take(20).rev().cloned().collect::<Vec<_>>(),

@@ -3,6 +3,7 @@
 //! rate, encodes one FRAME message and hands it to every viewer; each viewer's task sends it on. Several
 //! viewers may watch; the first to connect controls the tool until it leaves or another sends TAKE_CONTROL.
 
+use crate::delivery::{DeliveryStats, Frame, PublishLog};
 use crate::outbox::Outbox;
 use crate::protocol::{self, ClientMessage, WireError};
 use anyhow::{anyhow, Context};
@@ -61,9 +62,10 @@ pub struct ServeArgs {
     /// Stop by itself after this many seconds (for benchmarks and scripts).
     #[arg(long)]
     pub duration: Option<f64>,
-    /// Real-time (SCHED_FIFO) priority of the 1 kHz haptic thread, 1..=99, or 0 for normal priority (the frame
-    /// thread then runs one below it, so that FRAMEs leave on time on a busy machine). Needs root or
-    /// CAP_SYS_NICE; without the right the loop runs at normal priority and a warning says so.
+    /// Real-time (SCHED_FIFO) priority of the 1 kHz haptic thread, 1..=99, or 0 for normal priority (when
+    /// real-time, the frame thread runs one below it and the network threads that write FRAMEs two below, so
+    /// that FRAMEs leave on time on a busy machine). Needs root or CAP_SYS_NICE; without the right the loop runs
+    /// at normal priority and a warning says so.
     #[arg(long, default_value_t = 10)]
     pub haptic_priority: i32,
     /// Haptic loop rate, Hz, in (0, 4000] (`SessionParams::haptic_rate_hz`).
@@ -144,7 +146,11 @@ struct Control {
 struct App {
     scene_msg: Mutex<Arc<Vec<u8>>>,
     scene: Mutex<Arc<Scene>>,
-    frames: watch::Receiver<Arc<Vec<u8>>>,
+    frames: watch::Receiver<Arc<Frame>>,
+    /// How on time the writers hand FRAMEs on (their pickup delays).
+    delivery: DeliveryStats,
+    /// When the latest FRAMEs were published (for the writers' pickup delays).
+    published: PublishLog,
     device: Mutex<VirtualHandle>,
     commands: Mutex<Sender<Command>>,
     control: Mutex<Control>,
@@ -185,9 +191,14 @@ impl App {
         }
     }
 
+    /// The viewers now. Messages are posted outside the control lock, which the frame thread also takes:
+    /// nobody holds it for long.
+    fn viewers(&self) -> Vec<Arc<Outbox>> {
+        self.control.lock().unwrap().viewers.clone()
+    }
+
     fn broadcast(&self, msg: &[u8]) {
-        let c = self.control.lock().unwrap();
-        for v in &c.viewers {
+        for v in self.viewers() {
             v.post(msg.to_vec());
         }
     }
@@ -213,6 +224,8 @@ struct PumpStats {
     late: u64,
     /// The largest delay of a frame behind its scheduled time, s.
     max_late: f64,
+    /// The longest time from a frame's turn to its publication (encoding, and any wait for a lock), s.
+    max_build: f64,
 }
 
 /// Runs the server until Ctrl-C (or `--duration`).
@@ -278,12 +291,14 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let (session, io) = Session::start_with_device(scene.clone(), params, first_device).context("starting the session")?;
     let SessionIo { device, commands, lattice, haptic } = io;
     let scene_msg = Arc::new(protocol::encode_scene(&scene));
-    let (frame_tx, frame_rx) = watch::channel(Arc::new(Vec::new()));
+    let (frame_tx, frame_rx) = watch::channel(Arc::new(Frame::none()));
     let stop = Arc::new(AtomicBool::new(false));
     let app = Arc::new(App {
         scene_msg: Mutex::new(scene_msg),
         scene: Mutex::new(scene),
         frames: frame_rx,
+        delivery: DeliveryStats::default(),
+        published: PublishLog::default(),
         device: Mutex::new(device),
         commands: Mutex::new(commands),
         control: Mutex::new(Control { controller: None, viewers: Vec::new() }),
@@ -321,7 +336,8 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         let start = Instant::now();
         while !stop_p.load(Ordering::Relaxed) {
             // A loaded hairstyle's session: its snapshots from now on, and its strands' kept points to all.
-            if let Some((l, h)) = app_p.swap.lock().ok().and_then(|mut s| s.take()) {
+            // (The frame thread never waits for a lock a slower thread may hold: try_lock, and retry next frame.)
+            if let Some((l, h)) = app_p.swap.try_lock().ok().and_then(|mut s| s.take()) {
                 (lattice, haptic) = (l, h);
                 kept_sent = u64::MAX;
             }
@@ -338,23 +354,25 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
             if lat.kept_version != kept_sent {
                 kept_sent = lat.kept_version;
                 let s = protocol::encode_strands(&lat.kept);
-                if let Ok(c) = app_p.control.lock() {
-                    for v in &c.viewers {
-                        v.post(s.clone());
-                    }
+                for v in app_p.viewers() {
+                    v.post(s.clone());
                 }
             }
-            if let Ok(mut l) = app_p.latest_lattice.lock() {
+            // The latest state for SAVE (skipped while a SAVE reads it: the next frame's will do).
+            if let Ok(mut l) = app_p.latest_lattice.try_lock() {
                 l.clear();
                 l.extend(lat.positions.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]));
             }
-            if let Ok(mut g) = app_p.latest_guides.lock() {
+            if let Ok(mut g) = app_p.latest_guides.try_lock() {
                 let samples = if hap.active.is_empty() { 2 } else { (hap.displacement.len() / hap.active.len()).max(2) };
                 *g = (lat.kept.clone(), hap.active.clone(), hap.displacement.clone(), samples);
             }
             st.bytes += msg.len() as u64;
             st.runaways = hap.runaways;
-            let _ = frame_tx.send(Arc::new(msg));
+            let published = Instant::now();
+            app_p.published.note(st.frames as u32, published);
+            let _ = frame_tx.send(Arc::new(Frame { bytes: msg, published }));
+            st.max_build = st.max_build.max((published - w0).as_secs_f64());
             // The device's status to every viewer, about 10 times a second.
             if let Some((_, status)) = &app_p.udp {
                 if st.frames % (fps / 10.0).ceil().max(1.0) as u64 == 0 {
@@ -375,7 +393,21 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         st
     })?;
 
-    let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build()?;
+    // The runtime's threads (the viewers' writers and readers) run real-time one below the frame thread, so
+    // that a FRAME is not queued behind normal work on a busy machine; heavy jobs (LOAD, SAVE) go back to normal
+    // priority on their blocking thread (`delivery::normal_priority`).
+    let worker_priority = frame_priority.map(|p| (p - 1).max(1));
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .on_thread_start(move || {
+            if let Some(p) = worker_priority {
+                if let Err(why) = haptics::realtime::request_realtime(p) {
+                    tracing::debug!("a runtime thread runs at normal priority: {why}");
+                }
+            }
+        })
+        .build()?;
     let addr = SocketAddr::new(args.addr, args.port);
     let duration = args.duration;
     let app_token = app.access.token.clone();
@@ -397,7 +429,10 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
                 }
             }
         };
-        axum::serve(listener, router).with_graceful_shutdown(shutdown).await.context("server failed")?;
+        // TCP_NODELAY: a FRAME leaves at once. With Nagle's algorithm a FRAME (smaller than a segment) waits for
+        // the ACK of the previous one, which a viewer that only reads sends late (delayed ACKs, 40-200 ms):
+        // before, a reading viewer got a fifth of its FRAMEs about 30 ms late and gaps up to 193 ms.
+        axum::serve(nodelay(listener), router).with_graceful_shutdown(shutdown).await.context("server failed")?;
         anyhow::Ok(())
     });
     stop.store(true, Ordering::Relaxed);
@@ -406,8 +441,8 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let report = session.stop();
     let f = st.frames.max(1) as f64;
     println!(
-        "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame; {} more than a period late, the latest {:.1} ms behind); haptic loop: {} steps at {} Hz, step mean {:.1} us, p50 {:.0} us, p99 {:.0} us, p99.9 {:.0} us, max {:.0} us, {} misses, {} step panics, {} runaways, real-time priority: {}; global: {} steps, mean {:.2} ms",
-        st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, st.late, 1e3 * st.max_late, report.haptic.steps, args.haptic_rate, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p50, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, 1e6 * report.haptic.step_max, report.haptic.misses, report.haptic.panics, st.runaways, report.haptic.realtime, report.global_steps, 1e3 * report.global_step_mean
+        "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame; {} more than a period late, the latest {:.1} ms behind, built in at most {:.1} ms); haptic loop: {} steps at {} Hz, step mean {:.1} us, p50 {:.0} us, p99 {:.0} us, p99.9 {:.0} us, max {:.0} us, {} misses, {} step panics, {} runaways, real-time priority: {}; global: {} steps, mean {:.2} ms; delivery: {}",
+        st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, st.late, 1e3 * st.max_late, 1e3 * st.max_build, report.haptic.steps, args.haptic_rate, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p50, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, 1e6 * report.haptic.step_max, report.haptic.misses, report.haptic.panics, st.runaways, report.haptic.realtime, report.global_steps, 1e3 * report.global_step_mean, app_end.delivery.summary()
     );
     if let Some((_, status)) = &app_end.udp {
         let c = status.counts();
@@ -421,6 +456,16 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         println!("record: {} haptic steps written to {}", rec.steps.len(), path.display());
     }
     served
+}
+
+/// `listener` with TCP_NODELAY set on every accepted connection (see where it is used).
+fn nodelay(listener: tokio::net::TcpListener) -> impl axum::serve::Listener<Io = tokio::net::TcpStream, Addr = SocketAddr> {
+    use axum::serve::ListenerExt;
+    listener.tap_io(|tcp| {
+        if let Err(e) = tcp.set_nodelay(true) {
+            tracing::warn!("cannot set TCP_NODELAY on a connection (its FRAMEs may wait for ACKs): {e}");
+        }
+    })
 }
 
 fn write_record(path: &Path, rec: &Record) -> anyhow::Result<()> {
@@ -516,6 +561,9 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
     let mut writer = tokio::spawn(async move {
         // Queued messages first (a STRANDS precedes the FRAME carrying its version), then the latest frame.
         let mut cut = false;
+        // Since when the writer has been free to send (its pickup delays are measured from it).
+        let mut free_since = Instant::now();
+        let mut last_seq = None;
         loop {
             let bytes = match out_w.pop() {
                 Some(m) => m,
@@ -527,8 +575,11 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
                     changed = frames.changed() => {
                         if changed.is_err() { break; }
                         let f = frames.borrow_and_update().clone();
-                        if f.is_empty() { continue; }
-                        let mut bytes = (*f).clone();
+                        if f.bytes.is_empty() { continue; }
+                        let seq = u32::from_le_bytes(f.bytes[2..6].try_into().expect("FRAME header"));
+                        app_w.delivery.pickup(&app_w.published, seq, f.published, last_seq, free_since);
+                        last_seq = Some(seq);
+                        let mut bytes = f.bytes.clone();
                         let you = app_w.control.lock().map(|c| c.controller == Some(id)).unwrap_or(false);
                         bytes[protocol::FRAME_FLAGS_OFFSET] = you as u8;
                         bytes
@@ -543,6 +594,7 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
                 _ = closing_w.wait_for(Option::is_some) => { cut = true; false }
             };
             out_w.sending(false);
+            free_since = Instant::now();
             if !sent {
                 break;
             }
@@ -587,7 +639,11 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
             // runtime's workers keep serving the other viewers.
             Message::Binary(b) if matches!(b.first(), Some(&protocol::client::LOAD) | Some(&protocol::client::SAVE)) => {
                 let app = app.clone();
-                tokio::task::spawn_blocking(move || handle(&app, id, &b)).await.unwrap_or_else(|_| Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message: "the file operation failed".into() })))
+                tokio::task::spawn_blocking(move || {
+                    crate::delivery::normal_priority();
+                    handle(&app, id, &b)
+                })
+                .await.unwrap_or_else(|_| Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message: "the file operation failed".into() })))
             }
             Message::Binary(b) => handle(&app, id, &b),
             Message::Text(_) => Some(protocol::encode_error(&WireError { code: protocol::code::TEXT, message: "text frames are not part of the protocol; send binary messages (docs/protocol.md)".into() })),
@@ -692,8 +748,7 @@ fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
                     match load(app, &c, start) {
                         Ok(()) => {
                             let msg = protocol::encode_fit(&report);
-                            let c = app.control.lock().unwrap();
-                            for v in &c.viewers {
+                            for v in app.viewers() {
                                 v.post(msg.clone());
                             }
                             None
@@ -728,11 +783,8 @@ fn load(app: &App, curves: &hairstyle::HairCurves, t0: Instant) -> Result<(), St
     *app.scene.lock().unwrap() = scene.clone();
     *app.scene_msg.lock().unwrap() = msg.clone();
     app.latest_guides.lock().unwrap().0 = Arc::new(Vec::new());
-    {
-        let c = app.control.lock().unwrap();
-        for v in &c.viewers {
-            v.post((*msg).clone());
-        }
+    for v in app.viewers() {
+        v.post((*msg).clone());
     }
     *app.swap.lock().unwrap() = Some((lattice, haptic));
     if let Some(old) = old {
@@ -755,4 +807,24 @@ fn save(app: &App, format: usize) -> Result<Vec<u8>, String> {
     let mut curves = curves;
     curves.thickness = Some(vec![scene.hair_type.major_diameter as f32; curves.num_points()]);
     f.write(&curves).map_err(|e| format!("cannot write {}: {e}", protocol::FORMATS[format]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[tokio::test]
+    async fn accepted_connections_send_without_nagle_delays() {
+        // Every connection the server accepts has TCP_NODELAY (a FRAME must not wait for the ACK of the one
+        // before: a viewer that only reads acknowledges late). Without it, `nodelay()` hands out a socket
+        // with the option off (Linux's default) and this fails.
+        use axum::serve::Listener;
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let addr = listener.local_addr().unwrap();
+        let mut listener = nodelay(listener);
+        let client = tokio::net::TcpStream::connect(addr).await.unwrap();
+        assert!(!client.nodelay().unwrap(), "the default is off (else this test proves nothing)");
+        let (served, _) = listener.accept().await;
+        assert!(served.nodelay().unwrap());
+    }
 }

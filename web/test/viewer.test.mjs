@@ -80,14 +80,14 @@ describe('a comb stroke through the hair (issue 12; 5k render strands standing f
     assert.ok(s.in_hair_steps > 500, `steps with the comb in the hair: ${s.in_hair_steps}`);
     assert.ok(s.final_max_displacement_m <= 0.03, `displacement at the end ${s.final_max_displacement_m} m`);
     assert.ok(s.in_hair_force_share >= 0.6, `share of in-hair steps above 5 mN ${s.in_hair_force_share}`);
-    // Issue 12's bounds: at most 0.08 m during the stroke (met: with stable grooms, hair-hair contact and the
-    // groomed overlap kept, 0.045 and 0.058 m in two runs, 2026-11-24) and 0.1 N per step (not always met:
-    // 0.122 and 0.072 N in the same runs; each largest step is one stick-slip release, 18-26 teeth contacts
-    // letting go at once, the proxy's velocity jumping by about 0.01 m/s and the coupling's damper, 10 N s/m,
-    // passing it to the hand). The step is asserted as a regression bound until then: 0.2 N (before issue 12's
-    // work: 3.3 N steps).
+    // Issue 12's bounds: at most 0.08 m during the stroke and 0.1 N per step. The largest steps were the comb
+    // catching a wisp near its roots (a strand point 5 mm from the root, where it can hardly move): the proxy
+    // slowed by 0.01-0.016 m/s in one step and the coupling's plain damper (10 N s/m) passed it to the hand
+    // (0.122, 0.072 and 0.164 N in three runs, 2026-11-24/25). The damper now relaxes (the coupling's
+    // `damper_time`, a standard linear solid) and a joint of two strand pieces is one contact, not two:
+    // 0.042 N replaying the 0.164 N run's pointer path.
     assert.ok(s.stroke_max_displacement_m <= 0.08, `displacement during the stroke ${s.stroke_max_displacement_m} m`);
-    assert.ok(s.max_force_change_n <= 0.2, `largest one-step change ${s.max_force_change_n} N`);
+    assert.ok(s.max_force_change_n <= 0.1, `largest one-step change ${s.max_force_change_n} N`);
   });
 });
 

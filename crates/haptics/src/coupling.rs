@@ -4,14 +4,20 @@
 //! Per haptic step ([`Coupling::update`]):
 //! 1. check the reading: non-finite values or a jump faster than the profile's `max_speed` are rejected
 //!    (zero force, an [`InputError`] returned, the last good pose kept);
-//! 2. the proxy (a light rigid body of mass `proxy_mass`) is pulled towards the device by a spring-damper
-//!    (stiffness `stiffness`, below the device's limit) and pushed by the hair's reaction. Everything is
-//!    implicit in the proxy's new velocity: the spring and damper, and the hair's reaction through its
-//!    linearisation [`HairReaction`] (the force `f0` the hair gave at the proxy's last velocity `v0`, and its
-//!    damping matrix `D = -dF/dv`, from the contacts' compliant response), so that
-//!    `m (v - v_old) = (k (x_rel - h v) + b (v_dev - v) + f0 - D (v - v0)) h`. A reaction stiff enough to
-//!    throw an explicitly pushed proxy (`|D| h > m`) then only slows it: the proxy takes part in the contact
-//!    solve as a body with its mass;
+//! 2. the proxy (a light rigid body of mass `proxy_mass`) is pulled towards the device by the coupling
+//!    (stiffness `stiffness`, below the device's limit, in parallel with a damper `damping` that sits in
+//!    series with a spring of stiffness `damping / damper_time`: a standard linear solid, the viscoelastic
+//!    model of a fingertip holding a tool) and pushed by the hair's reaction. The damper branch's force `F_d`
+//!    obeys `dF_d/dt = (b (v_dev - v) - F_d) / tau`: it follows `b (v_dev - v)` with the time constant
+//!    `tau = damper_time`, so a sudden change of the proxy's velocity (the comb catching hair near the roots,
+//!    a stuck wisp letting go) reaches the hand over a few steps instead of in one, by at most
+//!    `b |dv| h / (tau + h)` per step. Everything is implicit in the proxy's new velocity: the spring and
+//!    the damper branch (`F_d' = (tau F_d + h b (v_dev - v)) / (tau + h)`), and the hair's reaction through
+//!    its linearisation [`HairReaction`] (the force `f0` the hair gave at the proxy's last velocity `v0`, and
+//!    its damping matrix `D = -dF/dv`, from the contacts' compliant response), so that
+//!    `m (v - v_old) = (k (x_rel - h v) + F_d' + f0 - D (v - v0)) h`. A reaction stiff enough to throw an
+//!    explicitly pushed proxy (`|D| h > m`) then only slows it: the proxy takes part in the contact solve as
+//!    a body with its mass. Springs and dampers only: the coupling is passive by construction;
 //! 3. the device force is minus the coupling force, its rate of change clamped to the profile; then the
 //!    passivity controller adds just enough damping to keep the energy the device port has absorbed from the
 //!    user non-negative (stability first: this damping may exceed the rate limit); then the magnitude is
@@ -88,8 +94,18 @@ impl HairReaction {
 pub struct CouplingParams {
     /// Coupling stiffness, N/m. Default: half the device's `max_stiffness`.
     pub stiffness: f64,
-    /// Coupling damping, N s/m. Default: critical damping of the proxy, `2 sqrt(k m)`.
+    /// Coupling damping `b`, N s/m: the damper of the coupling's viscoelastic branch. Default: critical
+    /// damping of the proxy, `2 sqrt(k m)`.
     pub damping: f64,
+    /// Relaxation time `tau` of the damper branch, s (>= 0): the damper sits in series with a spring of
+    /// stiffness `b / tau`, so its force follows `b (v_dev - v_proxy)` with this time constant and changes by
+    /// at most `b |dv| h / (tau + h)` in a step of `h` when the proxy's velocity jumps by `dv` (0: a plain
+    /// damper, whose force jumps by `b |dv|`). Default 0.003 (3 haptic steps; a fingertip's viscoelastic
+    /// relaxation is slower, tens of ms): the proxy's spring mode stays damped (Omni: 39 Hz, damping ratio
+    /// 0.56; 16 Hz critically damped with a plain damper), while the comb catching hair near the roots (the
+    /// proxy slowed by 0.01-0.016 m/s in one step in the browser's stroke) gives the hand 0.04 N in one step
+    /// instead of 0.13-0.16 N.
+    pub damper_time: f64,
     /// Mass of the tool proxy, kg. Default 0.05.
     pub proxy_mass: f64,
 }
@@ -99,7 +115,7 @@ impl CouplingParams {
     pub fn for_profile(p: &DeviceProfile) -> Self {
         let k = 0.5 * p.max_stiffness;
         let m = 0.05;
-        Self { stiffness: k, damping: 2.0 * (k * m).sqrt(), proxy_mass: m }
+        Self { stiffness: k, damping: 2.0 * (k * m).sqrt(), damper_time: 0.003, proxy_mass: m }
     }
 }
 
@@ -120,6 +136,8 @@ pub struct Coupling {
     pub device_velocity: Vector3<f64>,
     /// Force last sent to the device, N.
     pub force: Vector3<f64>,
+    /// Force of the coupling's damper branch on the proxy, N (see [`CouplingParams::damper_time`]).
+    pub damper_force: Vector3<f64>,
     /// Passivity observer: energy absorbed from the user through the device port, J (kept >= 0).
     pub energy: f64,
     /// Steps in which the passivity controller acted.
@@ -140,6 +158,7 @@ impl Coupling {
             device: position,
             device_velocity: Vector3::zeros(),
             force: Vector3::zeros(),
+            damper_force: Vector3::zeros(),
             energy: 0.0,
             passivity_activations: 0,
             clamp_activations: 0,
@@ -173,18 +192,22 @@ impl Coupling {
         self.last_time = Some(reading.time);
         let hair = hair.sanitized();
 
-        // Proxy dynamics, implicit in the new velocity (the coupling spring and damper at the new proxy state,
-        // the hair's reaction linearised about the velocity it was computed at).
+        // Proxy dynamics, implicit in the new velocity (the coupling spring and damper branch at the new proxy
+        // state, the hair's reaction linearised about the velocity it was computed at). The damper branch,
+        // backward Euler: F_d' = keep F_d + c (v_dev - v), keep = tau / (tau + h), c = b h / (tau + h).
         let (k, b, m) = (self.params.stiffness, self.params.damping, self.params.proxy_mass);
+        let tau = self.params.damper_time.max(0.0);
+        let (keep, c) = (tau / (tau + dt), b * dt / (tau + dt));
         let x_rel = self.device - self.proxy;
-        // (m + b h + k h^2) v + D h v = m v_old + (k x_rel + b v_dev + f0 + D v0) h, solved for v.
-        let a = Matrix3::identity() * (m + b * dt + k * dt * dt) + hair.damping * dt;
-        let rhs = self.proxy_velocity * m + (x_rel * k + self.device_velocity * b + hair.force + hair.damping * hair.velocity) * dt;
+        // (m + c h + k h^2) v + D h v = m v_old + (k x_rel + keep F_d + c v_dev + f0 + D v0) h, solved for v.
+        let a = Matrix3::identity() * (m + c * dt + k * dt * dt) + hair.damping * dt;
+        let rhs = self.proxy_velocity * m + (x_rel * k + self.damper_force * keep + self.device_velocity * c + hair.force + hair.damping * hair.velocity) * dt;
         // `a` is symmetric positive definite (m > 0, D >= 0): Cholesky never fails for finite input.
-        let v_new = a.cholesky().map_or(rhs / (m + b * dt + k * dt * dt), |c| c.solve(&rhs));
+        let v_new = a.cholesky().map_or(rhs / (m + c * dt + k * dt * dt), |ch| ch.solve(&rhs));
         self.proxy_velocity = v_new;
         self.proxy += v_new * dt;
-        let coupling = (self.device - self.proxy) * k + (self.device_velocity - self.proxy_velocity) * b;
+        self.damper_force = self.damper_force * keep + (self.device_velocity - self.proxy_velocity) * c;
+        let coupling = (self.device - self.proxy) * k + self.damper_force;
 
         // Device force: minus the coupling force, rate-limited.
         let mut f = -coupling;
@@ -219,6 +242,7 @@ impl Coupling {
 
     fn reject(&mut self) {
         self.force = Vector3::zeros();
+        self.damper_force = Vector3::zeros();
         self.proxy_velocity = Vector3::zeros();
         self.device_velocity = Vector3::zeros();
     }
@@ -349,14 +373,16 @@ mod tests {
     #[test]
     fn an_implicit_proxy_is_not_thrown_by_a_stiff_dense_patch() {
         // Omni profile, the device drawn 10 cm through the dense patch (a minimum-jerk stroke at a mean 0.1,
-        // 0.2 and 0.3 m/s, the stroke speeds) and held there 0.2 s. Explicitly (`D h / m = 40`), once
-        // the proxy slows down the reaction flips sign every step: the proxy chatters and the device force
-        // jumps at the rate clamp (0.3 N per step). Taken implicitly the proxy stays within 1.5 N / k + 1 mm
+        // 0.2 and 0.3 m/s, the stroke speeds) and held there 0.2 s. Explicitly (`D h / m = 40`, with
+        // a plain damper, `damper_time` 0, whose force follows the chattering proxy at once), once the proxy
+        // slows down the reaction flips sign every step: the proxy chatters and the device force jumps at the
+        // rate clamp (0.3 N per step). Taken implicitly the proxy stays within 1.5 N / k + 1 mm
         // of the device (never more than 0.5 mm ahead of it: it is not thrown forward), the device force never
         // changes by more than 0.1 N in one step and no clamp acts.
         let p = DeviceProfile::PHANTOM_OMNI;
         let run = |speed: f64, implicit: bool| {
-            let mut c = Coupling::new(p, CouplingParams::for_profile(&p), Vector3::zeros());
+            let params = if implicit { CouplingParams::for_profile(&p) } else { CouplingParams { damper_time: 0.0, ..CouplingParams::for_profile(&p) } };
+            let mut c = Coupling::new(p, params, Vector3::zeros());
             let mut hair = HairReaction::none();
             let (mut gap, mut jump, mut ahead, mut peak) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
             let mut last = Vector3::zeros();
@@ -389,6 +415,49 @@ mod tests {
             println!("explicit {speed} m/s: largest step change {jump:.3} N, clamps {clamps}");
             assert!(jump > 0.25 && clamps > 0, "{speed} m/s: the explicit proxy should chatter (jump {jump} N, {clamps} clamps)");
         }
+    }
+
+    #[test]
+    fn a_sudden_stop_reaches_the_hand_over_the_damper_time() {
+        // The hand moves at v = 0.02 m/s from rest while the proxy is held still (a hair reaction of damping
+        // 1e9 N s/m: the comb caught on a stiff wisp at once). The damper branch obeys
+        // dF/dt = (b v - F) / tau: F(t) = b v (1 - exp(-t / tau)), and its backward-Euler steps give exactly
+        // F_n = b v (1 - (tau / (tau + h))^n). Asserted: the device force is minus the spring k v t plus F_n
+        // (within 1e-6 N: the proxy creeps by v h k / 1e9 per step), F_n within 0.25 (h / tau) b v of the exponential
+        // (backward Euler's first-order lag: 0.055 b v at most for tau = 3 h), and no step changes the force by more than
+        // b v h / (tau + h) + k v h (0.06 N); a plain damper (`damper_time` 0) jumps by b v + k v h at once
+        // (0.21 N), checked too.
+        let p = DeviceProfile::PHANTOM_OMNI;
+        let (h, v) = (1e-3, 0.02);
+        let held = HairReaction { force: Vector3::zeros(), damping: Matrix3::identity() * 1e9, velocity: Vector3::zeros() };
+        let run = |params: CouplingParams| {
+            let mut c = Coupling::new(p, params, Vector3::zeros());
+            let mut forces = Vec::new();
+            for n in 0..=40 {
+                let t = n as f64 * h;
+                forces.push(c.update_implicit(&reading(t, Vector3::new(v * t, 0.0, 0.0)), h, &held).unwrap().x);
+            }
+            forces
+        };
+        let params = CouplingParams::for_profile(&p);
+        let (k, b, tau) = (params.stiffness, params.damping, params.damper_time);
+        let f = run(params);
+        let mut largest: f64 = 0.0;
+        for n in 1..f.len() {
+            let t = n as f64 * h;
+            let discrete = b * v * (1.0 - (tau / (tau + h)).powi(n as i32));
+            let exact = b * v * (1.0 - (-t / tau).exp());
+            assert!((-f[n] - (k * v * t + discrete)).abs() < 1e-6, "step {n}: {} vs {}", -f[n], k * v * t + discrete);
+            assert!((discrete - exact).abs() < 0.25 * h / tau * b * v, "step {n}: scheme {discrete} vs law {exact}");
+            largest = largest.max((f[n] - f[n - 1]).abs());
+        }
+        let bound = b * v * h / (tau + h) + k * v * h;
+        println!("damper time {tau} s: largest step change {largest:.4} N (bound {bound:.4} N)");
+        assert!(largest <= bound + 1e-6, "{largest} N in one step");
+        let plain = run(CouplingParams { damper_time: 0.0, ..params });
+        let first = (plain[1] - plain[0]).abs();
+        println!("plain damper: first step change {first:.4} N");
+        assert!((first - (b * v + k * v * h)).abs() < 1e-6, "plain damper's first step {first} N");
     }
 
     #[test]

@@ -90,6 +90,7 @@ pub fn detect(
         let swept = Aabb::of_segment(&a0, &b0, reach).merge(&Aabb::of_segment(&a1, &b1, reach));
         candidates.clear();
         bvh.query(&swept, &mut candidates);
+        let first = out.len();
         for &pi in &candidates {
             let piece = &pieces[pi];
             for j in 0..=k {
@@ -126,8 +127,29 @@ pub fn detect(
                 break;
             }
         }
+        merge_joint_contacts(out, first);
     }
     DetectReport { substeps: k, too_fast }
+}
+
+/// Two pieces of a strand that meet at a joint both report that joint when it is their point closest to a
+/// capsule (on the outside of a bend): one point of the strand, found twice. Counted twice it would be two
+/// constraints on the same point, twice as stiff as one. Of the contacts one capsule found (`out[first..]`),
+/// those on the same strand at the same arc length (within 1 nm) are kept once, the deepest.
+fn merge_joint_contacts(out: &mut Vec<Contact>, first: usize) {
+    let mut i = first + 1;
+    while i < out.len() {
+        let (c, done) = (out[i], &out[first..i]);
+        match done.iter().position(|k| k.strand == c.strand && (k.s - c.s).abs() <= 1e-9) {
+            Some(j) => {
+                if c.depth > out[first + j].depth {
+                    out[first + j] = c;
+                }
+                out.remove(i);
+            }
+            None => i += 1,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -185,6 +207,37 @@ mod tests {
                 assert!(crossed);
             }
         }
+    }
+
+    #[test]
+    fn a_joint_touched_from_outside_the_bend_is_one_contact() {
+        // A strand bent into a roof: two 5 mm pieces meeting at the origin, each sloping down by 2 mm. A
+        // sphere (radius 0.6 mm) comes down onto the apex from above: the closest point of both pieces is the
+        // joint (each piece's own contact, checked, is at the joint). One point of the strand: one contact (two
+        // would be two constraints on the same point, twice as stiff), at s = 5 mm, normal straight down.
+        let pieces = vec![
+            Piece { strand: 0, s: 0.0, length: 0.0054, a: Vector3::new(-0.005, 0.0, -0.002), b: Vector3::zeros() },
+            Piece { strand: 0, s: 0.0054, length: 0.0054, a: Vector3::zeros(), b: Vector3::new(0.005, 0.0, -0.002) },
+        ];
+        let shape = ToolShape::from_toml("name = \"ball\"\nkind = \"finger\"\n[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 6e-4\n").unwrap();
+        let pose = |z: f64| ToolPose { position: Vector3::new(0.0, 0.0, z), rotation: Matrix3::identity() };
+        let hair = 4e-5;
+        let (from, to) = (pose(7e-4), pose(6e-4));
+        let mut each = 0;
+        for p in &pieces {
+            let one = [*p];
+            let mut c = vec![];
+            detect(&shape, &from, &to, 1e-3, &one, &Bvh::build(&one, 1e-4), hair, &mut c);
+            assert_eq!(c.len(), 1, "each piece alone touches at the joint: {c:?}");
+            assert!(c[0].point.norm() < 1e-12, "{c:?}");
+            each += c.len();
+        }
+        assert_eq!(each, 2);
+        let mut contacts = vec![];
+        detect(&shape, &from, &to, 1e-3, &pieces, &Bvh::build(&pieces, 1e-4), hair, &mut contacts);
+        assert_eq!(contacts.len(), 1, "{contacts:?}");
+        assert!((contacts[0].s - 0.0054).abs() < 1e-12 && (contacts[0].normal + Vector3::z()).norm() < 1e-9, "{contacts:?}");
+        assert!((contacts[0].depth - (6e-4 + hair - 6e-4)).abs() < 1e-12, "{contacts:?}");
     }
 
     #[test]

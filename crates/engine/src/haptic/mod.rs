@@ -254,6 +254,7 @@ impl HapticCore {
             self.runaways += 1;
             self.coupling.proxy = reading.position;
             self.coupling.proxy_velocity = Vector3::zeros();
+            self.coupling.damper_force = Vector3::zeros();
             self.coupling.force = Vector3::zeros();
             self.hair_force = HairReaction::none();
             return DeviceCommand::default();

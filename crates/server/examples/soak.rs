@@ -14,7 +14,8 @@
 //! own stalls and the server's (`Watch`), lateness behind the schedule, and whether it was on time
 //! (docs/protocol.md, "Frames on time"); `frames_on_time` (every watcher on time and the server's frame thread
 //! never a period late); the largest force and non-finite ones, non-finite proxies, the runaway count, and the
-//! server's own summary line (haptic loop timing, the writers' pickup delays).
+//! server's own summary line (haptic loop timing, the writers' pickup delays); and the CPU time other processes'
+//! real-time threads used meanwhile (a run beside another real-time haptic loop measures the machine).
 
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 use std::io::{BufRead, BufReader};
@@ -137,6 +138,45 @@ impl Watch {
             "latency_over_20ms": { "frames": late.len(), "first_s": late.first(), "last_s": late.last() },
             "gaps": self.gaps.iter().take(12).map(|g| serde_json::json!({ "at_s": g.0, "gap_ms": 1e3 * g.1, "skipped": g.2, "own_stall_ms": 1e3 * g.3 })).collect::<Vec<_>>(),
         })
+    }
+}
+
+/// CPU time used during the soak by real-time (SCHED_FIFO or SCHED_RR) threads of other processes (kernel
+/// threads aside), from /proc: such threads preempt the server's real-time frame path, so a run where they used
+/// much CPU (another haptic loop, say) measured the machine rather than the server.
+#[derive(Default)]
+struct ForeignRealtime {
+    /// CPU ticks of each real-time thread seen at the previous sample, by (pid, tid).
+    threads: std::collections::HashMap<(u32, u32), u64>,
+    cpu_s: f64,
+}
+
+impl ForeignRealtime {
+    fn sample(&mut self, exclude: &[u32]) {
+        let ticks = 100.0; // USER_HZ
+        let Ok(procs) = std::fs::read_dir("/proc") else { return };
+        for p in procs.flatten() {
+            let Some(pid) = p.file_name().to_str().and_then(|n| n.parse::<u32>().ok()) else { continue };
+            if exclude.contains(&pid) {
+                continue;
+            }
+            let Ok(tasks) = std::fs::read_dir(p.path().join("task")) else { continue };
+            for t in tasks.flatten() {
+                let Some(tid) = t.file_name().to_str().and_then(|n| n.parse::<u32>().ok()) else { continue };
+                let Ok(stat) = std::fs::read_to_string(t.path().join("stat")) else { continue };
+                // Fields after the command's closing parenthesis: state is field 3; ppid 4; utime 14, stime 15; policy 41.
+                let Some(rest) = stat.rsplit_once(')').map(|r| r.1) else { continue };
+                let f: Vec<&str> = rest.split_whitespace().collect();
+                let field = |n: usize| f.get(n - 3).and_then(|v| v.parse::<u64>().ok()).unwrap_or(0);
+                let (ppid, policy) = (field(4), field(41));
+                if ppid == 2 || pid == 2 || !(policy == 1 || policy == 2) {
+                    continue;
+                }
+                let cpu = field(14) + field(15);
+                let prev = self.threads.insert((pid, tid), cpu);
+                self.cpu_s += prev.map_or(0, |p| cpu.saturating_sub(p)) as f64 / ticks;
+            }
+        }
     }
 }
 
@@ -349,10 +389,12 @@ fn main() {
             }
         })
     };
-    // Memory: every second.
+    // Memory, and other processes' real-time threads (which preempt the server's frame path), every second.
     let (mut early, mut peak) = (0u64, 0u64);
+    let mut foreign = ForeignRealtime::default();
     while t0.elapsed().as_secs_f64() < seconds {
         std::thread::sleep(Duration::from_secs(1));
+        foreign.sample(&[std::process::id(), pid]);
         let r = rss(pid);
         peak = peak.max(r);
         if early == 0 && t0.elapsed().as_secs_f64() >= 0.1 * seconds {
@@ -380,6 +422,8 @@ fn main() {
         "watcher_frames": watched.lock().unwrap().iter().map(|w| w.report(seconds)).collect::<Vec<_>>(),
         "forces": { "max_n": s.max_force, "non_finite": s.nonfinite_force },
         "proxy": { "non_finite": s.nonfinite_proxy, "runaways": s.runaways, "max_lag_m": s.max_lag },
+        "other_processes_realtime_cpu_s": foreign.cpu_s,
+        "other_processes_realtime_threads": foreign.threads.keys().len(),
         "controller_frames_in_control": s.frames_in_control,
         "errors_received": s.errors,
         "controller_lost": s.controller_lost,

@@ -6,6 +6,8 @@
 //! at 120 Hz, every tool in turn (10 s each, the primary button held half of the time), a SET_HAIR every 15 s, a
 //! RESET every 60 s, a 2 m teleport every 5 s (the NaN pose the server refuses before the loop), one burst of
 //! 1,000 RESETs at a third of the run. Run:
+//! Each traced step also takes what the live haptic thread adds to it: the tool input for the global thread and,
+//! every `SessionParams::publish_every` steps, the snapshot for the viewers (`HapticCore::snapshot`).
 //! `cargo run --release -p coiffure-engine --example soak_profile [-- [SECONDS] [rt] [hair=on|off] [slowest=N]]`
 //! (default 60 s of simulated time; `rt`: SCHED_FIFO priority 10 for this thread).
 
@@ -30,6 +32,8 @@ struct Row {
     pressed: bool,
     commands: usize,
     command_s: f64,
+    /// The tool input and the snapshot, s.
+    snapshot_s: f64,
     wall: f64,
     phases: StepPhases,
     active: usize,
@@ -78,6 +82,7 @@ fn main() {
     let mut queue: VecDeque<Command> = VecDeque::new();
     let mut rows: Vec<Row> = Vec::with_capacity(steps as usize);
     let mut burst = (u64::MAX, 0u64);
+    let mut snapshot = engine::snapshot::HapticSnapshot::default();
     for n in 0..steps {
         let t = n as f64 * ls.dt;
         if n % every == 0 {
@@ -127,11 +132,19 @@ fn main() {
         }
         let command_s = t0.elapsed().as_secs_f64();
         ls.haptic_step(&[], Some(reading));
+        // What the live haptic thread also does in its step: the tool input for the global thread, and every
+        // `publish_every` steps the snapshot for the viewers.
+        let t1 = t0.elapsed().as_secs_f64();
+        let _ = ls.haptic.tool_input();
+        if (n + 1) % params.publish_every == 0 {
+            ls.haptic.snapshot(&ls.lattice, ls.dt, &mut snapshot);
+        }
         let wall = t0.elapsed().as_secs_f64();
+        let snapshot_s = wall - t1;
         if burst.0 != u64::MAX && burst.1 == 0 && queue.is_empty() {
             burst.1 = n;
         }
-        rows.push(Row { n, tool, pressed, commands: applied, command_s, wall, phases: ls.haptic.timings(), active: ls.haptic.active().len() });
+        rows.push(Row { n, tool, pressed, commands: applied, command_s, snapshot_s, wall, phases: ls.haptic.timings(), active: ls.haptic.active().len() });
     }
     println!("soak_profile: {seconds} s ({} steps), real-time priority: {}, hair-hair contact: {}, load average {}", rows.len(), haptics::realtime::is_realtime(), params.haptic.hair_contact, std::fs::read_to_string("/proc/loadavg").unwrap_or_default().trim());
     let line = |name: &str, sel: &dyn Fn(&Row) -> bool| {
@@ -143,7 +156,7 @@ fn main() {
         let m = set.len() as f64;
         let avg = |f: &dyn Fn(&Row) -> f64| set.iter().map(|r| f(r)).sum::<f64>() / m * 1e6;
         println!(
-            "| {name} | {} | {mean:.0} | {p50:.0} | {p99:.0} | {p999:.0} | {max:.0} | {misses} ({:.2} %) | {:.0} | {:.0} | {:.0} ({:.0}, {:.0}) | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} ({:.0}) | {:.0} ({:.0}) | {:.0} | {:.1} | {:.1} |",
+            "| {name} | {} | {mean:.0} | {p50:.0} | {p99:.0} | {p999:.0} | {max:.0} | {misses} ({:.2} %) | {:.0} | {:.0} | {:.0} ({:.0}, {:.0}) | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} ({:.0}) | {:.0} ({:.0}) | {:.0} | {:.1} | {:.1} | {:.0} | {:.0} |",
             set.len(),
             100.0 * misses as f64 / m,
             avg(&|r| r.command_s),
@@ -162,10 +175,12 @@ fn main() {
             avg(&|r| r.phases.local.free),
             set.iter().map(|r| r.active as f64).sum::<f64>() / m,
             set.iter().map(|r| r.phases.local.sweeps as f64).sum::<f64>() / m,
+            set.iter().map(|r| r.phases.local.rows as f64).sum::<f64>() / m,
+            avg(&|r| r.snapshot_s),
         );
     };
-    println!("| steps | n | mean us | p50 | p99 | p99.9 | max | misses | commands | coupling | active (choose, rebuild) | actions | interaction | dynamics | sample | detect (hair) | constrained (body) | free | active strands | sweeps |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("| steps | n | mean us | p50 | p99 | p99.9 | max | misses | commands | coupling | active (choose, rebuild) | actions | interaction | dynamics | sample | detect (hair) | constrained (body) | free | active strands | sweeps | rows | snapshot us |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     line("all", &|_| true);
     for (k, t) in Tool::ALL.iter().enumerate() {
         line(&format!("{} up", t.name()), &|r| r.tool == k && !r.pressed);

@@ -126,8 +126,10 @@ pub struct HairContactFinder {
     chords: Vec<Chord>,
     /// Chord indices sorted by their boxes' lower end along `axis` (kept between steps).
     order: Vec<usize>,
-    /// The chords' boxes and strands in that order, packed for the sweep's inner loop.
-    sorted: Vec<(Aabb, usize)>,
+    /// The chords' boxes in that order, packed for the sweep's inner loop: lower and upper end along `axis`, then
+    /// along the next axis and the one after (m); and their strands.
+    sorted: Vec<[f64; 6]>,
+    sorted_strand: Vec<usize>,
     axis: usize,
     /// Per strand: `max_per_strand` slots and how many are filled.
     slots: Vec<Slot>,
@@ -237,15 +239,22 @@ impl HairContactFinder {
         self.pairs = 0;
         self.tested = 0;
         self.sorted.clear();
-        self.sorted.extend(self.order.iter().map(|&i| (self.chords[i].bounds, self.chords[i].strand)));
+        self.sorted_strand.clear();
+        let (a1, a2) = ((axis + 1) % 3, (axis + 2) % 3);
+        for &i in &self.order {
+            let b = &self.chords[i].bounds;
+            self.sorted.push([b.min[axis], b.max[axis], b.min[a1], b.max[a1], b.min[a2], b.max[a2]]);
+            self.sorted_strand.push(self.chords[i].strand);
+        }
         for x in 0..n {
-            let (pb, ps) = self.sorted[x];
-            for y in x + 1..n {
-                let (qb, qs) = &self.sorted[y];
-                if qb.min[axis] > pb.max[axis] {
+            let (p, ps) = (self.sorted[x], self.sorted_strand[x]);
+            for (y, q) in self.sorted.iter().enumerate().skip(x + 1) {
+                if q[0] > p[1] {
                     break;
                 }
-                if ps == *qs || !pb.overlaps(qb) {
+                // The boxes overlap on every axis (a NaN never does), and belong to two strands.
+                let overlap = p[0] <= q[1] && q[0] <= p[1] && p[2] <= q[3] && q[2] <= p[3] && p[4] <= q[5] && q[4] <= p[5];
+                if !overlap || self.sorted_strand[y] == ps {
                     continue;
                 }
                 let (nx, ny) = (self.order[x], self.order[y]);

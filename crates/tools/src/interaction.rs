@@ -92,6 +92,8 @@ pub struct StepTimings {
     pub body: f64,
     /// Projected Gauss-Seidel sweeps of the common solve (0 without constraints).
     pub sweeps: usize,
+    /// Constraint rows of the common solve (tool, pins, body and both sides of the hair-hair contacts).
+    pub rows: usize,
 }
 
 /// Membership changes after which the collision tree is rebuilt rather than refitted
@@ -822,6 +824,7 @@ impl LocalInteraction {
                 rows[link.second.0].impulses[link.second.1] = -p;
             }
             timings.sweeps = solve(&mut rows[..used], &links, &options);
+            timings.rows = rows[..used].iter().map(ConstraintRows::len).sum();
             timings.constrained += clock.elapsed().as_secs_f64() - t_solve;
             // Stage 3, per strand: apply the impulses and commit the step; the tool feels the tool constraints'.
             let mix = options.force_mixing(dt);

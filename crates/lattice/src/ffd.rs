@@ -242,8 +242,10 @@ impl FfdLattice {
         Ok(Self::combine(&idx, &w, nodes))
     }
 
-    /// The weighted sum of the stencil's nodes, m.
-    fn combine(idx: &[usize; 27], w: &[f64; 27], nodes: &[Point3<f64>]) -> Vector3<f64> {
+    /// The weighted sum of the stencil's nodes (a stencil from [`weights`](Self::weights) or
+    /// [`weights_clamped`](Self::weights_clamped)), m: with the stencil kept, mapping a fixed rest point through
+    /// new nodes costs only this sum. `nodes` must have [`node_count`](Self::node_count) entries (panics otherwise).
+    pub fn combine(idx: &[usize; 27], w: &[f64; 27], nodes: &[Point3<f64>]) -> Vector3<f64> {
         let mut x = Vector3::zeros();
         for m in 0..27 {
             x += w[m] * nodes[idx[m]].coords;

@@ -26,6 +26,7 @@
 pub mod actions;
 mod active;
 mod body;
+mod reference;
 mod strands;
 mod wetness;
 
@@ -36,7 +37,7 @@ pub(crate) use strands::resting_on;
 use crate::command::Command;
 use crate::error::SessionError;
 use crate::params::{InputKind, SessionParams};
-use crate::scene::{ffd_map, Scene};
+use crate::scene::Scene;
 use crate::snapshot::{HapticSnapshot, LatticeSnapshot};
 use crate::tool::{Tool, ToolInput};
 use haptics::coupling::{Coupling, CouplingParams, HairReaction};
@@ -73,6 +74,9 @@ pub struct HapticCore {
     pub(crate) members: Vec<active::Member>,
     /// Strands let go whose shown displacement is fading out (no longer simulated).
     pub(crate) faded: Vec<active::Faded>,
+    /// The shown guides' reference samples mapped through the lattice, kept between snapshots
+    /// ([`HapticCore::snapshot`] takes `&self`, hence the cell; the core lives on one thread).
+    pub(crate) references: std::cell::RefCell<reference::ReferenceCache>,
     /// The choice of the active set in progress, if any (spread over steps).
     pub(crate) choice: Option<active::Choice>,
     /// Fastest tip of the simulated strands over the last step, m/s.
@@ -168,7 +172,7 @@ impl HapticCore {
         let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape()).collect();
         let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
         Ok(Self {
-            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), choice: None, max_tip_speed: 0.0, interaction,
+            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), references: Default::default(), choice: None, max_tip_speed: 0.0, interaction,
             hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, head: nalgebra::Isometry3::identity(), rejected: 0, runaways: 0, failed: 0, timings: StepPhases::default(),
         })
     }
@@ -348,14 +352,15 @@ impl HapticCore {
         out.displacement.clear();
         let ok = lattice.positions.len() == self.scene.lattice.node_count();
         let samples = self.scene.samples();
+        let mut cache = self.references.borrow_mut();
+        cache.begin(&lattice.positions);
         for (slot, &g) in self.active.iter().enumerate() {
             out.active.push(g as u32);
             let s = &self.interaction.strands[slot];
             let weight = self.members.get(slot).map_or(1.0, |m| m.weight);
             let pts = samples_along(s, self.scene.guides[g].model.length, samples);
-            for (k, p) in pts.into_iter().enumerate() {
-                let reference = self.scene.guides[g].reference[k];
-                let base = if ok { ffd_map(&self.scene.lattice.ffd, &lattice.positions, &reference) } else { reference };
+            let bases = cache.bases(&self.scene, g, ok);
+            for (p, base) in pts.into_iter().zip(bases) {
                 let d = (p - base) * weight;
                 // Keep the viewer's displacement sane even if a strand misbehaves.
                 out.displacement.push(if d.iter().all(|x| x.is_finite()) && d.norm() < self.params.haptic.max_displacement { d } else { Vector3::zeros() });
@@ -364,13 +369,13 @@ impl HapticCore {
         // The let-go strands fading out, from where they were let go.
         for f in &self.faded {
             out.active.push(f.guide as u32);
-            for (k, p) in f.samples.iter().enumerate() {
-                let reference = self.scene.guides[f.guide].reference[k];
-                let base = if ok { ffd_map(&self.scene.lattice.ffd, &lattice.positions, &reference) } else { reference };
+            let bases = cache.bases(&self.scene, f.guide, ok);
+            for (p, base) in f.samples.iter().zip(bases) {
                 let d = (p - base) * f.weight;
                 out.displacement.push(if d.iter().all(|x| x.is_finite()) && d.norm() < self.params.haptic.max_displacement { d } else { Vector3::zeros() });
             }
         }
+        cache.end();
     }
 
     /// Tool contacts of the last step.

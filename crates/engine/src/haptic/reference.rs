@@ -1,0 +1,123 @@
+//! The shown guides' reference samples mapped through the lattice, for [`HapticCore::snapshot`]
+//! (`super::HapticCore::snapshot`): the viewer's displacement of a sample is its strand point minus this base.
+//!
+//! Mapping every reference sample through the FFD on every published snapshot cost ~135 us on the haptic
+//! thread. A reference sample never moves, so its FFD stencil (27 node indices and weights) is found once per
+//! guide while the guide is shown, and the bases are summed again only when the lattice nodes change (at the
+//! global rate, not the publish rate). The numbers are the same as [`ffd_map`](crate::scene::ffd_map)'s: the
+//! same stencil and the same sum ([`FfdLattice::combine`]).
+
+use lattice::ffd::FfdLattice;
+use nalgebra::{Point3, Vector3};
+
+use crate::scene::Scene;
+
+/// One guide's stencils and bases.
+#[derive(Debug, Clone)]
+struct Entry {
+    guide: usize,
+    /// Each reference sample's FFD stencil (None: the sample could not be located, e.g. NaN; it maps to itself).
+    stencils: Vec<Option<([usize; 27], [f64; 27])>>,
+    /// The bases for the nodes in [`ReferenceCache::nodes`], m (head frame).
+    bases: Vec<Vector3<f64>>,
+    /// Whether the bases are for the current nodes.
+    fresh: bool,
+    /// Whether the last snapshot used it (entries not used are dropped).
+    used: bool,
+}
+
+/// Per shown guide, its reference samples mapped through the lattice nodes last seen.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct ReferenceCache {
+    /// The lattice nodes the fresh bases were mapped through, m (empty: none yet).
+    nodes: Vec<Point3<f64>>,
+    entries: Vec<Entry>,
+}
+
+impl ReferenceCache {
+    /// Starts a snapshot through `nodes`: marks every entry unused, and stale if the nodes changed (compared
+    /// exactly, so a cached base is never from other nodes).
+    pub fn begin(&mut self, nodes: &[Point3<f64>]) {
+        if self.nodes.as_slice() != nodes {
+            self.nodes.clear();
+            self.nodes.extend_from_slice(nodes);
+            for e in &mut self.entries {
+                e.fresh = false;
+            }
+        }
+        for e in &mut self.entries {
+            e.used = false;
+        }
+    }
+
+    /// The reference samples of `guide` mapped through the nodes given to [`begin`](Self::begin) (`ok`: they
+    /// are the lattice's nodes; otherwise the references themselves, as `ffd_map` does), m.
+    pub fn bases<'a>(&'a mut self, scene: &'a Scene, guide: usize, ok: bool) -> &'a [Vector3<f64>] {
+        let reference = &scene.guides[guide].reference;
+        if !ok {
+            return reference;
+        }
+        let ffd: &FfdLattice = &scene.lattice.ffd;
+        let i = match self.entries.iter().position(|e| e.guide == guide) {
+            Some(i) => i,
+            None => {
+                let stencils = reference.iter().map(|p| ffd.weights_clamped(&Point3::from(*p)).ok()).collect();
+                self.entries.push(Entry { guide, stencils, bases: Vec::new(), fresh: false, used: false });
+                self.entries.len() - 1
+            }
+        };
+        let e = &mut self.entries[i];
+        e.used = true;
+        if !e.fresh {
+            e.bases.clear();
+            for (s, p) in e.stencils.iter().zip(reference) {
+                e.bases.push(s.as_ref().map_or(*p, |(idx, w)| FfdLattice::combine(idx, w, &self.nodes)));
+            }
+            e.fresh = true;
+        }
+        &e.bases
+    }
+
+    /// Ends a snapshot: drops the guides it did not show.
+    pub fn end(&mut self) {
+        self.entries.retain(|e| e.used);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::global::GlobalCore;
+    use crate::params::SessionParams;
+    use crate::scene::ffd_map;
+    use crate::testing::small_scene;
+
+    /// The rest nodes moved by a smooth field scaled by `a` (m), so every stencil sees different nodes.
+    fn moved(nodes: &[Point3<f64>], a: f64) -> Vec<Point3<f64>> {
+        nodes.iter().map(|p| p + Vector3::new(a * (7.0 * p.y).sin(), a * (5.0 * p.z).cos(), -a * p.x)).collect()
+    }
+
+    #[test]
+    fn bases_equal_ffd_map_exactly_and_follow_the_nodes() {
+        // The cache must give bit-for-bit the numbers of mapping each reference sample afresh (`ffd_map`),
+        // also after the nodes change (stale bases would differ by ~mm here) and for guides dropped and re-shown.
+        let scene = small_scene();
+        let rest = GlobalCore::new(scene.clone(), &SessionParams::default()).snapshot().positions;
+        let mut cache = ReferenceCache::default();
+        let guides = [0, scene.guides.len() / 2, scene.guides.len() - 1];
+        for (round, a) in [0.0, 3e-3, 3e-3, -2e-3].into_iter().enumerate() {
+            let nodes = moved(&rest, a);
+            cache.begin(&nodes);
+            // Round 2 shows one guide only, so the others are dropped and made again in round 3.
+            let shown: &[usize] = if round == 2 { &guides[..1] } else { &guides };
+            for &g in shown {
+                let want: Vec<_> = scene.guides[g].reference.iter().map(|p| ffd_map(&scene.lattice.ffd, &nodes, p)).collect();
+                assert_eq!(cache.bases(&scene, g, true), want.as_slice(), "guide {g}, round {round}");
+                assert_eq!(cache.bases(&scene, g, false), scene.guides[g].reference.as_slice());
+            }
+            cache.end();
+            assert_eq!(cache.entries.len(), shown.len());
+        }
+        assert_ne!(moved(&rest, 3e-3), rest, "the test moves the nodes");
+    }
+}

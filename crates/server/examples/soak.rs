@@ -112,11 +112,14 @@ impl Watch {
         self.frames.push((at, seq));
     }
 
-    /// The report: counts, gaps split into the viewer's own (the gap less its own stall is within [`ON_TIME`])
-    /// and the server's, and each FRAME's latency behind its schedule (less the smallest one: loopback's transit).
+    /// The report: counts, gaps split into the viewer's own and the server's, and each FRAME's latency behind its
+    /// schedule (less the smallest one: loopback's transit). A gap is the server's if, less the viewer's own stall,
+    /// it is over [`ON_TIME`], or if it skipped FRAMEs worth over [`ON_TIME`]: while only the viewer stalls, the
+    /// server's FRAMEs wait in its socket (seconds of them fit) and none is skipped; skips mean the server's
+    /// writer or frame thread was held too.
     fn report(&self, seconds: f64) -> serde_json::Value {
         let skipped: u64 = self.frames.windows(2).map(|w| w[1].1.saturating_sub(w[0].1 + 1) as u64).sum();
-        let server_gaps: Vec<_> = self.gaps.iter().filter(|g| g.1 - g.3 > ON_TIME).collect();
+        let server_gaps: Vec<_> = self.gaps.iter().filter(|g| g.1 - g.3 > ON_TIME || (g.2 + 1) as f64 / FPS > ON_TIME).collect();
         let lat: Vec<f64> = self.frames.iter().map(|&(t, q)| t - q as f64 / FPS).collect();
         let floor = lat.iter().copied().fold(f64::INFINITY, f64::min);
         let mut lat: Vec<f64> = lat.iter().map(|l| 1e3 * (l - floor)).collect();

@@ -10,13 +10,15 @@ use std::time::{Duration, Instant};
 fn a_reading_viewer_gets_its_frames_on_time_while_another_does_not_read() {
     // Viewer A only reads; viewer B controls the tool, combs the back hair (60 POSEs/s) and never reads (its
     // socket fills, its writer waits). A's FRAMEs must not wait for B, nor for A's own ACKs: each FRAME's
-    // lateness is its arrival less its schedule (sequence / fps) less the smallest such value (the transit).
+    // lateness is its arrival less its schedule (sequence / fps) less the smallest such value (the transit),
+    // counted only for FRAMEs before which A itself was not stalled (A times its own scheduling).
     // Without TCP_NODELAY a FRAME (about 25 kB once the comb moves strands) waits for the ACK of the one
-    // before, which a viewer that only reads delays: 45 of 239 FRAMEs (19 %) came 25-33 ms late here (and the
-    // idle soak saw a 193 ms gap); with it, 0. Bounds, with margins for a loaded 2-core machine where the server
-    // runs at normal priority: under 10 % of A's FRAMEs over 25 ms late (half the Nagle count), A received at
-    // least half of the FRAMEs sent meanwhile (skips, latest wins, are for slow viewers), and no gap over 1 s
-    // (10 x the on-time bound of 100 ms).
+    // before, which a viewer that only reads delays: 26 of 204, 36 of 218 and 45 of 226 judged FRAMEs (13-20 %) came over
+    // 15 ms late here (and the idle soak saw a 193 ms gap); with it, 0. Bounds, with margins for a loaded 2-core
+    // machine where the server runs at normal priority: under 5 % of the judged FRAMEs over 15 ms late (a third
+    // to a quarter of the Nagle count; an idle or moderately loaded machine gives 0), A received at least half of
+    // the FRAMEs sent meanwhile (skips, latest wins, are for slow viewers), and no gap beyond A's own stalls over
+    // 1 s (10 x the on-time bound of 100 ms).
     let fps = 60.0;
     let s = serve(&["--render-strands", "2000", "--fps", "60", "--duration", "10"]);
     let mut a = open(&s.http, None, "").unwrap();
@@ -47,36 +49,55 @@ fn a_reading_viewer_gets_its_frames_on_time_while_another_does_not_read() {
             b
         })
     };
-    // 1 s for the stroke to reach the hair (FRAMEs grow from 8 to about 25 kB), then 4 s measured.
+    // 1 s for the stroke to reach the hair (FRAMEs grow from 8 to about 25 kB), then 4 s measured. A polls (reads
+    // time out after 5 ms) and times its own stalls: a FRAME that arrives after A itself did not run for over
+    // 10 ms (a loaded machine) says nothing of the server and is left out of the lateness count.
+    let poll = Duration::from_millis(5);
+    a.get_mut().set_read_timeout(Some(poll)).unwrap();
     let t0 = Instant::now();
-    let mut got: Vec<(f64, u32)> = Vec::new();
-    let mut size = 0;
+    // (arrival s, sequence, A stalled since the previous FRAME s)
+    let mut got: Vec<(f64, u32, f64)> = Vec::new();
+    let (mut size, mut back, mut stalled) = (0, Instant::now(), 0.0f64);
     while t0.elapsed() < Duration::from_secs(5) {
-        if let tungstenite::Message::Binary(m) = a.read().unwrap() {
-            if m[0] == 0x82 && t0.elapsed() > Duration::from_secs(1) {
-                size = size.max(m.len());
-                got.push((t0.elapsed().as_secs_f64(), u32::from_le_bytes(m[2..6].try_into().unwrap())));
+        let m = a.read();
+        let now = Instant::now();
+        stalled = stalled.max((now - back).saturating_sub(poll).as_secs_f64());
+        back = now;
+        match m {
+            Ok(tungstenite::Message::Binary(m)) if m[0] == 0x82 => {
+                if t0.elapsed() > Duration::from_secs(1) {
+                    size = size.max(m.len());
+                    got.push(((now - t0).as_secs_f64(), u32::from_le_bytes(m[2..6].try_into().unwrap()), stalled));
+                }
+                stalled = 0.0;
             }
+            Ok(_) => {}
+            Err(tungstenite::Error::Io(e)) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
+            Err(e) => panic!("viewer A: {e}"),
         }
     }
-    let late: Vec<f64> = got.iter().map(|&(t, q)| t - q as f64 / fps).collect();
+    let late: Vec<f64> = got.iter().map(|&(t, q, _)| t - q as f64 / fps).collect();
     let floor = late.iter().copied().fold(f64::INFINITY, f64::min);
-    let over = late.iter().filter(|&&l| l - floor > 0.025).count();
+    let judged: Vec<f64> = late.iter().zip(&got).filter(|(_, g)| g.2 <= 0.010).map(|(l, _)| l - floor).collect();
+    let over = judged.iter().filter(|&&l| l > 0.015).count();
     let span = got.last().unwrap().1 - got[0].1 + 1;
-    let gap = got.windows(2).map(|w| w[1].0 - w[0].0).fold(0.0, f64::max);
-    let mut sorted: Vec<f64> = late.iter().map(|l| 1e3 * (l - floor)).collect();
+    // The largest gap less A's own stall in it.
+    let gap = got.windows(2).map(|w| w[1].0 - w[0].0 - w[1].2).fold(0.0, f64::max);
+    let mut sorted: Vec<f64> = judged.iter().map(|l| 1e3 * l).collect();
     sorted.sort_by(f64::total_cmp);
     eprintln!(
-        "{} FRAMEs (up to {size} bytes) of {span} sent; {over} over 25 ms late; lateness p50 {:.2} ms, p90 {:.2} ms, max {:.2} ms; largest gap {:.1} ms",
+        "{} FRAMEs (up to {size} bytes) of {span} sent; {} judged (A not stalled), {over} of them over 15 ms late; lateness p50 {:.2} ms, p90 {:.2} ms, max {:.2} ms; largest gap less A's stall {:.1} ms",
         got.len(),
+        judged.len(),
         sorted[sorted.len() / 2],
         sorted[sorted.len() * 9 / 10],
         sorted[sorted.len() - 1],
         1e3 * gap
     );
-    assert!((over as f64) < 0.1 * got.len() as f64, "{over} of {} FRAMEs over 25 ms late", got.len());
+    assert!(judged.len() >= 60, "viewer A itself stalled before {} of {} FRAMEs: the machine is too busy to judge", got.len() - judged.len(), got.len());
+    assert!((over as f64) < 0.05 * judged.len() as f64, "{over} of {} FRAMEs over 15 ms late", judged.len());
     assert!(2 * got.len() as u32 >= span, "received {} of {span}", got.len());
-    assert!(gap < 1.0, "a gap of {gap:.3} s");
+    assert!(gap < 1.0, "a gap of {gap:.3} s beyond A's own stalls");
     stop.store(true, std::sync::atomic::Ordering::Relaxed);
     drop(poser.join().unwrap());
     drop(a);

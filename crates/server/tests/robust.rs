@@ -215,7 +215,7 @@ fn a_burst_of_1000_resets_does_not_stall_the_haptic_loop() {
     // Now at most `engine::live::MAX_COMMANDS_PER_STEP` (2) run per step: the session's record shows all 1,000
     // applied, never more than 2 in a step (counts, whatever the machine's load), and the loop's longest step,
     // printed when the server stops, stays under 0.25 s (loose: a shared machine at normal priority preempts
-    // steps by tens of ms). The speed figure is bench/soak's.
+    // steps by tens of ms). The speed figure (p99.9 around the burst) is the `burst` example's (bench/RESULTS.md).
     let dir = common::scratch("burst");
     let record = dir.join("burst.rec");
     let s = serve(&["--render-strands", "2000", "--duration", "6", "--record", record.to_str().unwrap()]);

@@ -1,5 +1,6 @@
-//! The shown guides' reference samples mapped through the lattice, for [`HapticCore::snapshot`]
-//! (`super::HapticCore::snapshot`): the viewer's displacement of a sample is its strand point minus this base.
+//! The shown guides' reference samples mapped through the lattice, for
+//! [`HapticCore::snapshot`](super::HapticCore::snapshot): the viewer's displacement of a sample is its strand
+//! point minus this base.
 //!
 //! Mapping every reference sample through the FFD on every published snapshot cost ~135 us on the haptic
 //! thread. A reference sample never moves, so its FFD stencil (27 node indices and weights) is found once per

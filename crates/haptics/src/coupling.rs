@@ -240,6 +240,15 @@ impl Coupling {
         Ok(f)
     }
 
+    /// Puts the proxy at `position` (m), at rest, with no force in the coupling's damper branch and zero force
+    /// to the device (the runaway guard's reset); the device's state is kept.
+    pub fn put_proxy_at(&mut self, position: Vector3<f64>) {
+        self.proxy = position;
+        self.proxy_velocity = Vector3::zeros();
+        self.damper_force = Vector3::zeros();
+        self.force = Vector3::zeros();
+    }
+
     fn reject(&mut self) {
         self.force = Vector3::zeros();
         self.damper_force = Vector3::zeros();

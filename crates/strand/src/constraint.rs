@@ -547,7 +547,6 @@ impl ConstraintRows {
         }
     }
 
-    /// Velocity of constraint `c`'s point with the current impulses, m/s.
     /// Starts the solve of row `c` from the impulse `p` (N s; e.g. the same contact's impulse at the last step)
     /// instead of zero, projected onto what the row allows now: a contact's normal part >= 0 and its tangential part
     /// within the Coulomb cone (its current normal and friction), a drag's within its largest force. Ignored for a
@@ -561,20 +560,14 @@ impl ConstraintRows {
         self.impulses[c] = match self.constraints[c].kind {
             ConstraintKind::Contact { normal, friction, .. } => {
                 let pn = p.dot(&normal).max(0.0);
-                let mut pt = p - normal * p.dot(&normal);
-                if pt.norm() > friction * pn {
-                    pt *= friction * pn / pt.norm().max(1e-300);
-                }
-                normal * pn + pt
+                normal * pn + clamp_norm(p - normal * p.dot(&normal), friction * pn)
             }
-            ConstraintKind::Drag { max_force } => {
-                let limit = max_force * self.h;
-                if p.norm() > limit { p * (limit / p.norm()) } else { *p }
-            }
+            ConstraintKind::Drag { max_force } => clamp_norm(*p, max_force * self.h),
             ConstraintKind::Pin { .. } => *p,
         };
     }
 
+    /// Velocity of constraint `c`'s point with the current impulses, m/s.
     fn velocity(&self, c: usize) -> Vector3<f64> {
         let n = self.len();
         let mut u = self.u_free[c];
@@ -601,12 +594,7 @@ impl ConstraintRows {
             ConstraintKind::Drag { max_force } => {
                 let Rule::Drag { inverse } = self.rule[c] else { return };
                 // Aim for no relative motion, then clamp to the drag's largest impulse.
-                let mut pc = p + inverse * (-rel - p * mix);
-                let limit = max_force * self.h;
-                if pc.norm() > limit {
-                    pc *= limit / pc.norm();
-                }
-                pc
+                clamp_norm(p + inverse * (-rel - p * mix), max_force * self.h)
             }
             ConstraintKind::Contact { normal, depth, friction } => {
                 let Rule::Contact(frame) = self.rule[c] else { return };
@@ -615,6 +603,12 @@ impl ConstraintRows {
         };
         self.impulses[c] = if new.iter().all(|x| x.is_finite()) { new } else { Vector3::zeros() };
     }
+}
+
+/// `x` shortened to length `limit` if it is longer (an impulse clamped to its largest value, N s).
+fn clamp_norm(x: Vector3<f64>, limit: f64) -> Vector3<f64> {
+    let n = x.norm();
+    if n > limit { x * (limit / n) } else { x }
 }
 
 /// Two strands' constraints that are one contact (two strands touching): the `first` row's constraint, a

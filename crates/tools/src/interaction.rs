@@ -189,6 +189,8 @@ pub struct LocalInteraction {
     /// Each strand's constraint impulses of the last step: the next solve starts from them
     /// ([`LocalInteraction::warm_start`]).
     warm: Vec<Vec<Warm>>,
+    /// Workspace of [`LocalInteraction::warm_start`]: which of a strand's last impulses are taken.
+    warm_used: Vec<bool>,
 }
 
 /// One side of a hair-hair contact: the `pair`-th pair of the step ([`HairContactFinder::contacts`]), at its first
@@ -260,6 +262,7 @@ impl LocalInteraction {
             hair_slots: Vec::new(),
             rows: Vec::new(),
             warm: vec![Vec::new(); strands_len],
+            warm_used: Vec::new(),
         }
     }
 
@@ -524,18 +527,18 @@ impl LocalInteraction {
     /// the same constraint at the last step (`last`): the same kind on the same capsule, pin or other strand, the
     /// nearest in arc length within a quarter of a segment (`segment`, m; each impulse of the last step is used
     /// once). The solve then needs fewer sweeps while the contacts persist.
-    fn warm_start(last: &[Warm], tags: &[(WarmTag, f64)], segment: f64, rows: &mut ConstraintRows) {
+    /// `used`: workspace (which of `last` are taken), storage kept between calls.
+    fn warm_start(last: &[Warm], tags: &[(WarmTag, f64)], segment: f64, used: &mut Vec<bool>, rows: &mut ConstraintRows) {
         if last.is_empty() {
             return;
         }
-        let mut used = [false; 64];
+        used.clear();
+        used.resize(last.len(), false);
         let within = 0.25 * segment;
         for (c, &(tag, s)) in tags.iter().enumerate() {
-            let best = last.iter().enumerate().filter(|(i, w)| w.tag == tag && !used.get(*i).copied().unwrap_or(false) && (w.s - s).abs() <= within).min_by(|a, b| (a.1.s - s).abs().total_cmp(&(b.1.s - s).abs()));
+            let best = last.iter().enumerate().filter(|(i, w)| w.tag == tag && !used[*i] && (w.s - s).abs() <= within).min_by(|a, b| (a.1.s - s).abs().total_cmp(&(b.1.s - s).abs()));
             if let Some((i, w)) = best {
-                if let Some(u) = used.get_mut(i) {
-                    *u = true;
-                }
+                used[i] = true;
                 rows.warm_start(c, &w.impulse);
             }
         }
@@ -785,7 +788,7 @@ impl LocalInteraction {
                         strand.step_constrained(dt, &twisting, &cons, &options).map(Solved::Stepped)
                     };
                     if let Ok(Solved::Rows(i)) = &outcome {
-                        Self::warm_start(&last, &tags, strand.model.segment_length(), &mut rows[*i]);
+                        Self::warm_start(&last, &tags, strand.model.segment_length(), &mut self.warm_used, &mut rows[*i]);
                     }
                     self.warm[k] = last;
                     self.warm[k].clear();

@@ -256,10 +256,7 @@ impl HapticCore {
         let lag = (self.coupling.proxy - reading.position).norm();
         if !(lag <= self.params.haptic.max_proxy_lag) {
             self.runaways += 1;
-            self.coupling.proxy = reading.position;
-            self.coupling.proxy_velocity = Vector3::zeros();
-            self.coupling.damper_force = Vector3::zeros();
-            self.coupling.force = Vector3::zeros();
+            self.coupling.put_proxy_at(reading.position);
             self.hair_force = HairReaction::none();
             return DeviceCommand::default();
         }

@@ -89,11 +89,20 @@ fn main() {
         mean(&|p| p.local.free),
         mean(&|p| p.tracking)
     );
+    let count = |f: &dyn Fn(&StepPhases) -> usize| rows.iter().map(|r| f(&r.2) as f64).sum::<f64>() / n;
+    println!(
+        "constrained: solve {:.0} us mean; rows {:.0}, rows of the largest strand {:.1}, hair-hair links {:.1}, sweeps {:.1} a step on average",
+        mean(&|p| p.local.solve),
+        count(&|p| p.local.rows),
+        count(&|p| p.local.strand_rows),
+        count(&|p| p.local.links),
+        count(&|p| p.local.sweeps)
+    );
     rows.sort_by(|a, b| b.1.total_cmp(&a.1));
-    println!("| step | wall us | coupling | active set (choose, rebuild) | actions | interaction | dynamics | sample | detect (hair) | constrained (body) | free | tracking | active | contacts |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("| step | wall us | coupling | active set (choose, rebuild) | actions | interaction | dynamics | sample | detect (hair) | constrained (body) | free | tracking | active | contacts | solve us (rows, largest, links, sweeps) |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (k, w, p, a, c) in rows.iter().take(slowest) {
         let us = |x: f64| format!("{:.0}", x * 1e6);
-        println!("| {k} | {} | {} | {} ({}, {}) | {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {a} | {c} |", us(*w), us(p.coupling), us(p.active), us(p.choose), us(p.rebuild), us(p.actions), us(p.interaction), us(p.local.dynamics), us(p.local.sample), us(p.local.detect), us(p.local.hair_detect), us(p.local.constrained), us(p.local.body), us(p.local.free), us(p.tracking));
+        println!("| {k} | {} | {} | {} ({}, {}) | {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {a} | {c} | {} ({}, {}, {}, {}) |", us(*w), us(p.coupling), us(p.active), us(p.choose), us(p.rebuild), us(p.actions), us(p.interaction), us(p.local.dynamics), us(p.local.sample), us(p.local.detect), us(p.local.hair_detect), us(p.local.constrained), us(p.local.body), us(p.local.free), us(p.tracking), us(p.local.solve), p.local.rows, p.local.strand_rows, p.local.links, p.local.sweeps);
     }
 }

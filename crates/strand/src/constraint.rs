@@ -293,14 +293,14 @@ impl Strand {
         rows.dofs = dofs;
         rows.constraints.extend_from_slice(constraints);
         rows.jac.resize(n * size, 0.0);
-        rows.y.resize(n * size, 0.0);
+        rows.reduced.resize(n * size, 0.0);
+        rows.pivoted.resize(n * size, 0.0);
         for (c, pc) in constraints.iter().enumerate() {
             let jac = &mut rows.jac[c * size..(c + 1) * size];
             let (x, span) = self.dynamics.point_jacobian_into(&self.model, &self.state, pc.s, jac);
             let bias = root.velocity + root.angular_velocity.cross(&(x - root.position));
-            let yc = &mut rows.y[c * size..(c + 1) * size];
-            yc.copy_from_slice(jac);
-            if !self.resolve_step_matrix3(yc, span / d_seg) {
+            let (lc, dlc) = (&mut rows.reduced[c * size..(c + 1) * size], &mut rows.pivoted[c * size..(c + 1) * size]);
+            if !self.dynamics.reduce_articulated3(&self.model, jac, span / d_seg, lc, dlc) {
                 rows.clear();
                 return Err(StrandError::NotPositiveDefinite { what: "step matrix" });
             }
@@ -317,15 +317,17 @@ impl Strand {
                 ConstraintKind::Contact { .. } | ConstraintKind::Drag { .. } => Vector3::zeros(),
             });
         }
-        // Delassus blocks W[c][d] = J_c Y_d^T (3 x 3), over the nonzero columns of J_c (the others add exact
-        // zeros). W is symmetric, so only c <= d is computed.
+        // Delassus blocks W[c][d] = J_c A^-1 J_d^T = sum_m (L^-1 J_c^T)[m] (D^-1 L^-1 J_d^T)[m]^T (3 x 3), over the
+        // columns both reduced right-hand sides have (beyond a point's segment its own are zero). W is
+        // symmetric, so only c <= d is computed.
         rows.w.resize(n * n, Matrix3::zeros());
         for c in 0..n {
-            let jac = &rows.jac[c * size..c * size + 3 * rows.span[c]];
+            let lc = &rows.reduced[c * size..(c + 1) * size];
             for d in c..n {
-                let y = &rows.y[d * size..(d + 1) * size];
+                let common = 3 * rows.span[c].min(rows.span[d]);
+                let dlc = &rows.pivoted[d * size..d * size + common];
                 let mut block = Matrix3::zeros();
-                for (jm, ym) in jac.chunks_exact(3).zip(y.chunks_exact(3)) {
+                for (jm, ym) in lc[..common].chunks_exact(3).zip(dlc.chunks_exact(3)) {
                     block += Vector3::new(jm[0], jm[1], jm[2]) * nalgebra::RowVector3::new(ym[0], ym[1], ym[2]);
                 }
                 rows.w[c * n + d] = block;
@@ -375,8 +377,10 @@ impl Strand {
             self.prepared = Some((h, v));
             return Err(StrandError::InvalidParameter { field: "apply_constraints", reason: "the rows were not built for this strand's prepared step".into() });
         }
-        for c in 0..n {
-            rows.add_response(c, &rows.impulses[c], v.as_mut_slice());
+        // The velocity change of all the impulses at once: A^-1 J^T p (one articulated solve per strand).
+        if !self.add_response(rows, &rows.impulses, v.as_mut_slice()) {
+            self.prepared = Some((h, v));
+            return Err(StrandError::NonFinite { what: "constraint response", time: self.state.time });
         }
         let saved = self.state.clone();
         self.commit_step(h, v)?;
@@ -412,8 +416,11 @@ impl Strand {
                     lambda[c] += projection * r;
                 }
             }
-            for &c in &pins {
-                rows.add_response(c, &lambda[c], self.state.q.as_mut_slice());
+            let mut q = std::mem::replace(&mut self.state.q, nalgebra::DVector::zeros(0));
+            let finite = self.add_response(rows, &lambda, q.as_mut_slice());
+            self.state.q = q;
+            if !finite {
+                break;
             }
         }
         if !self.state.q.iter().all(|x| x.is_finite()) {
@@ -421,6 +428,38 @@ impl Strand {
             return Err(StrandError::NonFinite { what: "pin projection", time: self.state.time });
         }
         Ok(rows.impulses.clone())
+    }
+}
+
+impl Strand {
+    /// Adds `A^-1 J^T p` (the generalized response to the impulses `p`, one per constraint of `rows`, N s) to
+    /// `out` (dofs), with the step matrix of the prepared step: one articulated solve for all of them. False if
+    /// the response is not finite (`out` unchanged).
+    fn add_response(&mut self, rows: &ConstraintRows, p: &[Vector3<f64>], out: &mut [f64]) -> bool {
+        let mut g = std::mem::replace(&mut self.rhs, nalgebra::DVector::zeros(0));
+        if g.len() != rows.dofs {
+            g = nalgebra::DVector::zeros(rows.dofs);
+        }
+        g.fill(0.0);
+        let mut any = false;
+        for (c, p) in p.iter().enumerate().take(rows.len()) {
+            if p.x == 0.0 && p.y == 0.0 && p.z == 0.0 {
+                continue;
+            }
+            any = true;
+            let jac = &rows.jac[c * 3 * rows.dofs..c * 3 * rows.dofs + 3 * rows.span[c]];
+            for (o, j) in g.iter_mut().zip(jac.chunks_exact(3)) {
+                *o += j[0] * p.x + j[1] * p.y + j[2] * p.z;
+            }
+        }
+        let ok = !any || self.dynamics.resolve_articulated1(&self.model, g.as_mut_slice());
+        if ok && any {
+            for (o, x) in out.iter_mut().zip(g.iter()) {
+                *o += x;
+            }
+        }
+        self.rhs = g;
+        ok
     }
 }
 
@@ -491,8 +530,12 @@ pub struct ConstraintRows {
     /// which only the first `span[c]` columns can be nonzero.
     jac: Vec<f64>,
     span: Vec<usize>,
-    /// Per constraint, at `c * 3 dofs`: `Y_c = (A^-1 J_c^T)^T` (3 x dofs, column-major).
-    y: Vec<f64>,
+    /// Per constraint, at `c * 3 dofs`: its reduced right-hand sides `L^-1 J_c^T` (3 x dofs, column-major; the
+    /// first `span[c]` columns can be nonzero) in the elimination `A = L D L^T` of the step matrix
+    /// ([`crate::dynamics::Dynamics::reduce_articulated3`]).
+    reduced: Vec<f64>,
+    /// Per constraint, at `c * 3 dofs`: `D^-1 L^-1 J_c^T`, the same layout.
+    pivoted: Vec<f64>,
     /// Delassus blocks `W[c][d]` at `c * n + d`, m/s per N s.
     w: Vec<Matrix3<f64>>,
     /// Unconstrained point velocities, m/s.
@@ -534,17 +577,6 @@ impl ConstraintRows {
     /// N s (the velocity change of the point along `direction` per unit impulse along it).
     pub fn mobility(&self, c: usize, direction: &Vector3<f64>) -> f64 {
         direction.dot(&(self.w[c * self.len() + c] * direction))
-    }
-
-    /// Adds `Y_c^T p` (the generalized response to the impulse `p` at constraint `c`'s point) to `out` (dofs).
-    fn add_response(&self, c: usize, p: &Vector3<f64>, out: &mut [f64]) {
-        if p.x == 0.0 && p.y == 0.0 && p.z == 0.0 {
-            return;
-        }
-        let size = 3 * self.dofs;
-        for (o, y) in out.iter_mut().zip(self.y[c * size..(c + 1) * size].chunks_exact(3)) {
-            *o += y[0] * p.x + y[1] * p.y + y[2] * p.z;
-        }
     }
 
     /// Starts the solve of row `c` from the impulse `p` (N s; e.g. the same contact's impulse at the last step)

@@ -253,7 +253,7 @@ pub struct Dynamics {
     coupling: Vec<Twists>,
     /// Workspace of [`Dynamics::solve_articulated`], per segment: `U_Q`, `D_Q^-1` and `c_Q`.
     articulated: Vec<(Twists, Matrix3<f64>, Vector3<f64>)>,
-    /// Workspace of [`Dynamics::resolve_articulated3`]: `c_Q` of its three right-hand sides (columns).
+    /// Workspace of [`Dynamics::resolve_articulated1`]: `c_Q` of its right-hand sides (columns).
     articulated3: Vec<Matrix3<f64>>,
     /// Mass matrix M(q): the kinetic energy (with a fixed root) is `qdot^T M qdot / 2`, J. Assembled only by
     /// `evaluate(.., with_mass = true)` (the linearly implicit step does not need it and leaves it stale).
@@ -553,38 +553,26 @@ impl Dynamics {
         b.iter().all(|x| x.is_finite())
     }
 
-    /// Solves the same system as the last [`Dynamics::solve_articulated`] for another right-hand side, reusing
-    /// its elimination (one column of [`Dynamics::resolve_articulated3`]).
-    #[cfg(test)]
-    pub(crate) fn resolve_articulated(&mut self, model: &StrandModel, b: &mut DVector<f64>) -> bool {
-        let mut three = Matrix3xX::zeros(b.len());
-        three.row_mut(0).copy_from(&b.transpose());
-        let ok = self.resolve_articulated3(model, three.as_mut_slice(), model.segments);
-        b.copy_from(&three.row(0).transpose());
-        ok
-    }
-
-    /// Solves the system of the last [`Dynamics::solve_articulated`] for three right-hand sides at once, reusing
-    /// its elimination (articulated inertias and pivots): only the bias recursion and the back-substitution run,
-    /// O(N) with a small constant. `b` holds the right-hand sides as the rows of a 3 x dofs matrix, column-major
-    /// (3 entries per column), and becomes `(A^-1 b^T)^T`: the constraint solver's responses `Y = A^-1 J^T` to a
-    /// point's three directions in one pass. Only the columns of the first `used` segments of `b` may be
-    /// nonzero (a point's Jacobian: the segments from the root to its own), so the tip-to-root recursion starts
-    /// at segment `used - 1`.
-    pub(crate) fn resolve_articulated3(&mut self, model: &StrandModel, b: &mut [f64], used: usize) -> bool {
+    /// Solves the system of the last [`Dynamics::solve_articulated`] for another right-hand side `b` (dofs) in
+    /// place, reusing its elimination (articulated inertias and pivots): only the bias recursion and the
+    /// back-substitution run, O(N) with a small constant. E.g. the velocity change `A^-1 J^T p` of all a
+    /// strand's constraint impulses at once.
+    pub(crate) fn resolve_articulated1(&mut self, model: &StrandModel, b: &mut [f64]) -> bool {
         if model.dofs_per_segment() == 2 {
-            self.resolve_articulated3_d::<2>(model, b, used)
+            self.resolve_articulated_d::<2, 1>(model, b, model.segments)
         } else {
-            self.resolve_articulated3_d::<3>(model, b, used)
+            self.resolve_articulated_d::<3, 1>(model, b, model.segments)
         }
     }
 
-    /// [`Dynamics::resolve_articulated3`] for `D` coordinates per segment: the padded rows and columns of the
-    /// workspace (zero in `U`, `S` and `c`, identity in `D^-1`) would only add exact zeros.
-    fn resolve_articulated3_d<const D: usize>(&mut self, model: &StrandModel, b: &mut [f64], used: usize) -> bool {
+    /// [`Dynamics::resolve_articulated1`] for `D` coordinates per segment and `R` right-hand sides (`b`: R x dofs,
+    /// column-major; only the first `used` segments' columns nonzero, so the tip-to-root recursion starts at
+    /// segment `used - 1`): the padded rows and columns of the workspace (zero in `U`, `S` and `c`, identity in
+    /// `D^-1`) would only add exact zeros.
+    fn resolve_articulated_d<const D: usize, const R: usize>(&mut self, model: &StrandModel, b: &mut [f64], used: usize) -> bool {
         let n = model.segments;
         let used = used.min(n);
-        let mut pa = SMatrix::<f64, 6, 3>::zeros();
+        let mut pa = SMatrix::<f64, 6, R>::zeros();
         // Beyond `used` the right-hand sides and the bias are zero.
         self.articulated3[used..n].fill(Matrix3::zeros());
         for i in (0..used).rev() {
@@ -594,25 +582,69 @@ impl Dynamics {
             let (u, dinv, _) = &self.articulated[i];
             let mut c = Matrix3::zeros();
             for k in 0..D {
-                for r in 0..3 {
-                    c[(k, r)] = -s_pa[(k, r)] - b[3 * (i * D + k) + r];
+                for r in 0..R {
+                    c[(k, r)] = -s_pa[(k, r)] - b[R * (i * D + k) + r];
                 }
             }
-            pa += u.fixed_columns::<D>(0) * (dinv.fixed_view::<D, D>(0, 0) * c.fixed_rows::<D>(0));
+            pa += u.fixed_columns::<D>(0) * (dinv.fixed_view::<D, D>(0, 0) * c.fixed_view::<D, R>(0, 0));
             self.articulated3[i] = c;
         }
-        let mut v = SMatrix::<f64, 6, 3>::zeros();
+        let mut v = SMatrix::<f64, 6, R>::zeros();
         for i in 0..n {
             let (u, dinv, _) = &self.articulated[i];
-            let x = -(dinv.fixed_view::<D, D>(0, 0) * (u.fixed_columns::<D>(0).tr_mul(&v) + self.articulated3[i].fixed_rows::<D>(0)));
+            let x = -(dinv.fixed_view::<D, D>(0, 0) * (u.fixed_columns::<D>(0).tr_mul(&v) + self.articulated3[i].fixed_view::<D, R>(0, 0)));
             for k in 0..D {
-                for r in 0..3 {
-                    b[3 * (i * D + k) + r] = x[(k, r)];
+                for r in 0..R {
+                    b[R * (i * D + k) + r] = x[(k, r)];
                 }
             }
             v += self.motion[i].fixed_columns::<D>(0) * x;
         }
-        b[..3 * n * D].iter().all(|x| x.is_finite())
+        b[..R * n * D].iter().all(|x| x.is_finite())
+    }
+
+    /// The tip-to-root half of [`Dynamics::resolve_articulated1`] alone, for three right-hand sides, for the quadratic form of `A^-1`: with
+    /// the elimination `A = L D L^T` of the last [`Dynamics::solve_articulated`] (the pivots `D_Q` of each
+    /// segment), the reduced right-hand sides `c = L^-1 b` give `b1^T A^-1 b2 = sum_Q c1_Q^T D_Q^-1 c2_Q`. For
+    /// the three right-hand sides `b` (3 x dofs, column-major, only the first `used` segments' columns nonzero,
+    /// e.g. a point's Jacobian: the segments from the root to its own) writes `c` into `c_out` and `D^-1 c` into `e_out` (3 x (used
+    /// D), column-major, the same layout as `b`; `c` is zero beyond `used`). So the Delassus block of two points
+    /// is `W_12 = J_1 A^-1 J_2^T = sum_m c1[m] e2[m]^T` over the columns both have: no back-substitution over the
+    /// whole strand per point. False if a value is not finite.
+    pub(crate) fn reduce_articulated3(&self, model: &StrandModel, b: &[f64], used: usize, c_out: &mut [f64], e_out: &mut [f64]) -> bool {
+        if model.dofs_per_segment() == 2 {
+            self.reduce_articulated_d::<2>(model, b, used, c_out, e_out)
+        } else {
+            self.reduce_articulated_d::<3>(model, b, used, c_out, e_out)
+        }
+    }
+
+    /// [`Dynamics::reduce_articulated3`] for `D` coordinates per segment.
+    fn reduce_articulated_d<const D: usize>(&self, model: &StrandModel, b: &[f64], used: usize, c_out: &mut [f64], e_out: &mut [f64]) -> bool {
+        let used = used.min(model.segments);
+        let mut pa = SMatrix::<f64, 6, 3>::zeros();
+        let mut finite = true;
+        for i in (0..used).rev() {
+            let s = self.motion[i].fixed_columns::<D>(0);
+            let s_pa = s.tr_mul(&pa);
+            let (u, dinv, _) = &self.articulated[i];
+            let mut c = SMatrix::<f64, D, 3>::zeros();
+            for k in 0..D {
+                for r in 0..3 {
+                    c[(k, r)] = -s_pa[(k, r)] - b[3 * (i * D + k) + r];
+                }
+            }
+            let e = dinv.fixed_view::<D, D>(0, 0) * c;
+            pa += u.fixed_columns::<D>(0) * e;
+            for k in 0..D {
+                for r in 0..3 {
+                    c_out[3 * (i * D + k) + r] = c[(k, r)];
+                    e_out[3 * (i * D + k) + r] = e[(k, r)];
+                }
+            }
+            finite &= e.iter().all(|x| x.is_finite());
+        }
+        finite
     }
 
     /// Steps 2 (mass) and 3 of the pipeline: the dense mass matrix from the sums of [`Dynamics::sweep`].
@@ -741,8 +773,54 @@ mod tests {
             let mut b1 = DVector::from_fn(n, |i, _| (i as f64 * 0.9).sin());
             assert!(dy.solve_articulated(&m, 1.3, 2e-6, &mut b1));
             let mut again = b2.clone();
-            assert!(dy.resolve_articulated(&m, &mut again));
+            assert!(dy.resolve_articulated1(&m, again.as_mut_slice()));
             assert!((&again - &fresh).norm() <= 1e-12 * fresh.norm(), "{kind:?}");
+        }
+    }
+
+    #[test]
+    fn reduced_right_hand_sides_give_the_delassus_blocks_of_the_dense_matrix() {
+        // W_12 = J_1 A^-1 J_2^T from the tip-to-root half alone (sum_m c1[m] e2[m]^T over the columns both points
+        // have) against the dense A = scale M + stiffness K solved by LU, for points in the same segment, in
+        // different segments and at the root: equal to 1e-9 of the largest block entry (round-off of the two
+        // factorizations of a matrix whose condition number reaches 1e6).
+        for kind in [ModelKind::Reduced, ModelKind::Full] {
+            let (m, st) = curly(kind);
+            let mut dy = Dynamics::new(&m);
+            dy.evaluate(&m, &st, &[], true);
+            let (scale, stiffness) = (1.3, 2e-6);
+            let n = m.dofs();
+            let d = m.dofs_per_segment();
+            let mut b = DVector::from_fn(n, |i, _| (i as f64 * 0.9).sin());
+            assert!(dy.solve_articulated(&m, scale, stiffness, &mut b));
+            let rig = m.rigidities() * (m.segment_length() * stiffness);
+            let mut a = &dy.mass * scale;
+            for j in 0..n {
+                a[(j, j)] += rig[j % d];
+            }
+            let lu = a.lu();
+            let points = [0.0, 0.003, 0.013, 0.014, 0.05, 0.0799, 0.1];
+            let reduced: Vec<(Matrix3xX<f64>, Vec<f64>, Vec<f64>, usize)> = points
+                .iter()
+                .map(|&s| {
+                    let (j, _) = dy.point_jacobian(&m, &st, s);
+                    let (_, span) = dy.point_jacobian_into(&m, &st, s, &mut vec![0.0; 3 * n]);
+                    let (mut c, mut e) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
+                    assert!(dy.reduce_articulated3(&m, j.as_slice(), span / d, &mut c, &mut e));
+                    (j, c, e, span)
+                })
+                .collect();
+            for (j1, c1, _, span1) in &reduced {
+                for (j2, _, e2, span2) in &reduced {
+                    let dense = j1 * lu.solve(&j2.transpose()).expect("A is invertible");
+                    let mut w = Matrix3::zeros();
+                    for (cm, em) in c1[..3 * span1.min(span2)].chunks_exact(3).zip(e2.chunks_exact(3)) {
+                        w += Vector3::new(cm[0], cm[1], cm[2]) * nalgebra::RowVector3::new(em[0], em[1], em[2]);
+                    }
+                    let err = (w - &dense).amax();
+                    assert!(err <= 1e-9 * dense.amax().max(1e-300), "{kind:?}: {err} of {}", dense.amax());
+                }
+            }
         }
     }
 

@@ -56,7 +56,7 @@ pub struct Strand {
     /// Workspace: the step's system matrix, factorized in place.
     system: DMatrix<f64>,
     /// Workspace: right-hand side, then solution, of the step's linear system.
-    rhs: DVector<f64>,
+    pub(crate) rhs: DVector<f64>,
     /// A step begun by [`Strand::prepare_step`]: its time step (s) and unconstrained velocities.
     pub(crate) prepared: Option<(f64, DVector<f64>)>,
 }
@@ -132,13 +132,6 @@ impl Strand {
         self.state.root.advance(h);
         self.state.time += h;
         Ok(())
-    }
-
-    /// Solves `A x = b` in place for the three rows of `b` (3 x dofs, column-major) with the matrix of the last
-    /// linearly implicit step, reusing its elimination; only the first `used` segments' columns of `b` may be
-    /// nonzero.
-    pub(crate) fn resolve_step_matrix3(&mut self, b: &mut [f64], used: usize) -> bool {
-        self.dynamics.resolve_articulated3(&self.model, b, used)
     }
 
     /// Solves `A x = b` in place with the linearly implicit step's matrix `A = M (1 + h c) + (h tau + h^2) K` at

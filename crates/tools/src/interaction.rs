@@ -94,6 +94,12 @@ pub struct StepTimings {
     pub sweeps: usize,
     /// Constraint rows of the common solve (tool, pins, body and both sides of the hair-hair contacts).
     pub rows: usize,
+    /// Of `constrained`: the common solve's sweeps alone ([`solve`]), s.
+    pub solve: f64,
+    /// The most constraint rows of one strand in the common solve.
+    pub strand_rows: usize,
+    /// Hair-hair links of the common solve (contacts solved for both strands at once).
+    pub links: usize,
 }
 
 /// Membership changes after which the collision tree is rebuilt rather than refitted
@@ -826,8 +832,12 @@ impl LocalInteraction {
                 let p = rows[link.first.0].impulses[link.first.1];
                 rows[link.second.0].impulses[link.second.1] = -p;
             }
+            let t_sweeps = clock.elapsed().as_secs_f64();
             timings.sweeps = solve(&mut rows[..used], &links, &options);
+            timings.solve = clock.elapsed().as_secs_f64() - t_sweeps;
             timings.rows = rows[..used].iter().map(ConstraintRows::len).sum();
+            timings.strand_rows = rows[..used].iter().map(ConstraintRows::len).max().unwrap_or(0);
+            timings.links = links.len();
             timings.constrained += clock.elapsed().as_secs_f64() - t_solve;
             // Stage 3, per strand: apply the impulses and commit the step; the tool feels the tool constraints'.
             let mix = options.force_mixing(dt);

@@ -382,13 +382,14 @@ impl Strand {
             self.prepared = Some((h, v));
             return Err(StrandError::NonFinite { what: "constraint response", time: self.state.time });
         }
-        let saved = self.state.clone();
-        self.commit_step(h, v)?;
         let constraints = &rows.constraints;
-        let v_max = opts.max_correction_speed;
         // Post-stabilization of pins (Cline and Pai 2003): project the positions back onto the pins with the
-        // same metric, dq = A^-1 J^T lambda with W lambda = error; two Gauss-Seidel passes per projection.
+        // same metric, dq = A^-1 J^T lambda with W lambda = error; two Gauss-Seidel passes per projection. The
+        // state before the step is kept to restore it if the projection fails (commit_step checks its own).
         let pins: Vec<usize> = (0..n).filter(|&c| matches!(constraints[c].kind, ConstraintKind::Pin { .. })).collect();
+        let saved = (!pins.is_empty()).then(|| self.state.clone());
+        self.commit_step(h, v)?;
+        let v_max = opts.max_correction_speed;
         for _ in 0..2 {
             if pins.is_empty() {
                 break;
@@ -423,7 +424,7 @@ impl Strand {
                 break;
             }
         }
-        if !self.state.q.iter().all(|x| x.is_finite()) {
+        if let Some(saved) = saved.filter(|_| !self.state.q.iter().all(|x| x.is_finite())) {
             self.state = saved;
             return Err(StrandError::NonFinite { what: "pin projection", time: self.state.time });
         }

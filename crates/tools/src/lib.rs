@@ -18,4 +18,5 @@ pub mod hair_contact;
 pub mod interaction;
 pub mod shape;
 pub mod sprayer;
+pub mod sweep;
 pub mod wetness;

@@ -279,31 +279,18 @@ impl HapticCore {
         self.active = guides;
         self.members = members;
         self.interaction.set_strands(strands, &from);
-        // Joining strands: their groomed shapes as the hair-hair contacts' rest (`HapticParams::groomed_overlap`).
+        // Joining strands: their groomed shapes as the hair-hair contacts' rest (`HapticParams::groomed_overlap`;
+        // none for a cut strand: other segments than the groom's).
         if self.params.haptic.groomed_overlap {
             for (i, &g) in self.active.iter().enumerate() {
-                if from[i].is_none() {
-                    if let Some(r) = self.groomed(g, &self.interaction.strands[i]) {
-                        self.interaction.set_rest_shape(i, &r);
-                    }
+                let guide = &self.scene.guides[g];
+                let uncut = (self.interaction.strands[i].model.length - guide.model.length).abs() <= 1e-12;
+                if from[i].is_none() && uncut {
+                    self.interaction.set_rest_state(i, &guide.state);
                 }
             }
         }
         self.wet_version = u64::MAX;
-    }
-
-    /// Guide `g`'s groomed shape as a strand like `like` (its model, the guide's groomed coordinates and root
-    /// on the head at rest); None for a cut strand (other segments than the groom's).
-    fn groomed(&self, g: usize, like: &Strand) -> Option<Strand> {
-        let guide = &self.scene.guides[g];
-        if like.state.q.len() != guide.state.q.len() || (like.model.length - guide.model.length).abs() > 1e-12 {
-            return None;
-        }
-        let mut s = like.clone();
-        s.state.q.copy_from(&guide.state.q);
-        s.state.qdot.fill(0.0);
-        s.state.root = guide.state.root.clone();
-        Some(s)
     }
 
     /// Guide `g`'s stored strand ready to join: at rest (zero velocities), its root on the head at rest.

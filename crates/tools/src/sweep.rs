@@ -11,7 +11,7 @@
 //! one-at-a-time sweep (each box in sweep order, then its partners in sweep order), so what follows is unchanged.
 
 use crate::geometry::Aabb;
-use wide::{f64x4, CmpGt, CmpLe};
+use wide::{f64x4, CmpGt, CmpLe, CmpNe};
 
 /// SIMD lanes of the scan.
 const LANES: usize = 4;
@@ -26,7 +26,9 @@ pub struct SweepAndPrune {
     /// (m), padded for the last lanes; and their groups.
     lo: [Vec<f64>; 3],
     hi: [Vec<f64>; 3],
-    group: Vec<usize>,
+    group: Vec<f64>,
+    /// The pairs found, as positions in sweep order (storage kept between calls).
+    hits: Vec<[u32; 2]>,
 }
 
 impl SweepAndPrune {
@@ -50,6 +52,7 @@ impl SweepAndPrune {
     /// sweep order of `i`, then of `j`.
     pub fn pairs(&mut self, boxes: &[Aabb], groups: &[usize], out: &mut Vec<(usize, usize)>) {
         assert_eq!(boxes.len(), groups.len(), "one group per box");
+        assert!(boxes.len() < u32::MAX as usize - LANES, "at most 2^32 - 5 boxes");
         out.clear();
         let n = boxes.len();
         self.sort(boxes);
@@ -66,16 +69,23 @@ impl SweepAndPrune {
             lo.resize(padded, f64::NAN);
             hi.resize(padded, f64::NAN);
         }
+        // Groups as lanes too (exact below 2^53; NaN padding).
         self.group.clear();
-        self.group.extend(self.order.iter().map(|&i| groups[i]));
+        self.group.extend(self.order.iter().map(|&i| groups[i] as f64));
+        self.group.resize(padded, f64::NAN);
         let [lo0, lo1, lo2] = &self.lo;
         let [hi0, hi1, hi2] = &self.hi;
+        let group = &self.group;
         let lane = |v: &[f64], y: usize| f64x4::from(<[f64; LANES]>::try_from(&v[y..y + LANES]).expect("padded for the last lanes"));
+        // Each block's pairs are written without branching: all four lanes' positions are stored and the count
+        // moves past those that overlap (the hits' storage stays LANES ahead of the count).
+        let hits = &mut self.hits;
+        let mut count = 0;
         for x in 0..n {
-            let g = self.group[x];
             let (p_lo0, p_hi0) = (f64x4::splat(lo0[x]), f64x4::splat(hi0[x]));
             let (p_lo1, p_hi1) = (f64x4::splat(lo1[x]), f64x4::splat(hi1[x]));
             let (p_lo2, p_hi2) = (f64x4::splat(lo2[x]), f64x4::splat(hi2[x]));
+            let p_group = f64x4::splat(group[x]);
             let mut y = x + 1;
             while y < n {
                 // Lanes y..y + 4 (past n: masked). The sweep stops at the first box whose lower end is past this
@@ -89,14 +99,15 @@ impl SweepAndPrune {
                     & p_lo1.cmp_le(lane(hi1, y))
                     & lane(lo1, y).cmp_le(p_hi1)
                     & p_lo2.cmp_le(lane(hi2, y))
-                    & lane(lo2, y).cmp_le(p_hi2);
-                let mut hits = overlap.move_mask() & before;
-                while hits != 0 {
-                    let l = hits.trailing_zeros() as usize;
-                    hits &= hits - 1;
-                    if self.group[y + l] != g {
-                        out.push((self.order[x], self.order[y + l]));
-                    }
+                    & lane(lo2, y).cmp_le(p_hi2)
+                    & lane(group, y).cmp_ne(p_group);
+                let mask = (overlap.move_mask() & before) as usize;
+                if hits.len() < count + LANES {
+                    hits.resize(2 * (count + LANES), [0; 2]);
+                }
+                for l in 0..LANES {
+                    hits[count] = [x as u32, (y + l) as u32];
+                    count += (mask >> l) & 1;
                 }
                 if stop != 0 {
                     break;
@@ -104,6 +115,7 @@ impl SweepAndPrune {
                 y += LANES;
             }
         }
+        out.extend(hits[..count].iter().map(|&[x, y]| (self.order[x as usize], self.order[y as usize])));
     }
 
     /// Chooses the sweep axis (where the boxes' centres spread widest relative to their mean extent) and sorts

@@ -98,7 +98,8 @@ pub struct ConstraintOptions {
     /// contacts persist (with hair-hair contacts the linked solve seldom reaches `tolerance`; 30 cold sweeps a
     /// step cost a third of the haptic step, bench/HISTORY.md).
     pub iterations: usize,
-    /// The sweeps stop early once a whole sweep changed no impulse by more than `tolerance` times the largest
+    /// The sweeps of a group of strands (one strand, or strands linked by contacts with each other) stop early
+    /// once a whole sweep changed none of the group's impulses by more than `tolerance` times its largest
     /// impulse (dimensionless, >= 0; 0 always runs `iterations` sweeps). Default 1e-6.
     pub tolerance: f64,
 }
@@ -658,9 +659,11 @@ pub struct ConstraintLink {
 }
 
 /// Solves the constraints of one or several strands' prepared steps together by projected Gauss-Seidel sweeps
-/// (at most `opts.iterations`, fewer once converged to `opts.tolerance`), the law of the module documentation; `links` couple rows of different strands (their
-/// contacts with each other), so that both strands' responses enter each such contact in the same sweep
-/// (implicitly, with no lag of a step). Unlinked strands are solved as they would be alone. A link naming a
+/// (at most `opts.iterations`, fewer once converged to `opts.tolerance`), the law of the module documentation;
+/// `links` couple rows of different strands (their contacts with each other), so that both strands' responses
+/// enter each such contact in the same sweep (implicitly, with no lag of a step). Each group of strands linked
+/// directly or through others (an unlinked strand alone) is solved as it would be alone: its sweeps stop when
+/// its own impulses converged. A link naming a
 /// missing row, a row of its own strand, a row already linked or a first row that is not a contact is ignored.
 /// The impulses are left in each [`ConstraintRows::impulses`]; the sweeps start from the impulses the rows hold
 /// (zero, or a warm start: [`ConstraintRows::warm_start`]). Returns the number of sweeps run.
@@ -688,17 +691,19 @@ pub fn solve(rows: &mut [ConstraintRows], links: &[ConstraintLink], opts: &Const
         role[a][i] = 1 + l;
         role[b][j] = SECOND;
     }
-    // A strand without links stops sweeping once its own impulses converged (as it would alone); linked strands
-    // sweep until all of them converged together.
-    let linked: Vec<bool> = role.iter().map(|r| r.iter().any(|&x| x != 0)).collect();
+    // Strands linked by contacts, directly or through others, form a group; each group stops sweeping once a
+    // whole sweep changed none of its impulses by more than `tolerance` times its largest one (a strand without
+    // links is a group of its own, and stops as it would alone).
+    let group = groups(rows.len(), links.iter().enumerate().filter(|(l, _)| frames[*l].is_some()).map(|(_, k)| (k.first.0, k.second.0)));
     let mut done = vec![false; rows.len()];
+    // Per group: the largest impulse and the largest change of one in this sweep, N s.
+    let mut sizes = vec![(0.0f64, 0.0f64); rows.len()];
     let mut sweeps = 0;
     for _ in 0..opts.iterations.max(1) {
         sweeps += 1;
-        // The largest impulse and the largest change of one in this sweep among the linked strands, N s.
-        let (mut largest, mut change) = (0.0f64, 0.0f64);
+        sizes.fill((0.0, 0.0));
         for s in 0..rows.len() {
-            if done[s] {
+            if done[group[s]] {
                 continue;
             }
             let (mut own_largest, mut own_change) = (0.0f64, 0.0f64);
@@ -722,17 +727,51 @@ pub fn solve(rows: &mut [ConstraintRows], links: &[ConstraintLink], opts: &Const
                 own_largest = own_largest.max(rows[s].impulses[c].norm_squared());
                 own_change = own_change.max((rows[s].impulses[c] - before).norm_squared());
             }
-            let (own_largest, own_change) = (own_largest.sqrt(), own_change.sqrt());
-            if linked[s] {
-                largest = largest.max(own_largest);
-                change = change.max(own_change);
-            } else {
-                done[s] = own_change <= opts.tolerance * own_largest;
+            let size = &mut sizes[group[s]];
+            *size = (size.0.max(own_largest), size.1.max(own_change));
+        }
+        let mut all = true;
+        for g in 0..rows.len() {
+            if group[g] == g && !done[g] {
+                let (largest, change) = (sizes[g].0.sqrt(), sizes[g].1.sqrt());
+                done[g] = change <= opts.tolerance * largest;
+                all &= done[g];
             }
         }
-        if done.iter().zip(&linked).all(|(&d, &l)| d || l) && change <= opts.tolerance * largest {
+        if all {
             break;
         }
     }
     sweeps
+}
+
+/// The group of each of `n` strands joined by the `pairs` (strand indices; out-of-range ones ignored): the
+/// smallest strand index of its group, so a group's representative is the strand whose group is itself.
+fn groups(n: usize, pairs: impl Iterator<Item = (usize, usize)>) -> Vec<usize> {
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
+        }
+        x
+    }
+    for (a, b) in pairs.filter(|&(a, b)| a < n && b < n) {
+        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+        parent[ra.max(rb)] = ra.min(rb);
+    }
+    (0..n).map(|x| find(&mut parent, x)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::groups;
+
+    #[test]
+    fn strands_joined_directly_or_through_others_form_one_group() {
+        // 0-3 and 3-5 join 0, 3, 5; 4-2 joins 2 and 4; 1 and 6 stay alone; an out-of-range pair is ignored.
+        let pairs = [(0, 3), (4, 2), (5, 3), (7, 1), (2, 4)];
+        assert_eq!(groups(7, pairs.into_iter()), vec![0, 1, 2, 0, 2, 0, 6]);
+        assert_eq!(groups(3, std::iter::empty()), vec![0, 1, 2]);
+    }
 }

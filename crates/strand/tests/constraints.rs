@@ -328,3 +328,42 @@ fn two_strands_pressed_together_share_the_contact() {
     assert!((moved_down / (0.5 * gap) - 1.0).abs() < 0.03, "upper tip moved {moved_down}");
     assert!((moved_up / (0.5 * gap) - 1.0).abs() < 0.03, "lower tip moved {moved_up}");
 }
+
+/// Rows of a pair of cantilevers (as [`tips_pressed_together`], roots `gap` apart in z and `x0` along y) in
+/// their first step: the upper strand's tip on the lower one's (row 0 of each, to be linked), and a contact
+/// pressing the upper strand's middle down by `press` (m), which couples the upper strand's two rows.
+fn pair_rows(gap: f64, x0: f64, press: f64, opts: &ConstraintOptions) -> Vec<strand::constraint::ConstraintRows> {
+    let mut m = h1(0.02, 16);
+    m.damping = 0.05;
+    let at = |z: f64| RootFrame::new(Vector3::new(0.0, x0, z), Vector3::x(), Vector3::y()).unwrap();
+    let (mut upper, mut lower) = (Strand::new(m.clone(), at(gap)).unwrap(), Strand::new(m.clone(), at(0.0)).unwrap());
+    upper.prepare_step(1e-3, &[]).unwrap();
+    lower.prepare_step(1e-3, &[]).unwrap();
+    let contact = |s: f64, normal: Vector3<f64>, depth: f64| PointConstraint { s, kind: ConstraintKind::Contact { normal, depth, friction: 0.3 }, velocity: Vector3::zeros() };
+    let middle = contact(0.5 * m.length, -Vector3::z(), press);
+    vec![
+        upper.constraint_rows(&[contact(m.length, -Vector3::z(), gap), middle], opts).unwrap(),
+        lower.constraint_rows(&[contact(m.length, Vector3::z(), gap)], opts).unwrap(),
+    ]
+}
+
+#[test]
+fn groups_of_linked_strands_stop_sweeping_on_their_own() {
+    // Two pairs of strands, each pair linked by one contact, solved in one call: each pair (a group) stops once
+    // its own sweep changed no impulse by more than the tolerance, so the impulses equal bit for bit those of
+    // each pair solved alone, and the call runs as many sweeps as the slower pair (the pairs converge at
+    // different rates: checked).
+    use strand::constraint::{solve, ConstraintLink};
+    let opts = ConstraintOptions { tolerance: 0.1, iterations: 200, ..ConstraintOptions::default() };
+    let link = |a: usize| ConstraintLink { first: (a, 0), second: (a + 1, 0) };
+    let (a, b) = (|| pair_rows(2e-4, 0.0, 1e-3, &opts), || pair_rows(5e-4, 0.01, 3e-3, &opts));
+    let (mut alone_a, mut alone_b) = (a(), b());
+    let n_a = solve(&mut alone_a, &[link(0)], &opts);
+    let n_b = solve(&mut alone_b, &[link(0)], &opts);
+    assert!(n_a != n_b && n_a.max(n_b) < opts.iterations, "sweeps {n_a} and {n_b}");
+    let mut both: Vec<_> = a().into_iter().chain(b()).collect();
+    assert_eq!(solve(&mut both, &[link(0), link(2)], &opts), n_a.max(n_b));
+    for (together, alone) in both.iter().zip(alone_a.iter().chain(&alone_b)) {
+        assert_eq!(together.impulses, alone.impulses);
+    }
+}

@@ -43,7 +43,9 @@ impl HapticCore {
             }
         }
         if let Ok(m) = self.wet_model.wet(&dry, h.friction_coefficient(), section.area(), mean) {
-            self.interaction.model = ForceModel::Constraint { friction: self.params.haptic.combing_friction(m.friction, self.combing_ease), options: Default::default() };
+            // Wet fibres are softer: their contacts' largest stiffness follows (`contact_options`).
+            let options = super::strands::contact_options(m.material().young_modulus * section.i_soft());
+            self.interaction.model = ForceModel::Constraint { friction: self.params.haptic.combing_friction(m.friction, self.combing_ease), options };
         }
         self.interaction.hair_contact = self.hair_contact(mean);
     }

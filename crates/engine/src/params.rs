@@ -134,6 +134,11 @@ pub struct HapticParams {
     /// so that no step pays for the whole scan; `crate::haptic` active set), >= 1. Default 10 (10 ms at 1 kHz,
     /// far less than `lookahead`).
     pub choice_steps: usize,
+    /// Most guides that join the active set in one haptic step: the guides a finished choice adds join in
+    /// turns, nearest first, from the step after the scan ended (each joining strand costs ~5 us of the step;
+    /// a choice adds up to `max_chosen`), >= 1. Default 4 (48 guides join within 12 ms, far less than
+    /// `lookahead`).
+    pub joins_per_step: usize,
     /// The clip pins the strand point nearest its jaws if it is within this distance, m. Default 0.01.
     pub clip_reach: f64,
     /// Displacements of the local strands from their references larger than this are not sent to the
@@ -204,7 +209,7 @@ pub struct HapticParams {
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false }
+        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false }
     }
 }
 
@@ -239,8 +244,8 @@ impl HapticParams {
         if !(0.0..1.0).contains(&self.combing_ease_reduction) {
             return p(format!("haptic.combing_ease_reduction must be in [0, 1), got {}", self.combing_ease_reduction));
         }
-        if self.dryer_pieces == 0 || self.cut_pieces == 0 || self.choice_steps == 0 {
-            return p(format!("haptic.dryer_pieces, haptic.cut_pieces and haptic.choice_steps must be > 0, got {}, {}, {}", self.dryer_pieces, self.cut_pieces, self.choice_steps));
+        if self.dryer_pieces == 0 || self.cut_pieces == 0 || self.choice_steps == 0 || self.joins_per_step == 0 {
+            return p(format!("haptic.dryer_pieces, haptic.cut_pieces, haptic.choice_steps and haptic.joins_per_step must be > 0, got {}, {}, {}, {}", self.dryer_pieces, self.cut_pieces, self.choice_steps, self.joins_per_step));
         }
         if !(0.0..=1.0).contains(&self.hydrogen_share) {
             return p(format!("haptic.hydrogen_share must be in [0, 1], got {}", self.hydrogen_share));

@@ -4,12 +4,12 @@
 //! Pipeline of [`HairContactFinder::detect`] (no allocation once the workspaces have grown):
 //! 1. **Chords**: each strand's sampled centreline pieces are merged into chords, one per helical segment
 //!    (the segment's start to its end), with a box grown by half the contact distance.
-//! 2. **Broad phase**: sweep and prune (Baraff 1992; Cohen et al. 1995) along the axis on which the chords are
-//!    spread widest relative to their boxes' size: the chords are kept sorted by their boxes' lower end on that
-//!    axis (a stable sort from the last step's order: about O(n) while the strands move little), and each chord is
-//!    tested against the following ones until their boxes start beyond its own (a hashed uniform grid of
+//! 2. **Broad phase** ([`crate::sweep`]): sweep and prune (Baraff 1992; Cohen et al. 1995) along the axis on which
+//!    the chords are spread widest relative to their boxes' size, four boxes at a time in SIMD lanes: the pairs of
+//!    chords of two strands whose boxes overlap on every axis, in sweep order (a hashed uniform grid of
 //!    chord-sized cells was tried first: on the haptic-loop bench it cost more, see bench/RESULTS.md).
-//! 3. **Narrow phase**: closest points of the two chords; closer than the contact distance, a contact.
+//! 3. **Narrow phase**: closest points of the two chords; closer than the contact distance, a contact (four pairs
+//!    at a time in SIMD lanes reject those that are apart first, [`crate::segments4`]).
 //! 4. **Reduction**: each strand keeps at most one contact per (chord, other strand) and at most
 //!    [`HairContact::max_per_strand`] contacts, the deepest.
 //!
@@ -20,6 +20,8 @@
 
 use crate::bvh::Piece;
 use crate::geometry::{closest_segment_params, Aabb};
+use crate::segments4::may_be_closer;
+use crate::sweep::SweepAndPrune;
 use nalgebra::Vector3;
 use strand::StrandError;
 
@@ -124,13 +126,12 @@ pub struct HairPair {
 #[derive(Debug, Clone, Default)]
 pub struct HairContactFinder {
     chords: Vec<Chord>,
-    /// Chord indices sorted by their boxes' lower end along `axis` (kept between steps).
-    order: Vec<usize>,
-    /// The chords' boxes in that order, packed for the sweep's inner loop: lower and upper end along `axis`, then
-    /// along the next axis and the one after (m); and their strands.
-    sorted: Vec<[f64; 6]>,
-    sorted_strand: Vec<usize>,
-    axis: usize,
+    /// The chords' boxes and strands, the broad phase's input, and its output: pairs of chords (indices into
+    /// `chords`) whose boxes overlap, of two strands, in sweep order.
+    boxes: Vec<Aabb>,
+    groups: Vec<usize>,
+    sweep: SweepAndPrune,
+    candidates: Vec<(usize, usize)>,
     /// Per strand: `max_per_strand` slots and how many are filled.
     slots: Vec<Slot>,
     filled: Vec<usize>,
@@ -200,35 +201,11 @@ impl HairContactFinder {
             index += 1;
             i = j + 1;
         }
-        // The sweep axis: where the chords' centres spread widest relative to their boxes' mean extent.
-        let n = self.chords.len();
-        let mut score = [0.0f64; 3];
-        for (axis, sc) in score.iter_mut().enumerate() {
-            let (mut lo, mut hi, mut extent) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
-            for c in &self.chords {
-                let m = 0.5 * (c.bounds.min[axis] + c.bounds.max[axis]);
-                lo = lo.min(m);
-                hi = hi.max(m);
-                extent += c.bounds.max[axis] - c.bounds.min[axis];
-            }
-            *sc = if n > 0 { (hi - lo) / (extent / n as f64).max(1e-300) } else { 0.0 };
-        }
-        let axis = (0..3).fold(0, |b, a| if score[a] > score[b] { a } else { b });
-        let chords = &self.chords;
-        let key = |i: usize| chords[i].bounds.min[axis];
-        if self.order.len() != n || axis != self.axis {
-            self.order.clear();
-            self.order.extend(0..n);
-            self.order.sort_unstable_by(|&x, &y| key(x).total_cmp(&key(y)));
-            self.axis = axis;
-        } else {
-            // A stable sort from last step's order: the order an insertion sort would give, found in about O(n)
-            // from the sorted runs (nearly sorted while the strands move little), and without the insertion
-            // sort's O(n) walk of each chord of a strand that joined far from the one it replaced.
-            // (-0 and +0 compare equal, as in the insertion sort's `>`; a total order, so no NaN can upset it.)
-            let flat = |i: usize| if key(i) == 0.0 { 0.0 } else { key(i) };
-            self.order.sort_by(|&x, &y| flat(x).total_cmp(&flat(y)));
-        }
+        self.boxes.clear();
+        self.boxes.extend(self.chords.iter().map(|c| c.bounds));
+        self.groups.clear();
+        self.groups.extend(self.chords.iter().map(|c| c.strand));
+        self.sweep.pairs(&self.boxes, &self.groups, &mut self.candidates);
         // Reduction workspace.
         self.cap = params.max_per_strand;
         self.filled.clear();
@@ -238,53 +215,57 @@ impl HairContactFinder {
         self.slots.resize(strands * self.cap, empty);
         self.pairs = 0;
         self.tested = 0;
-        self.sorted.clear();
-        self.sorted_strand.clear();
-        let (a1, a2) = ((axis + 1) % 3, (axis + 2) % 3);
-        for &i in &self.order {
-            let b = &self.chords[i].bounds;
-            self.sorted.push([b.min[axis], b.max[axis], b.min[a1], b.max[a1], b.min[a2], b.max[a2]]);
-            self.sorted_strand.push(self.chords[i].strand);
+        // Narrow phase, four candidates at a time: the lanes reject the pairs that are apart, the scalar test
+        // decides on the others, in the broad phase's order.
+        let m = self.candidates.len();
+        let mut k = 0;
+        while k < m {
+            let lanes = (m - k).min(4);
+            let chord = |l: usize| {
+                let (i, j) = self.candidates[k + l.min(lanes - 1)];
+                (&self.chords[i], &self.chords[j])
+            };
+            let (c0, c1, c2, c3) = (chord(0), chord(1), chord(2), chord(3));
+            let mask = may_be_closer([&c0.0.a, &c1.0.a, &c2.0.a, &c3.0.a], [&c0.0.b, &c1.0.b, &c2.0.b, &c3.0.b], [&c0.1.a, &c1.1.a, &c2.1.a, &c3.1.a], [&c0.1.b, &c1.1.b, &c2.1.b, &c3.1.b], distance);
+            self.tested += lanes;
+            for l in 0..lanes {
+                if mask & (1 << l) != 0 {
+                    let (nx, ny) = self.candidates[k + l];
+                    self.touch(nx, ny, distance);
+                }
+            }
+            k += lanes;
         }
-        for x in 0..n {
-            let (p, ps) = (self.sorted[x], self.sorted_strand[x]);
-            for (y, q) in self.sorted.iter().enumerate().skip(x + 1) {
-                if q[0] > p[1] {
-                    break;
-                }
-                // The boxes overlap on every axis (a NaN never does), and belong to two strands.
-                let overlap = p[0] <= q[1] && q[0] <= p[1] && p[2] <= q[3] && q[2] <= p[3] && p[4] <= q[5] && q[4] <= p[5];
-                if !overlap || self.sorted_strand[y] == ps {
-                    continue;
-                }
-                let (nx, ny) = (self.order[x], self.order[y]);
-                let (p, q) = (&self.chords[nx], &self.chords[ny]);
-                self.tested += 1;
-                let (u, v) = closest_segment_params(&p.a, &p.b, &q.a, &q.b);
-                let (xp, xq) = (p.a + (p.b - p.a) * u, q.a + (q.b - q.a) * v);
-                let gap = xp - xq;
-                let dist = gap.norm();
-                if dist >= distance || dist < 1e-12 * distance {
-                    continue;
-                }
-                // Closer than the contact distance at rest (both rest chords known): the rest distance is theirs.
-                let mut limit = distance;
-                if p.rest_a.x.is_finite() && q.rest_a.x.is_finite() {
-                    let (u0, v0) = closest_segment_params(&p.rest_a, &p.rest_b, &q.rest_a, &q.rest_b);
-                    limit = limit.min(((p.rest_a + (p.rest_b - p.rest_a) * u0) - (q.rest_a + (q.rest_b - q.rest_a) * v0)).norm());
-                    if dist >= limit {
-                        continue;
-                    }
-                }
-                self.pairs += 1;
-                let depth = limit - dist;
-                let normal = gap / dist;
-                let (sp, sq) = (p.s + u * p.length, q.s + v * q.length);
-                let (kp, kq, ip, iq) = (p.strand, q.strand, p.index, q.index);
-                keep(&mut self.slots, &mut self.filled, self.cap, kp, Slot { other: kq, chord: ip, other_chord: iq, depth, s: sp, other_s: sq, normal });
-                keep(&mut self.slots, &mut self.filled, self.cap, kq, Slot { other: kp, chord: iq, other_chord: ip, depth, s: sq, other_s: sp, normal: -normal });
+    }
+
+    /// The narrow phase's exact test of the chords `nx` and `ny` (indices into `chords`, in the broad phase's
+    /// order): closer than the contact `distance` (m; or than their rest distance), a contact offered to both
+    /// strands.
+    fn touch(&mut self, nx: usize, ny: usize, distance: f64) {
+        let (p, q) = (&self.chords[nx], &self.chords[ny]);
+        let (u, v) = closest_segment_params(&p.a, &p.b, &q.a, &q.b);
+        let (xp, xq) = (p.a + (p.b - p.a) * u, q.a + (q.b - q.a) * v);
+        let gap = xp - xq;
+        let dist = gap.norm();
+        if dist >= distance || dist < 1e-12 * distance {
+            return;
+        }
+        // Closer than the contact distance at rest (both rest chords known): the rest distance is theirs.
+        let mut limit = distance;
+        if p.rest_a.x.is_finite() && q.rest_a.x.is_finite() {
+            let (u0, v0) = closest_segment_params(&p.rest_a, &p.rest_b, &q.rest_a, &q.rest_b);
+            limit = limit.min(((p.rest_a + (p.rest_b - p.rest_a) * u0) - (q.rest_a + (q.rest_b - q.rest_a) * v0)).norm());
+            if dist >= limit {
+                return;
             }
         }
+        self.pairs += 1;
+        let depth = limit - dist;
+        let normal = gap / dist;
+        let (sp, sq) = (p.s + u * p.length, q.s + v * q.length);
+        let (kp, kq, ip, iq) = (p.strand, q.strand, p.index, q.index);
+        keep(&mut self.slots, &mut self.filled, self.cap, kp, Slot { other: kq, chord: ip, other_chord: iq, depth, s: sp, other_s: sq, normal });
+        keep(&mut self.slots, &mut self.filled, self.cap, kq, Slot { other: kp, chord: iq, other_chord: ip, depth, s: sq, other_s: sp, normal: -normal });
     }
 }
 
@@ -376,6 +357,80 @@ mod tests {
                 assert!(grid.tested() * 20 < 112_320, "{} pairs tested", grid.tested());
             }
         }
+    }
+
+    /// The contacts the full search finds: every pair of chords of two strands in the last sweep's order (no broad
+    /// phase, no lanes) through the exact test, into fresh slots.
+    fn full_search(found: &HairContactFinder, distance: f64) -> (usize, Vec<HairPair>) {
+        let mut full = found.clone();
+        full.filled.iter_mut().for_each(|f| *f = 0);
+        full.pairs = 0;
+        let order = found.sweep.order().to_vec();
+        for (x, &i) in order.iter().enumerate() {
+            for &j in &order[x + 1..] {
+                if full.chords[i].strand != full.chords[j].strand {
+                    full.touch(i, j, distance);
+                }
+            }
+        }
+        (full.pairs, full.contacts().collect())
+    }
+
+    #[test]
+    fn the_contacts_are_the_full_searchs_over_random_moving_tresses() {
+        // 60 random tresses of 2 to 40 wavy strands (1 to 12 chords of 1 to 4 pieces) in a 1 x 1 cm patch, with
+        // rest shapes for some, each moved over 8 steps (small random motions, and a strand leaving or joining
+        // between steps, which changes the number of chords), contact distances 0.3 to 3 mm, caps 1 to 6: at
+        // every step the same contacts as the full search of all chord pairs in the sweep's order, bit for bit
+        // and in the same order, and the same number of touching pairs.
+        let mut seed = 5u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut total = 0;
+        for case in 0..60 {
+            let n = 2 + (rnd() * 39.0) as usize;
+            let per = 1 + (rnd() * 4.0) as usize;
+            let chords = 1 + (rnd() * 12.0) as usize;
+            let distance = 3e-4 + 2.7e-3 * rnd();
+            let params = HairContact { max_per_strand: 1 + (rnd() * 6.0) as usize, ..Default::default() };
+            let shape = |root: (f64, f64), phase: f64, amp: f64, k: usize| -> Vec<Piece> {
+                let m = per * chords;
+                let l = 0.02 / m as f64;
+                let at = |s: f64| Vector3::new(root.0 + amp * (40.0 * s + phase).sin(), root.1 + amp * (25.0 * s + phase).cos(), 0.3 - s);
+                (0..m).map(|i| Piece { strand: k, s: i as f64 * l, length: l, a: at(i as f64 * l), b: at((i + 1) as f64 * l) }).collect()
+            };
+            let mut roots: Vec<((f64, f64), f64, f64)> = (0..n).map(|_| ((0.01 * rnd(), 0.01 * rnd()), 6.0 * rnd(), 0.004 * rnd())).collect();
+            let with_rest = case % 3 == 0;
+            let mut finder = HairContactFinder::new();
+            for step in 0..8 {
+                if step == 4 && roots.len() > 2 {
+                    roots.remove((rnd() * roots.len() as f64) as usize);
+                }
+                if step == 6 {
+                    roots.push(((0.01 * rnd(), 0.01 * rnd()), 6.0 * rnd(), 0.004 * rnd()));
+                }
+                let pieces: Vec<Piece> = roots.iter().enumerate().flat_map(|(k, r)| shape(r.0, r.1, r.2, k)).collect();
+                let rest: Vec<Piece> = if with_rest {
+                    roots.iter().enumerate().flat_map(|(k, r)| shape(r.0, r.1 + 0.3, r.2, k)).collect()
+                } else {
+                    Vec::new()
+                };
+                finder.detect(&params, &pieces, &rest, |_| per, roots.len(), distance);
+                let found: Vec<HairPair> = finder.contacts().collect();
+                let (pairs, want) = full_search(&finder, distance);
+                assert_eq!(finder.pairs(), pairs, "case {case} step {step}");
+                assert_eq!(found, want, "case {case} step {step}");
+                total += found.len();
+                for r in roots.iter_mut() {
+                    r.0 .0 += 2e-4 * (rnd() - 0.5);
+                    r.0 .1 += 2e-4 * (rnd() - 0.5);
+                    r.1 += 0.05 * (rnd() - 0.5);
+                }
+            }
+        }
+        assert!(total > 2_000, "the tresses touch: {total} contacts");
     }
 
     #[test]

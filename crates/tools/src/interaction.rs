@@ -96,10 +96,6 @@ pub struct StepTimings {
     pub rows: usize,
 }
 
-/// Membership changes after which the collision tree is rebuilt rather than refitted
-/// ([`LocalInteraction::set_strands`]).
-const TREE_REBUILD_AFTER: usize = 8;
-
 /// How a strand's constrained step stands between the stages of [`LocalInteraction::step`].
 enum Solved {
     /// Its rows, at this index of the step's rows, wait for the common solve.
@@ -173,8 +169,6 @@ pub struct LocalInteraction {
     bvh: Bvh,
     /// Build the tree anew at the next step rather than refit it.
     rebuild_tree: bool,
-    /// Membership changes ([`LocalInteraction::set_strands`]) since the tree was last built.
-    changes_since_build: usize,
     /// Workspace: which strands' steps were prepared this step.
     prepared: Vec<bool>,
     /// Workspace: contacts of this step.
@@ -255,7 +249,6 @@ impl LocalInteraction {
             pieces,
             bvh,
             rebuild_tree: false,
-            changes_since_build: 0,
             prepared,
             contacts: Vec::new(),
             hair_rows: Vec::new(),
@@ -269,8 +262,7 @@ impl LocalInteraction {
     /// Replaces the strands by `strands`, keeping the workspaces (the batches' solver storage, the contact
     /// buffers): strand `i` of the new set was strand `from[i]` of the old one (its pending surface torques and
     /// loads and its wetness move with it), or is new (`None`, dry). The pins are released (they name old strands). The collision
-    /// tree is refitted at the next step (rebuilt after a few such changes). Cheaper than a new interaction when a
-    /// few strands join or leave.
+    /// tree is rebuilt at the next step. Cheaper than a new interaction when a few strands join or leave.
     pub fn set_strands(&mut self, strands: Vec<Strand>, from: &[Option<usize>]) {
         let mut old = std::mem::take(&mut self.surface_torques);
         self.surface_torques = (0..strands.len()).map(|i| match from.get(i).copied().flatten() {
@@ -324,13 +316,9 @@ impl LocalInteraction {
         self.lane_of.resize(strands.len(), None);
         self.pins.clear();
         self.strands = strands;
-        // The collision tree is refitted over the new strands' pieces (its boxes stay valid, only looser where
-        // a strand moved in from elsewhere) and rebuilt after `TREE_REBUILD_AFTER` such changes; the hair-hair
-        // sweep's order is re-sorted from the last one.
-        self.changes_since_build += 1;
-        if self.changes_since_build >= TREE_REBUILD_AFTER {
-            self.rebuild_tree = true;
-        }
+        // The collision tree is built anew at the next step (`Bvh::rebuild`, about the cost of a refit); the
+        // hair-hair sweep's order is re-sorted from the last one.
+        self.rebuild_tree = true;
     }
 
     /// Gives strand `k` its rest shape for hair-hair contact: `rest`'s centreline (the same model and
@@ -343,6 +331,22 @@ impl LocalInteraction {
             Self::sample_strand(k, rest, r);
             self.rest_stale = true;
         }
+    }
+
+    /// As [`LocalInteraction::set_rest_shape`], the rest shape being strand `k` itself in the state `state`
+    /// (its coordinates and root; e.g. its groomed state), without copying the strand. False (and nothing
+    /// changed) when `state` has another number of coordinates than strand `k` (a cut strand).
+    pub fn set_rest_state(&mut self, k: usize, state: &strand::StrandState) -> bool {
+        let (Some(s), Some(r)) = (self.strands.get_mut(k), self.rest_shapes.get_mut(k)) else { return false };
+        if s.state.q.len() != state.q.len() {
+            return false;
+        }
+        let own = std::mem::replace(&mut s.state, state.clone());
+        r.clear();
+        Self::sample_strand(k, s, r);
+        s.state = own;
+        self.rest_stale = true;
+        true
     }
 
     /// Aligns the strands' rest shapes with this step's pieces into `rest_pieces` (NaN for a strand whose rest
@@ -589,9 +593,8 @@ impl LocalInteraction {
         } else {
             // A strand changed its number of pieces (cut by the scissors, or replaced), or the reach changed: new
             // tree.
-            self.bvh = Bvh::build(&self.pieces, reach);
+            self.bvh.rebuild(&self.pieces, reach);
             self.rebuild_tree = false;
-            self.changes_since_build = 0;
         }
         let t_sample = clock.elapsed().as_secs_f64();
         timings.sample = t_sample - t_dynamics;

@@ -16,6 +16,8 @@ pub mod entanglement;
 pub mod geometry;
 pub mod hair_contact;
 pub mod interaction;
+pub mod segments4;
 pub mod shape;
 pub mod sprayer;
+pub mod sweep;
 pub mod wetness;

@@ -8,9 +8,12 @@
 //!    tool's shape on its way over the next `HapticParams::lookahead` s (from the tool to where its velocity
 //!    takes it), nearest first, at most `SessionParams::max_chosen`. The scan is spread over
 //!    `HapticParams::choice_steps` haptic steps (an equal share of the guides each step, [`Choice`]), so that
-//!    no step pays for all of it; the chosen set takes effect when the scan ends.
-//! 2. **Joining** guides start from their stored shape (groomed, or where they came to rest), at rest, their
-//!    roots on the head: no kick. The displacement the viewer shows fades in over `HapticParams::blend_time`.
+//!    no step pays for all of it; the chosen set takes effect when the scan ends: the strands no longer chosen
+//!    start relaxing at once, the newly chosen guides are queued.
+//! 2. **Joining** guides join from the queue, nearest first, at most `HapticParams::joins_per_step` a step
+//!    from the step after the scan ended (a step pays for a few joining strands, not for a whole choice). They
+//!    start from their stored shape (groomed, or where they came to rest), at rest, their roots on the head:
+//!    no kick. The displacement the viewer shows fades in over `HapticParams::blend_time`.
 //! 3. **Leaving** guides (no longer chosen) are still simulated, and the tool may still touch them, until
 //!    they are at rest (tip slower than `HapticParams::rest_speed` for `HapticParams::rest_time`) or
 //!    `HapticParams::max_relax_time` has passed. Then they are let go: velocities zeroed, and a strand whose
@@ -80,6 +83,50 @@ pub(crate) struct Choice {
     near: Vec<(f64, usize)>,
 }
 
+/// Each guide's settled shape bounded, so that the choice's scan passes over the guides far from the tool
+/// without mapping their samples through the lattice. The FFD's weights are non-negative and sum to one, so a
+/// sample mapped through the nodes is within D of itself mapped through the rest nodes, D the largest node
+/// displacement from rest: every mapped sample of guide g lies in the ball of centre `centres[g]` and radius
+/// `radii[g] + D`.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct GuideBounds {
+    /// The lattice's rest nodes, m.
+    rest: Vec<Point3<f64>>,
+    /// Centre of each guide's reference samples mapped through the rest nodes, m.
+    centres: Vec<Vector3<f64>>,
+    /// Radius about it, m (rounding allowance included).
+    radii: Vec<f64>,
+}
+
+impl GuideBounds {
+    /// Rounding allowance on each radius, m: the ball test must never pass over a guide the samples' own test
+    /// would choose.
+    const ROUNDING: f64 = 1e-9;
+
+    /// The bounds of the scene's guides.
+    pub fn new(scene: &crate::scene::Scene) -> Self {
+        let ffd = &scene.lattice.ffd;
+        let rest = ffd.rest_positions();
+        let (mut centres, mut radii) = (Vec::new(), Vec::new());
+        for g in &scene.guides {
+            let x: Vec<Vector3<f64>> = g.reference.iter().map(|p| ffd_map(ffd, &rest, p)).collect();
+            let (lo, hi) = x.iter().fold((Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY)), |(l, h), p| (l.inf(p), h.sup(p)));
+            let c = if x.is_empty() { Vector3::zeros() } else { (lo + hi) * 0.5 };
+            centres.push(c);
+            radii.push(x.iter().map(|p| (p - c).norm()).fold(0.0, f64::max) + Self::ROUNDING);
+        }
+        Self { rest, centres, radii }
+    }
+
+    /// The largest displacement of `nodes` from the rest nodes, m (infinite if they are not the lattice's).
+    fn slack(&self, nodes: &[Point3<f64>]) -> f64 {
+        if nodes.len() != self.rest.len() {
+            return f64::INFINITY;
+        }
+        nodes.iter().zip(&self.rest).map(|(n, r)| (n - r).norm()).fold(0.0, f64::max) + Self::ROUNDING
+    }
+}
+
 /// The tip of a strand, m.
 fn tip(s: &Strand) -> Vector3<f64> {
     let frames = strand::kinematics::segment_frames(&s.model, &s.state);
@@ -103,6 +150,7 @@ impl HapticCore {
         self.members.clear();
         self.faded.clear();
         self.choice = None;
+        self.queued.clear();
         self.last_select = None;
     }
 
@@ -133,7 +181,13 @@ impl HapticCore {
         let (tool, ahead, rotation) = (c.tool, c.ahead, c.rotation);
         let poses = [tool, (tool + ahead) * 0.5, ahead];
         let end = (c.next + count).min(self.scene.guides.len());
+        let slack = self.bounds.slack(nodes);
         for g in c.next..end {
+            // The guide's ball farther than the radius from the swept shape: none of its samples is nearer.
+            let ball = self.bounds.radii[g] + slack;
+            if point_segment_distance(&self.bounds.centres[g], &tool, &ahead) - reach - ball >= r {
+                continue;
+            }
             let guide = &self.scene.guides[g];
             let mut d = f64::INFINITY;
             for p in &guide.reference {
@@ -182,7 +236,10 @@ impl HapticCore {
         }
         let mut guides = self.active.clone();
         let mut members = self.members.clone();
-        if let Some(mut c) = self.choice.take() {
+        // Queued guides join (before any scan, so a step never pays for the scan's end and joins).
+        if !self.queued.is_empty() {
+            self.admit(&mut guides, &mut members);
+        } else if let Some(mut c) = self.choice.take() {
             let clock = std::time::Instant::now();
             let n = self.scene.guides.len();
             let share = n.div_ceil(self.params.haptic.choice_steps.max(1));
@@ -193,7 +250,7 @@ impl HapticCore {
             };
             self.timings.choose = clock.elapsed().as_secs_f64();
             if let Some(chosen) = chosen {
-                self.join(&chosen, &mut guides, &mut members);
+                self.join(&chosen, &guides, &mut members);
             }
         }
         // Let-go strands leave the simulation.
@@ -215,9 +272,10 @@ impl HapticCore {
         }
     }
 
-    /// The membership after a choice: the `chosen` guides become (or stay) Chosen, the others that were
-    /// start relaxing, and the relaxing ones that left first are let go while there are more than `max_active`.
-    fn join(&mut self, chosen: &[usize], guides: &mut Vec<usize>, members: &mut Vec<Member>) {
+    /// The membership after a choice: the `chosen` guides that are simulated (`guides`, `members` parallel)
+    /// become (or stay) Chosen, the others that were start relaxing, and the chosen ones not simulated yet are
+    /// queued to join, nearest first ([`HapticCore::admit`]).
+    fn join(&mut self, chosen: &[usize], guides: &[usize], members: &mut [Member]) {
         for (g, m) in guides.iter().zip(members.iter_mut()) {
             if chosen.contains(g) {
                 m.phase = Phase::Chosen;
@@ -225,11 +283,19 @@ impl HapticCore {
                 m.phase = Phase::Relaxing { since: 0.0, still: 0.0 };
             }
         }
-        for &g in chosen {
+        self.queued.clear();
+        self.queued.extend(chosen.iter().rev().filter(|g| !guides.contains(g)));
+    }
+
+    /// The next `HapticParams::joins_per_step` queued guides join (a guide fading out is simulated again from
+    /// its stored state), and the relaxing ones that left first are let go while there are more than
+    /// `max_active`.
+    fn admit(&mut self, guides: &mut Vec<usize>, members: &mut Vec<Member>) {
+        for _ in 0..self.params.haptic.joins_per_step {
+            let Some(g) = self.queued.pop() else { break };
             if !guides.contains(&g) {
                 guides.push(g);
                 members.push(Member::joining());
-                // A guide fading out is simulated again from its stored state.
                 self.faded.retain(|f| f.guide != g);
             }
         }
@@ -279,31 +345,18 @@ impl HapticCore {
         self.active = guides;
         self.members = members;
         self.interaction.set_strands(strands, &from);
-        // Joining strands: their groomed shapes as the hair-hair contacts' rest (`HapticParams::groomed_overlap`).
+        // Joining strands: their groomed shapes as the hair-hair contacts' rest (`HapticParams::groomed_overlap`;
+        // none for a cut strand: other segments than the groom's).
         if self.params.haptic.groomed_overlap {
             for (i, &g) in self.active.iter().enumerate() {
-                if from[i].is_none() {
-                    if let Some(r) = self.groomed(g, &self.interaction.strands[i]) {
-                        self.interaction.set_rest_shape(i, &r);
-                    }
+                let guide = &self.scene.guides[g];
+                let uncut = (self.interaction.strands[i].model.length - guide.model.length).abs() <= 1e-12;
+                if from[i].is_none() && uncut {
+                    self.interaction.set_rest_state(i, &guide.state);
                 }
             }
         }
         self.wet_version = u64::MAX;
-    }
-
-    /// Guide `g`'s groomed shape as a strand like `like` (its model, the guide's groomed coordinates and root
-    /// on the head at rest); None for a cut strand (other segments than the groom's).
-    fn groomed(&self, g: usize, like: &Strand) -> Option<Strand> {
-        let guide = &self.scene.guides[g];
-        if like.state.q.len() != guide.state.q.len() || (like.model.length - guide.model.length).abs() > 1e-12 {
-            return None;
-        }
-        let mut s = like.clone();
-        s.state.q.copy_from(&guide.state.q);
-        s.state.qdot.fill(0.0);
-        s.state.root = guide.state.root.clone();
-        Some(s)
     }
 
     /// Guide `g`'s stored strand ready to join: at rest (zero velocities), its root on the head at rest.
@@ -393,9 +446,10 @@ mod tests {
 
     #[test]
     fn the_choice_spread_over_steps_is_the_whole_scan() {
-        // The comb held still in the hair at the back of the head: after `choice_steps` steps the active set is
-        // exactly the guides the whole scan at once chooses (same set, nearest first), and not before (the scan
-        // is spread: the set is empty at step choice_steps - 1). Then at most `max_active` are simulated.
+        // The comb held still in the hair at the back of the head: after `choice_steps` steps the scan has found
+        // exactly the guides the whole scan at once chooses (same set, nearest first), and none has joined
+        // before (the scan is spread: the set is empty until then). They then join `joins_per_step` a step,
+        // nearest first, until all have. At most `max_active` are simulated.
         let scene = small_scene();
         let params = SessionParams::default();
         let mut core = HapticCore::new(scene.clone(), params).unwrap();
@@ -412,8 +466,47 @@ mod tests {
         }
         let (from, to) = way.unwrap();
         let want = core.choose(&from, &to, &test_rot(), &snap.positions);
-        assert!(want.len() >= 3, "the comb is in the hair: {want:?}");
-        assert_eq!(core.active(), &want[..]);
+        let per = params.haptic.joins_per_step;
+        assert!(want.len() > per, "the comb is in the hair, more guides than join in one step: {want:?}");
+        assert!(core.active().is_empty(), "nothing joins on the step the scan ends");
+        for k in 1..=want.len().div_ceil(per) {
+            core.step(Some(reading), &snap, 1e-3);
+            assert_eq!(core.active(), &want[..(k * per).min(want.len())], "after {k} joining steps");
+        }
         assert!(core.active().len() <= params.max_active);
+    }
+
+    #[test]
+    fn the_guide_balls_hold_every_mapped_sample_and_the_scan_chooses_the_same_guides() {
+        // Lattice nodes moved by a smooth field (up to ~1 cm): every guide sample mapped through them lies in its
+        // guide's ball (radius + the nodes' largest displacement), and a choice made with the balls is the
+        // choice made sample by sample (balls disabled), for tools all over the head.
+        let scene = small_scene();
+        let params = SessionParams::default();
+        let mut core = HapticCore::new(scene.clone(), params).unwrap();
+        let rest = scene.lattice.ffd.rest_positions();
+        let mut compared = 0;
+        for a in [0.0, 4e-3, -9e-3] {
+            let nodes: Vec<Point3<f64>> = rest.iter().map(|p| p + Vector3::new(a * (7.0 * p.y).sin(), a * (5.0 * p.z).cos(), -a * p.x)).collect();
+            let slack = core.bounds.slack(&nodes);
+            for (g, guide) in scene.guides.iter().enumerate() {
+                for p in &guide.reference {
+                    let x = ffd_map(&scene.lattice.ffd, &nodes, p);
+                    assert!((x - core.bounds.centres[g]).norm() <= core.bounds.radii[g] + slack, "guide {g}, a {a}");
+                }
+            }
+            for k in 0..12 {
+                let angle = k as f64 * 0.52;
+                let tool = Vector3::new(0.11 * angle.sin(), -0.11 * angle.cos(), 0.04 - 0.01 * k as f64);
+                let ahead = tool + Vector3::new(0.0, 0.0, -0.015);
+                let with = core.choose(&tool, &ahead, &test_rot(), &nodes);
+                let radii = std::mem::replace(&mut core.bounds.radii, vec![f64::INFINITY; scene.guides.len()]);
+                let without = core.choose(&tool, &ahead, &test_rot(), &nodes);
+                core.bounds.radii = radii;
+                assert_eq!(with, without, "tool at {tool:?}, a {a}");
+                compared += with.len();
+            }
+        }
+        assert!(compared > 20, "the tools met guides: {compared}");
     }
 }

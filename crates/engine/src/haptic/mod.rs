@@ -79,6 +79,11 @@ pub struct HapticCore {
     pub(crate) references: std::cell::RefCell<reference::ReferenceCache>,
     /// The choice of the active set in progress, if any (spread over steps).
     pub(crate) choice: Option<active::Choice>,
+    /// Each guide's settled shape bounded for the choice's scan (fixed, from the scene).
+    pub(crate) bounds: active::GuideBounds,
+    /// Guides the last finished choice chose that have yet to join, nearest first (they join
+    /// `HapticParams::joins_per_step` at a time).
+    pub(crate) queued: Vec<usize>,
     /// Fastest tip of the simulated strands over the last step, m/s.
     pub(crate) max_tip_speed: f64,
     pub(crate) interaction: LocalInteraction,
@@ -171,8 +176,9 @@ impl HapticCore {
         let n = scene.guides.len();
         let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape()).collect();
         let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
+        let bounds = active::GuideBounds::new(&scene);
         Ok(Self {
-            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), references: Default::default(), choice: None, max_tip_speed: 0.0, interaction,
+            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), references: Default::default(), choice: None, bounds, queued: Vec::new(), max_tip_speed: 0.0, interaction,
             hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, head: nalgebra::Isometry3::identity(), rejected: 0, runaways: 0, failed: 0, timings: StepPhases::default(),
         })
     }

@@ -79,6 +79,17 @@ impl Entanglement {
         let held = (2.0 * free_length.max(0.0) / self.span).min(1.0);
         held * 48.0 * ei * delta / self.span.powi(3) + wetness.clamp(0.0, 1.0) * bridge
     }
+
+    /// Lateral stiffness of one fibre of flexural rigidity `ei` (N m^2) pressed at a point, N/m: held sideways by
+    /// its neighbours every `span`, it bends over one span as a simply supported beam under a central load,
+    /// `48 E I / span^3`. The bending share of [`Entanglement::parting_load`] is this times the deflection; the live
+    /// session takes it as the stiffest any constraint on a simulated fibre may be (`ConstraintOptions::max_stiffness`):
+    /// a tooth or a neighbour pressing a fibre meets that span's bending, not the rigid segments of the model beyond.
+    /// (`parting_load` keeps its own order of the operations: the tress scenarios' forces are calibrated on it
+    /// and move at round-off; `stiffness * delta` instead lowered H2's wet/dry peak ratio from above 4 to 3.94.)
+    pub fn fibre_stiffness(&self, ei: f64) -> f64 {
+        48.0 * ei / self.span.powi(3)
+    }
 }
 
 /// Share (0..1) of a wisp's fibres, uniform over a disc of radius `wisp_radius` (m), whose centres lie within
@@ -141,6 +152,9 @@ mod tests {
         // At the tip only the meniscus is left; half a span from it, half the beam.
         assert!((e.parting_load(ei, rf, rt, 1.0, 0.0) - 0.1511e-3).abs() < 1e-3 * 0.15e-3);
         assert!((e.parting_load(ei, rf, rt, 0.0, 0.25 * e.span) - 0.5 * beam).abs() < 1e-12 * beam);
+        // The fibre's lateral stiffness over one span: 48 EI / L^3 = 0.7116 N/m (by hand), the beam's load per metre of deflection.
+        assert!((e.fibre_stiffness(ei) - 0.71156).abs() < 1e-4, "{}", e.fibre_stiffness(ei));
+        assert!((e.fibre_stiffness(ei) * 0.5 * (rf + rt) - beam).abs() < 1e-12 * beam);
         assert!(Entanglement { span: 0.0, ..e }.validate().unwrap_err().to_string().contains("entanglement.span"));
         assert!(Entanglement { surface_tension: f64::NAN, ..e }.validate().is_err());
     }

@@ -130,6 +130,8 @@ pub struct HairContactFinder {
     /// `chords`) whose boxes overlap, of two strands, in sweep order.
     boxes: Vec<Aabb>,
     groups: Vec<usize>,
+    /// The chords' ends (`a`, `b`; m) side by side, for the narrow phase's lanes.
+    ends: Vec<[Vector3<f64>; 2]>,
     sweep: SweepAndPrune,
     candidates: Vec<(usize, usize)>,
     /// Per strand: `max_per_strand` slots and how many are filled.
@@ -203,6 +205,8 @@ impl HairContactFinder {
         }
         self.boxes.clear();
         self.boxes.extend(self.chords.iter().map(|c| c.bounds));
+        self.ends.clear();
+        self.ends.extend(self.chords.iter().map(|c| [c.a, c.b]));
         self.groups.clear();
         self.groups.extend(self.chords.iter().map(|c| c.strand));
         self.sweep.pairs(&self.boxes, &self.groups, &mut self.candidates);
@@ -223,10 +227,10 @@ impl HairContactFinder {
             let lanes = (m - k).min(4);
             let chord = |l: usize| {
                 let (i, j) = self.candidates[k + l.min(lanes - 1)];
-                (&self.chords[i], &self.chords[j])
+                (&self.ends[i], &self.ends[j])
             };
             let (c0, c1, c2, c3) = (chord(0), chord(1), chord(2), chord(3));
-            let mask = may_be_closer([&c0.0.a, &c1.0.a, &c2.0.a, &c3.0.a], [&c0.0.b, &c1.0.b, &c2.0.b, &c3.0.b], [&c0.1.a, &c1.1.a, &c2.1.a, &c3.1.a], [&c0.1.b, &c1.1.b, &c2.1.b, &c3.1.b], distance);
+            let mask = may_be_closer([&c0.0[0], &c1.0[0], &c2.0[0], &c3.0[0]], [&c0.0[1], &c1.0[1], &c2.0[1], &c3.0[1]], [&c0.1[0], &c1.1[0], &c2.1[0], &c3.1[0]], [&c0.1[1], &c1.1[1], &c2.1[1], &c3.1[1]], distance);
             self.tested += lanes;
             for l in 0..lanes {
                 if mask & (1 << l) != 0 {

@@ -7,6 +7,7 @@ use crate::params::HapticParams;
 use crate::scene::Scene;
 use nalgebra::Vector3;
 use strand::{HairType, Strand};
+use strand::constraint::ConstraintOptions;
 use tools::interaction::{Entanglement, ForceModel, HairContact, LocalInteraction};
 
 /// `it` with the scene's body (head, neck, shoulders; the live head frame is the world frame) for its strands
@@ -44,9 +45,10 @@ impl HapticCore {
         }).collect()
     }
 
-    /// The tool's contact law on dry hair of type `h` at combing ease `ease` ([`HapticParams::combing_friction`]).
+    /// The tool's contact law on dry hair of type `h` at combing ease `ease` ([`HapticParams::combing_friction`]),
+    /// with the constraints' compliance of [`contact_options`] for its fibre.
     pub(crate) fn force_model(params: &HapticParams, h: &HairType, ease: f64) -> ForceModel {
-        ForceModel::Constraint { friction: params.combing_friction(h.friction_coefficient(), ease), options: Default::default() }
+        ForceModel::Constraint { friction: params.combing_friction(h.friction_coefficient(), ease), options: contact_options(h.bending_stiffness) }
     }
 
     /// Hair-hair contact between the local strands (`tools::hair_contact`; None when
@@ -77,6 +79,18 @@ impl HapticCore {
         }
         self.interaction = it;
     }
+}
+
+/// The live session's constraint solver options for simulated fibres of flexural rigidity `ei` (N m^2): the
+/// defaults, with no constraint (tool, body or hair-hair contact, pin) stiffer than the fibre's lateral stiffness
+/// over the span between the neighbours that hold it sideways in the hair, `48 EI / span^3`
+/// (`tools::entanglement::Entanglement::fibre_stiffness`, the span of the tress calibration, 6.6 mm; caucasian
+/// dry 0.48 N/m, against the solver's default cap of 100 N/m). A simulated guide is a chain of rigid-curvature
+/// segments (8 of 2.5 cm in the built-in hairstyle) and stands for hundreds of fibres, so a tooth pressing it near its
+/// root, or two teeth shearing it on opposite sides, met the whole segment's resistance and the solver's cap:
+/// 2-6 mN per guide, 1-3 N at the hand (issue 12's upward strokes). A real fibre there bends over one span.
+pub(crate) fn contact_options(ei: f64) -> ConstraintOptions {
+    ConstraintOptions { max_stiffness: Entanglement::default().fibre_stiffness(ei), ..ConstraintOptions::default() }
 }
 
 /// `samples` centreline points of a strand evenly in arc length, root to tip, m.

@@ -47,7 +47,9 @@ impl HapticCore {
             }
         }
         if let Ok(m) = self.wet_model.wet(&dry, h.friction_coefficient(), section.area(), mean) {
-            self.interaction.model = ForceModel::Constraint { friction: self.params.haptic.combing_friction(m.friction, self.combing_ease), options: Default::default() };
+            // Wet fibres are softer: their contacts' largest stiffness follows (`contact_options`).
+            let options = super::strands::contact_options(m.material().young_modulus * section.i_soft());
+            self.interaction.model = ForceModel::Constraint { friction: self.params.haptic.combing_friction(m.friction, self.combing_ease), options };
         }
         self.interaction.hair_contact = self.hair_contact(mean);
     }
@@ -109,6 +111,16 @@ mod tests {
         assert!((friction(&wet_core) - want).abs() < 1e-12 * want, "wet friction {} vs {want}", friction(&wet_core));
         assert!((friction(&dry_core) - SessionParams::default().haptic.combing_friction(h.friction_coefficient(), 0.0)).abs() < 1e-12);
         assert!(friction(&wet_core) > 5.0 * friction(&dry_core));
+        // The constraints' cap is the fibre's lateral stiffness over the entanglement span (6.6 mm), 48 EI / span^3,
+        // with the wet fibre's softer E when wet (`strands::contact_options`; the formula written out here).
+        let cap = |c: &HapticCore| match c.interaction.model {
+            ForceModel::Constraint { options, .. } => options.max_stiffness,
+            ForceModel::Paper { .. } => f64::NAN,
+        };
+        let span3 = 6.6e-3f64.powi(3);
+        let (dry_cap, wet_cap) = (48.0 * h.bending_stiffness / span3, 48.0 * wet.material().young_modulus * h.section().unwrap().i_soft() / span3);
+        assert!((cap(&dry_core) - dry_cap).abs() < 1e-9 * dry_cap && (cap(&wet_core) - wet_cap).abs() < 1e-9 * wet_cap, "caps {} and {} vs {dry_cap} and {wet_cap} N/m", cap(&dry_core), cap(&wet_core));
+        assert!(wet_cap < dry_cap && dry_cap < 1.0, "{wet_cap} {dry_cap}");
         assert!(!wet_core.active.is_empty() && dp > 1e-4, "the stroke goes through the hair");
         for (s, d) in wet_core.interaction.strands.iter().zip(&dry_core.interaction.strands) {
             assert!(s.model.material.density > d.model.material.density, "{:?} vs {:?}", s.model.material, d.model.material);

@@ -91,7 +91,6 @@ struct Chord {
     /// The chord in the strand's rest shape (NaN: none; see [`HairContactFinder::detect`]), m.
     rest_a: Vector3<f64>,
     rest_b: Vector3<f64>,
-    bounds: Aabb,
 }
 
 /// A contact one strand keeps: the other strand, both chords, the overlap (m), both points' arc lengths (m) and
@@ -126,8 +125,8 @@ pub struct HairPair {
 #[derive(Debug, Clone, Default)]
 pub struct HairContactFinder {
     chords: Vec<Chord>,
-    /// The chords' boxes and strands, the broad phase's input, and its output: pairs of chords (indices into
-    /// `chords`) whose boxes overlap, of two strands, in sweep order.
+    /// The chords' boxes (grown by half the contact distance; m) and strands, the broad phase's input, and its
+    /// output: pairs of chords (indices into `chords`) whose boxes overlap, of two strands, in sweep order.
     boxes: Vec<Aabb>,
     groups: Vec<usize>,
     /// The chords' ends (`a`, `b`; m) side by side, for the narrow phase's lanes.
@@ -183,6 +182,9 @@ impl HairContactFinder {
     pub fn detect(&mut self, params: &HairContact, pieces: &[Piece], rest: &[Piece], pieces_per_chord: impl Fn(usize) -> usize, strands: usize, distance: f64) {
         let has_rest = rest.len() == pieces.len();
         self.chords.clear();
+        self.boxes.clear();
+        self.ends.clear();
+        self.groups.clear();
         let half = 0.5 * distance;
         let mut i = 0;
         let mut index = 0;
@@ -199,16 +201,13 @@ impl HairContactFinder {
             let (a, b) = (pieces[i].a, pieces[j].b);
             let length = pieces[j].s + pieces[j].length - pieces[i].s;
             let (rest_a, rest_b) = if has_rest { (rest[i].a, rest[j].b) } else { (Vector3::repeat(f64::NAN), Vector3::repeat(f64::NAN)) };
-            self.chords.push(Chord { strand: k, index, s: pieces[i].s, length, a, b, rest_a, rest_b, bounds: Aabb::of_segment(&a, &b, half) });
+            self.chords.push(Chord { strand: k, index, s: pieces[i].s, length, a, b, rest_a, rest_b });
+            self.boxes.push(Aabb::of_segment(&a, &b, half));
+            self.ends.push([a, b]);
+            self.groups.push(k);
             index += 1;
             i = j + 1;
         }
-        self.boxes.clear();
-        self.boxes.extend(self.chords.iter().map(|c| c.bounds));
-        self.ends.clear();
-        self.ends.extend(self.chords.iter().map(|c| [c.a, c.b]));
-        self.groups.clear();
-        self.groups.extend(self.chords.iter().map(|c| c.strand));
         self.sweep.pairs(&self.boxes, &self.groups, &mut self.candidates);
         // Reduction workspace.
         self.cap = params.max_per_strand;

@@ -79,8 +79,8 @@ impl SweepAndPrune {
         let [hi0, hi1, hi2] = &self.hi;
         let group = &self.group;
         let lane = |v: &[f64], y: usize| f64x4::from(<[f64; LANES]>::try_from(&v[y..y + LANES]).expect("padded for the last lanes"));
-        // Each block's pairs are written without branching: all four lanes' positions are stored and the count
-        // moves past those that overlap (the hits' storage stays LANES ahead of the count).
+        // Each block's pairs are written without branching: every lane's positions are stored after the hits among
+        // the lanes before it and the count moves past the hits (the hits' storage stays LANES ahead of the count).
         let hits = &mut self.hits;
         let mut count = 0;
         for x in 0..n {
@@ -108,9 +108,10 @@ impl SweepAndPrune {
                     hits.resize(2 * (count + LANES), [0; 2]);
                 }
                 for l in 0..LANES {
-                    hits[count] = [x as u32, (y + l) as u32];
-                    count += (mask >> l) & 1;
+                    // Lane l goes after the hits among the lanes before it (independent stores, in lane order).
+                    hits[count + (mask & ((1 << l) - 1)).count_ones() as usize] = [x as u32, (y + l) as u32];
                 }
+                count += mask.count_ones() as usize;
                 if stop != 0 {
                     break;
                 }

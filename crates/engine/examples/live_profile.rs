@@ -1,7 +1,10 @@
 //! Profile of the live haptic step: a `[live]` scenario (default examples/scenarios/live-comb.toml) run as
 //! `coiffure run` runs it (both cores in lockstep on one thread, `LiveScenario`'s schedule), with the wall time
 //! of each stage of `HapticCore::step` (`haptic::StepPhases`) for every traced step. Prints the step-time
-//! percentiles, the mean of each stage, and the stages of the slowest steps. Run:
+//! percentiles, the mean of each stage, and the stages of the slowest steps. As in the live server's haptic thread,
+//! each step stages a share of the viewer's snapshot (`HapticCore::stage_snapshot`) and every
+//! `SessionParams::publish_every`-th step writes it (`HapticCore::snapshot`), timed together as "publish" and
+//! counted in the step's wall time. Run:
 //! `cargo run --release -p coiffure-engine --example live_profile [-- [FILE.toml] [rt] [slowest=N] [hair=on|off] [max_active=N]]`
 //! (`rt`: SCHED_FIFO priority 10 for this thread, needs root or CAP_SYS_NICE; `hair=`: `HapticParams::hair_contact`,
 //! default the scenario's `[live] hair_contact`; `max_active=`: `SessionParams::max_active`).
@@ -45,8 +48,9 @@ fn main() {
     let every = ((params.haptic_rate_hz / params.global_rate_hz).round() as u64).max(1);
     let settle = (s.settle / ls.dt).round() as u64;
     let steps = settle + (s.run_time() / ls.dt).round() as u64;
-    // (step, wall time, stages, active strands, contacts)
-    let mut rows: Vec<(u64, f64, StepPhases, usize, u32)> = Vec::new();
+    // (step, wall time, stages, active strands, contacts, publish time)
+    let mut rows: Vec<(u64, f64, StepPhases, usize, u32, f64)> = Vec::new();
+    let mut snapshot = engine::snapshot::HapticSnapshot::default();
     let (mut tip, mut peak, mut jump, mut last) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for n in 0..steps {
         if n % every == 0 {
@@ -60,9 +64,15 @@ fn main() {
         peak = peak.max(cmd.force.norm());
         jump = jump.max((cmd.force.norm() - last).abs());
         last = cmd.force.norm();
+        let t1 = Instant::now();
+        ls.haptic.stage_snapshot(&ls.lattice);
+        if (n + 1) % params.publish_every == 0 {
+            ls.haptic.snapshot(&ls.lattice, ls.dt, &mut snapshot);
+        }
+        let publish = t1.elapsed().as_secs_f64();
         let wall = t0.elapsed().as_secs_f64();
         if n >= settle {
-            rows.push((n - settle, wall, ls.haptic.timings(), ls.haptic.active().len(), ls.haptic.last_contacts()));
+            rows.push((n - settle, wall, ls.haptic.timings(), ls.haptic.active().len(), ls.haptic.last_contacts(), publish));
         }
     }
     let mut times: Vec<f64> = rows.iter().map(|r| r.1).collect();
@@ -89,11 +99,15 @@ fn main() {
         mean(&|p| p.local.free),
         mean(&|p| p.tracking)
     );
+    let mut published: Vec<f64> = rows.iter().map(|r| r.5).collect();
+    published.sort_by(f64::total_cmp);
+    let pq = |p: f64| published.get(((p * published.len() as f64) as usize).min(published.len().saturating_sub(1))).copied().unwrap_or(0.0) * 1e6;
+    println!("publish (staged every step, written every {} steps): mean {:.0} us, p50 {:.0} us, p90 {:.0} us, p99 {:.0} us, max {:.0} us", params.publish_every, published.iter().sum::<f64>() / published.len().max(1) as f64 * 1e6, pq(0.5), pq(0.9), pq(0.99), pq(1.0));
     rows.sort_by(|a, b| b.1.total_cmp(&a.1));
-    println!("| step | wall us | coupling | active set (choose, rebuild) | actions | interaction | dynamics | sample | detect (hair) | constrained (body) | free | tracking | active | contacts |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
-    for (k, w, p, a, c) in rows.iter().take(slowest) {
+    println!("| step | wall us | coupling | active set (choose, rebuild) | actions | interaction | dynamics | sample | detect (hair) | constrained (body) | free | tracking | active | contacts | publish |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for (k, w, p, a, c, publish) in rows.iter().take(slowest) {
         let us = |x: f64| format!("{:.0}", x * 1e6);
-        println!("| {k} | {} | {} | {} ({}, {}) | {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {a} | {c} |", us(*w), us(p.coupling), us(p.active), us(p.choose), us(p.rebuild), us(p.actions), us(p.interaction), us(p.local.dynamics), us(p.local.sample), us(p.local.detect), us(p.local.hair_detect), us(p.local.constrained), us(p.local.body), us(p.local.free), us(p.tracking));
+        println!("| {k} | {} | {} | {} ({}, {}) | {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {a} | {c} | {} |", us(*w), us(p.coupling), us(p.active), us(p.choose), us(p.rebuild), us(p.actions), us(p.interaction), us(p.local.dynamics), us(p.local.sample), us(p.local.detect), us(p.local.hair_detect), us(p.local.constrained), us(p.local.body), us(p.local.free), us(p.tracking), us(*publish));
     }
 }

@@ -188,6 +188,7 @@ impl Session {
                     r.flush(false);
                 }
             }
+            core.stage_snapshot(lattice);
             if core.step % publish_every == 0 {
                 let mut out = hap_in.input_buffer_mut();
                 core.snapshot(lattice, dt, &mut out);

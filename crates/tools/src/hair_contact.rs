@@ -229,12 +229,13 @@ impl HairContactFinder {
                 (&self.ends[i], &self.ends[j])
             };
             let (c0, c1, c2, c3) = (chord(0), chord(1), chord(2), chord(3));
-            let mask = may_be_closer([&c0.0[0], &c1.0[0], &c2.0[0], &c3.0[0]], [&c0.0[1], &c1.0[1], &c2.0[1], &c3.0[1]], [&c0.1[0], &c1.1[0], &c2.1[0], &c3.1[0]], [&c0.1[1], &c1.1[1], &c2.1[1], &c3.1[1]], distance);
+            let found = may_be_closer([&c0.0[0], &c1.0[0], &c2.0[0], &c3.0[0]], [&c0.0[1], &c1.0[1], &c2.0[1], &c3.0[1]], [&c0.1[0], &c1.1[0], &c2.1[0], &c3.1[0]], [&c0.1[1], &c1.1[1], &c2.1[1], &c3.1[1]], distance);
             self.tested += lanes;
             for l in 0..lanes {
-                if mask & (1 << l) != 0 {
+                if found.through & (1 << l) != 0 {
                     let (nx, ny) = self.candidates[k + l];
-                    self.touch(nx, ny, distance);
+                    let closest = (found.exact & (1 << l) != 0).then(|| (found.s[l], found.t[l]));
+                    self.touch(nx, ny, closest, distance);
                 }
             }
             k += lanes;
@@ -242,11 +243,12 @@ impl HairContactFinder {
     }
 
     /// The narrow phase's exact test of the chords `nx` and `ny` (indices into `chords`, in the broad phase's
-    /// order): closer than the contact `distance` (m; or than their rest distance), a contact offered to both
-    /// strands.
-    fn touch(&mut self, nx: usize, ny: usize, distance: f64) {
+    /// order) with their closest points' parameters `closest` when the lanes found them (`closest_segment_params`'
+    /// own), else found here: closer than the contact `distance` (m; or than their rest distance), a contact
+    /// offered to both strands.
+    fn touch(&mut self, nx: usize, ny: usize, closest: Option<(f64, f64)>, distance: f64) {
         let (p, q) = (&self.chords[nx], &self.chords[ny]);
-        let (u, v) = closest_segment_params(&p.a, &p.b, &q.a, &q.b);
+        let (u, v) = closest.unwrap_or_else(|| closest_segment_params(&p.a, &p.b, &q.a, &q.b));
         let (xp, xq) = (p.a + (p.b - p.a) * u, q.a + (q.b - q.a) * v);
         let gap = xp - xq;
         let dist = gap.norm();
@@ -372,7 +374,7 @@ mod tests {
         for (x, &i) in order.iter().enumerate() {
             for &j in &order[x + 1..] {
                 if full.chords[i].strand != full.chords[j].strand {
-                    full.touch(i, j, distance);
+                    full.touch(i, j, None, distance);
                 }
             }
         }

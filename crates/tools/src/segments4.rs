@@ -9,15 +9,17 @@
 //! let through, so the scalar test alone decides which pairs touch.
 
 use nalgebra::Vector3;
-use wide::{f64x4, CmpGe, CmpGt, CmpLe, CmpLt};
+use wide::{f64x4, CmpEq, CmpGe, CmpGt, CmpLe, CmpLt};
 
 /// Relative slack of the reject: a pair is rejected only if its distance is at least `distance (1 + SLACK)`.
 const SLACK: f64 = 1e-6;
 
 /// The lanes (bit `l` for pair `l`) of the four segment pairs `[p0[l], p1[l]]`, `[q0[l], q1[l]]` that may be
 /// closer than `distance` (m): every pair whose distance (as `closest_segment_params` finds it) is below
-/// `distance (1 + 1e-6)`, every pair with a point-like segment, and every pair with a NaN coordinate.
-pub fn may_be_closer(p0: [&Vector3<f64>; 4], p1: [&Vector3<f64>; 4], q0: [&Vector3<f64>; 4], q1: [&Vector3<f64>; 4], distance: f64) -> i32 {
+/// `distance (1 + 1e-6)`, every pair with a point-like segment, and every pair with a NaN coordinate; and each pair's
+/// closest points `(s, t)` as `closest_segment_params` gives them, bit for bit (the same operations), where the
+/// lane is in `exact` (none of its segments point-like, no NaN); elsewhere the scalar function must be asked.
+pub fn may_be_closer(p0: [&Vector3<f64>; 4], p1: [&Vector3<f64>; 4], q0: [&Vector3<f64>; 4], q1: [&Vector3<f64>; 4], distance: f64) -> Closest4 {
     let lanes = |v: [&Vector3<f64>; 4], c: usize| f64x4::from([v[0][c], v[1][c], v[2][c], v[3][c]]);
     let xyz = |v: [&Vector3<f64>; 4]| [lanes(v, 0), lanes(v, 1), lanes(v, 2)];
     let (p0, p1, q0, q1) = (xyz(p0), xyz(p1), xyz(q0), xyz(q1));
@@ -49,7 +51,20 @@ pub fn may_be_closer(p0: [&Vector3<f64>; 4], p1: [&Vector3<f64>; 4], q0: [&Vecto
     let gap = sub(xp, xq);
     let far = distance * (1.0 + SLACK);
     let apart = dot(gap, gap).cmp_ge(f64x4::splat(far * far)) & !degenerate;
-    !apart.move_mask() & 0b1111
+    let exact = !degenerate & s.cmp_eq(s) & t.cmp_eq(t);
+    Closest4 { through: !apart.move_mask() & 0b1111, exact: exact.move_mask() & 0b1111, s: s.to_array(), t: t.to_array() }
+}
+
+/// What [`may_be_closer`] finds of four segment pairs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Closest4 {
+    /// The lanes that may be closer than the distance (bit `l` for pair `l`).
+    pub through: i32,
+    /// The lanes whose `s` and `t` are `closest_segment_params`' own.
+    pub exact: i32,
+    /// Each pair's closest points: `p0 + s (p1 - p0)` and `q0 + t (q1 - q0)`.
+    pub s: [f64; 4],
+    pub t: [f64; 4],
 }
 
 #[cfg(test)]
@@ -62,13 +77,14 @@ mod tests {
         // 40,000 random segment pairs in 1 cm (a quarter parallel, some crossing, some point-like, some with a NaN),
         // four at a time, against contact distances of 0.5 to 5 mm: every pair closer than the distance by
         // closest_segment_params is let through; every pair let through is a point-like or NaN one or closer than
-        // the distance plus 1e-6 of it; and most of the far pairs are rejected (the reject works).
+        // the distance plus 1e-6 of it; every far pair is rejected (the reject works); and the lanes' closest points
+        // are the scalar's to the bit wherever they say so (all but the point-like and NaN pairs).
         let mut seed = 99u64;
         let mut rnd = || {
             seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
-        let (mut far, mut rejected, mut near) = (0, 0, 0);
+        let (mut far, mut rejected, mut near, mut exact) = (0, 0, 0, 0);
         for block in 0..10_000 {
             let distance = 5e-4 + 4.5e-3 * rnd();
             let mut segs: Vec<[Vector3<f64>; 4]> = Vec::new();
@@ -85,10 +101,15 @@ mod tests {
                 segs.push([p0, p1, q0, q1]);
             }
             let pick = |k: usize| [&segs[0][k], &segs[1][k], &segs[2][k], &segs[3][k]];
-            let mask = may_be_closer(pick(0), pick(1), pick(2), pick(3), distance);
+            let found = may_be_closer(pick(0), pick(1), pick(2), pick(3), distance);
+            let mask = found.through;
             for (l, [p0, p1, q0, q1]) in segs.iter().enumerate() {
                 let (s, t) = closest_segment_params(p0, p1, q0, q1);
                 let d = ((p0 + (p1 - p0) * s) - (q0 + (q1 - q0) * t)).norm();
+                if found.exact & (1 << l) != 0 {
+                    assert_eq!((found.s[l].to_bits(), found.t[l].to_bits()), (s.to_bits(), t.to_bits()), "block {block} lane {l}: the lanes' closest points are the scalar's");
+                    exact += 1;
+                }
                 let through = mask & (1 << l) != 0;
                 let odd = (p1 - p0).norm_squared() <= 1e-30 || (q1 - q0).norm_squared() <= 1e-30 || d.is_nan();
                 if d < distance || odd {
@@ -105,6 +126,7 @@ mod tests {
             }
         }
         assert!(near > 1_000 && far > 20_000, "{near} near, {far} far");
+        assert!(exact > 30_000, "{exact} pairs with the scalar's closest points");
         assert_eq!(rejected, far, "every far pair is rejected");
     }
 }

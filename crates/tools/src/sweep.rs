@@ -21,8 +21,10 @@ const LANES: usize = 4;
 pub struct SweepAndPrune {
     /// Box indices sorted by their lower end along `axis` (kept between calls).
     order: Vec<usize>,
-    /// Workspace of the sort: (lower end as an integer in `f64::total_cmp`'s order, box index).
+    /// Workspaces of the sort: (lower end as an integer in `f64::total_cmp`'s order, box index), and the lower
+    /// ends so, by box.
     keyed: Vec<(i64, usize)>,
+    keys: Vec<i64>,
     axis: usize,
     /// The boxes' lower and upper ends in sweep order along `axis`, then along the next axis and the one after
     /// (m), padded for the last lanes; and their groups.
@@ -139,10 +141,19 @@ impl SweepAndPrune {
         }
         let axis = (0..3).fold(0, |b, a| if score[a] > score[b] { a } else { b });
         let key = |i: usize| boxes[i].min[axis];
+        let total = |x: f64| {
+            let bits = x.to_bits() as i64;
+            bits ^ (((bits >> 63) as u64) >> 1) as i64
+        };
         if self.order.len() != n || axis != self.axis {
+            // From scratch, by the keys as integers in `f64::total_cmp`'s order read from one array (the same
+            // comparisons, so the same order, as comparing the boxes' lower ends with `total_cmp`).
+            self.keys.clear();
+            self.keys.extend(boxes.iter().map(|b| total(b.min[axis])));
+            let keys = &self.keys;
             self.order.clear();
             self.order.extend(0..n);
-            self.order.sort_unstable_by(|&x, &y| key(x).total_cmp(&key(y)));
+            self.order.sort_unstable_by(|&x, &y| keys[x].cmp(&keys[y]));
             self.axis = axis;
         } else {
             // A stable sort from last call's order (the order an insertion sort would give; -0 and +0 compare
@@ -152,10 +163,6 @@ impl SweepAndPrune {
             // entries (strands joined far from those they replaced) a merge sort of the sorted runs takes over
             // from last call's order, which gives the same order in O(n log n) at most.
             let flat = |i: usize| if key(i) == 0.0 { 0.0 } else { key(i) };
-            let total = |x: f64| {
-                let bits = x.to_bits() as i64;
-                bits ^ (((bits >> 63) as u64) >> 1) as i64
-            };
             self.keyed.clear();
             self.keyed.extend(self.order.iter().map(|&i| (total(flat(i)), i)));
             if !insertion_sort(&mut self.keyed, 2 * n) {

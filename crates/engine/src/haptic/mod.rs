@@ -77,6 +77,9 @@ pub struct HapticCore {
     /// The shown guides' reference samples mapped through the lattice, kept between snapshots
     /// ([`HapticCore::snapshot`] takes `&self`, hence the cell; the core lives on one thread).
     pub(crate) references: std::cell::RefCell<reference::ReferenceCache>,
+    /// The next snapshot's staged displacements ([`HapticCore::stage_snapshot`]): per guide, the step they
+    /// were mapped at and its samples' displacements, m.
+    pub(crate) staged: std::cell::RefCell<Vec<(usize, u64, Vec<Vector3<f64>>)>>,
     /// The choice of the active set in progress, if any (spread over steps).
     pub(crate) choice: Option<active::Choice>,
     /// Each guide's settled shape bounded for the choice's scan (fixed, from the scene).
@@ -178,7 +181,7 @@ impl HapticCore {
         let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
         let bounds = active::GuideBounds::new(&scene);
         Ok(Self {
-            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), references: Default::default(), choice: None, bounds, queued: Vec::new(), max_tip_speed: 0.0, interaction,
+            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), references: Default::default(), staged: Default::default(), choice: None, bounds, queued: Vec::new(), max_tip_speed: 0.0, interaction,
             hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, head: nalgebra::Isometry3::identity(), rejected: 0, runaways: 0, failed: 0, timings: StepPhases::default(),
         })
     }
@@ -339,7 +342,54 @@ impl HapticCore {
         ToolInput { tool: self.tool, present: self.device.is_some(), position: self.coupling.proxy, rotation: self.interaction.pose.rotation, pressed: self.was_pressed, cuts: self.cuts, head: self.head }
     }
 
-    /// Fills `out` with what the viewer needs.
+    /// Stages the viewer's next snapshot, a share of it a step: the displacements of every
+    /// `SessionParams::publish_every`-th simulated strand (this step's share of the slots) are mapped and kept,
+    /// so that [`HapticCore::snapshot`] copies them rather than mapping every strand in the step that
+    /// publishes (66-118 us at 64 strands, every 5th step). Call once after each step where snapshots are
+    /// published every `publish_every` steps; without it the snapshot maps every strand itself.
+    pub fn stage_snapshot(&self, lattice: &LatticeSnapshot) {
+        let every = self.params.publish_every.max(1);
+        let share = (self.step % every) as usize;
+        let ok = lattice.positions.len() == self.scene.lattice.node_count();
+        let mut cache = self.references.borrow_mut();
+        cache.use_nodes(&lattice.positions);
+        let mut staged = self.staged.borrow_mut();
+        for slot in (share..self.active.len()).step_by(every as usize) {
+            let g = self.active[slot];
+            let i = match staged.iter().position(|e| e.0 == g) {
+                Some(i) => i,
+                None => {
+                    staged.push((g, 0, Vec::new()));
+                    staged.len() - 1
+                }
+            };
+            let e = &mut staged[i];
+            e.1 = self.step;
+            e.2.clear();
+            self.displacement_into(slot, g, &mut cache, ok, &mut e.2);
+        }
+    }
+
+    /// Appends the shown displacement of simulated strand `slot` (guide `g`) to `out`: its samples minus their
+    /// references mapped through the cache's nodes (`ok`: they are the lattice's), times its blend weight, m.
+    fn displacement_into(&self, slot: usize, g: usize, cache: &mut reference::ReferenceCache, ok: bool, out: &mut Vec<Vector3<f64>>) {
+        let s = &self.interaction.strands[slot];
+        let weight = self.members.get(slot).map_or(1.0, |m| m.weight);
+        let pts = samples_along(s, self.scene.guides[g].model.length, self.scene.samples());
+        let bases = cache.bases(&self.scene, g, ok);
+        for (p, base) in pts.into_iter().zip(bases) {
+            out.push(self.shown((p - base) * weight));
+        }
+    }
+
+    /// A displacement as the viewer may show it: zero if not finite or larger than
+    /// `HapticParams::max_displacement` (a misbehaving strand must not throw the hairstyle across the scene).
+    fn shown(&self, d: Vector3<f64>) -> Vector3<f64> {
+        if d.iter().all(|x| x.is_finite()) && d.norm() < self.params.haptic.max_displacement { d } else { Vector3::zeros() }
+    }
+
+    /// Fills `out` with what the viewer needs. The simulated strands' displacements staged in the last
+    /// `publish_every` steps ([`HapticCore::stage_snapshot`]) are copied, the others mapped now.
     pub fn snapshot(&self, lattice: &LatticeSnapshot, dt: f64, out: &mut HapticSnapshot) {
         out.step = self.step;
         out.time = self.step as f64 * dt;
@@ -354,19 +404,15 @@ impl HapticCore {
         out.active.clear();
         out.displacement.clear();
         let ok = lattice.positions.len() == self.scene.lattice.node_count();
-        let samples = self.scene.samples();
+        let every = self.params.publish_every.max(1);
         let mut cache = self.references.borrow_mut();
-        cache.begin(&lattice.positions);
+        cache.use_nodes(&lattice.positions);
+        let mut staged = self.staged.borrow_mut();
         for (slot, &g) in self.active.iter().enumerate() {
             out.active.push(g as u32);
-            let s = &self.interaction.strands[slot];
-            let weight = self.members.get(slot).map_or(1.0, |m| m.weight);
-            let pts = samples_along(s, self.scene.guides[g].model.length, samples);
-            let bases = cache.bases(&self.scene, g, ok);
-            for (p, base) in pts.into_iter().zip(bases) {
-                let d = (p - base) * weight;
-                // Keep the viewer's displacement sane even if a strand misbehaves.
-                out.displacement.push(if d.iter().all(|x| x.is_finite()) && d.norm() < self.params.haptic.max_displacement { d } else { Vector3::zeros() });
+            match staged.iter().find(|e| e.0 == g && e.1 + every > self.step) {
+                Some(e) => out.displacement.extend_from_slice(&e.2),
+                None => self.displacement_into(slot, g, &mut cache, ok, &mut out.displacement),
             }
         }
         // The let-go strands fading out, from where they were let go.
@@ -374,11 +420,11 @@ impl HapticCore {
             out.active.push(f.guide as u32);
             let bases = cache.bases(&self.scene, f.guide, ok);
             for (p, base) in f.samples.iter().zip(bases) {
-                let d = (p - base) * f.weight;
-                out.displacement.push(if d.iter().all(|x| x.is_finite()) && d.norm() < self.params.haptic.max_displacement { d } else { Vector3::zeros() });
+                out.displacement.push(self.shown((p - base) * f.weight));
             }
         }
-        cache.end();
+        cache.keep_only(&out.active);
+        staged.retain(|e| self.active.contains(&e.0));
     }
 
     /// Tool contacts of the last step.
@@ -465,6 +511,46 @@ mod tests {
         let mut hs = HapticSnapshot::default();
         core.snapshot(&snap, 1e-3, &mut hs);
         assert_eq!(hs.runaways, 2);
+    }
+
+    #[test]
+    fn a_staged_snapshot_is_the_one_mapped_at_once_up_to_the_steps_between() {
+        // The comb drawn down through the hair (0.1 m/s), the snapshot staged every step and written every
+        // publish_every steps: the strands staged in the writing step itself give bit for bit what mapping every
+        // strand at once gives; the others were staged at most publish_every - 1 = 4 ms earlier, so they differ
+        // by at most how far a strand point moved meanwhile (under 2 mm here: the comb at 0.1 m/s moves 0.4 mm).
+        let scene = small_scene();
+        let params = SessionParams::default();
+        let mut core = HapticCore::new(scene.clone(), params).unwrap();
+        let snap = GlobalCore::new(scene, &params).snapshot();
+        let (mut staged, mut fresh) = (HapticSnapshot::default(), HapticSnapshot::default());
+        let (mut compared, mut exact) = (0, 0);
+        for n in 0..900 {
+            let t = n as f64 * 1e-3;
+            let p = Vector3::new(0.0, -0.118, 0.05 - 0.1 * t);
+            core.step(Some(DeviceReading { time: t, position: p, rotation: test_rot(), buttons: 0 }), &snap, 1e-3);
+            core.stage_snapshot(&snap);
+            if core.step % params.publish_every == 0 && n > 300 {
+                core.snapshot(&snap, 1e-3, &mut staged);
+                let kept = core.staged.replace(Vec::new());
+                core.snapshot(&snap, 1e-3, &mut fresh);
+                core.staged.replace(kept);
+                assert_eq!(staged.active, fresh.active);
+                let k = core.scene.samples();
+                for slot in 0..core.active().len() {
+                    let (a, b) = (&staged.displacement[slot * k..(slot + 1) * k], &fresh.displacement[slot * k..(slot + 1) * k]);
+                    let off = a.iter().zip(b).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max);
+                    if slot as u64 % params.publish_every == 0 {
+                        assert_eq!(a, b, "slot {slot} staged in the writing step");
+                    } else {
+                        assert!(off < 2e-3, "slot {slot}: {off} m from the mapping at once");
+                    }
+                    exact += (off == 0.0) as usize;
+                    compared += 1;
+                }
+            }
+        }
+        assert!(compared > 100 && exact < compared, "compared {compared} strands, {exact} equal: the strands moved");
     }
 
     #[test]

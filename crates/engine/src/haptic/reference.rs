@@ -23,8 +23,6 @@ struct Entry {
     bases: Vec<Vector3<f64>>,
     /// Whether the bases are for the current nodes.
     fresh: bool,
-    /// Whether the last snapshot used it (entries not used are dropped).
-    used: bool,
 }
 
 /// Per shown guide, its reference samples mapped through the lattice nodes last seen.
@@ -36,9 +34,9 @@ pub(crate) struct ReferenceCache {
 }
 
 impl ReferenceCache {
-    /// Starts a snapshot through `nodes`: marks every entry unused, and stale if the nodes changed (compared
-    /// exactly, so a cached base is never from other nodes).
-    pub fn begin(&mut self, nodes: &[Point3<f64>]) {
+    /// Maps through `nodes` from now on: the bases become stale if the nodes changed (compared exactly, so a
+    /// cached base is never from other nodes).
+    pub fn use_nodes(&mut self, nodes: &[Point3<f64>]) {
         if self.nodes.as_slice() != nodes {
             self.nodes.clear();
             self.nodes.extend_from_slice(nodes);
@@ -46,12 +44,9 @@ impl ReferenceCache {
                 e.fresh = false;
             }
         }
-        for e in &mut self.entries {
-            e.used = false;
-        }
     }
 
-    /// The reference samples of `guide` mapped through the nodes given to [`begin`](Self::begin) (`ok`: they
+    /// The reference samples of `guide` mapped through the nodes given to [`use_nodes`](Self::use_nodes) (`ok`: they
     /// are the lattice's nodes; otherwise the references themselves, as `ffd_map` does), m.
     pub fn bases<'a>(&'a mut self, scene: &'a Scene, guide: usize, ok: bool) -> &'a [Vector3<f64>] {
         let reference = &scene.guides[guide].reference;
@@ -63,12 +58,11 @@ impl ReferenceCache {
             Some(i) => i,
             None => {
                 let stencils = reference.iter().map(|p| ffd.weights_clamped(&Point3::from(*p)).ok()).collect();
-                self.entries.push(Entry { guide, stencils, bases: Vec::new(), fresh: false, used: false });
+                self.entries.push(Entry { guide, stencils, bases: Vec::new(), fresh: false });
                 self.entries.len() - 1
             }
         };
         let e = &mut self.entries[i];
-        e.used = true;
         if !e.fresh {
             e.bases.clear();
             for (s, p) in e.stencils.iter().zip(reference) {
@@ -79,9 +73,9 @@ impl ReferenceCache {
         &e.bases
     }
 
-    /// Ends a snapshot: drops the guides it did not show.
-    pub fn end(&mut self) {
-        self.entries.retain(|e| e.used);
+    /// Drops the guides not in `shown` (those no snapshot shows any more).
+    pub fn keep_only(&mut self, shown: &[u32]) {
+        self.entries.retain(|e| shown.contains(&(e.guide as u32)));
     }
 }
 
@@ -108,7 +102,7 @@ mod tests {
         let guides = [0, scene.guides.len() / 2, scene.guides.len() - 1];
         for (round, a) in [0.0, 3e-3, 3e-3, -2e-3].into_iter().enumerate() {
             let nodes = moved(&rest, a);
-            cache.begin(&nodes);
+            cache.use_nodes(&nodes);
             // Round 2 shows one guide only, so the others are dropped and made again in round 3.
             let shown: &[usize] = if round == 2 { &guides[..1] } else { &guides };
             for &g in shown {
@@ -116,7 +110,7 @@ mod tests {
                 assert_eq!(cache.bases(&scene, g, true), want.as_slice(), "guide {g}, round {round}");
                 assert_eq!(cache.bases(&scene, g, false), scene.guides[g].reference.as_slice());
             }
-            cache.end();
+            cache.keep_only(&shown.iter().map(|&g| g as u32).collect::<Vec<_>>());
             assert_eq!(cache.entries.len(), shown.len());
         }
         assert_ne!(moved(&rest, 3e-3), rest, "the test moves the nodes");

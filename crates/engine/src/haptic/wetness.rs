@@ -37,9 +37,13 @@ impl HapticCore {
             if self.sets[g].set.len() != s.model.dofs() {
                 self.sets[g] = SetState::new(&s.model);
             }
-            let (q, ws) = (s.state.q.clone(), vec![w; s.model.segments]);
-            if self.sets[g].update(&set_model, &mut s.model, &q, &ws).is_err() {
-                self.failed += 1;
+            // Unchanged wetness leaves the set and the rest shape as they are (the law moves the set only as the
+            // wetness changes), so the update is skipped: it ran for every simulated strand at every global step.
+            if self.sets[g].wetness.iter().any(|&x| x != w) {
+                let (q, ws) = (s.state.q.clone(), vec![w; s.model.segments]);
+                if self.sets[g].update(&set_model, &mut s.model, &q, &ws).is_err() {
+                    self.failed += 1;
+                }
             }
         }
         if let Ok(m) = self.wet_model.wet(&dry, h.friction_coefficient(), section.area(), mean) {

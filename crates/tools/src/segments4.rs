@@ -1,12 +1,13 @@
 //! Distances between four pairs of segments at once (SIMD lanes, `wide::f64x4`): the quick reject of the hair-hair
 //! narrow phase ([`crate::hair_contact`]). Most pairs of chords whose boxes overlap are farther apart than the
 //! contact distance (about 1,240 tested for 60 in contact a step on the live comb); four of them are measured here
-//! in the time of about one scalar [`crate::geometry::closest_segment_params`], and only those that may touch go on to it.
+//! in the time of about one scalar [`crate::geometry::closest_segment_params`], and only those that may touch go
+//! on to the exact test.
 //!
 //! The lanes run `closest_segment_params`'s own arithmetic, operation for operation (the same products and sums
-//! in the same order, the same branches as selections), so they give its distances; a lane is let through unless
-//! its distance is past the contact distance by a relative 1e-6, and degenerate (point-like) segments are always
-//! let through, so the scalar test alone decides which pairs touch.
+//! in the same order, the same branches as selections), so they give its closest points bit for bit (tested); a
+//! lane is let through unless its distance is past the contact distance by a relative 1e-6, and degenerate
+//! (point-like) segments are always let through, so the exact test alone decides which pairs touch.
 
 use nalgebra::Vector3;
 use wide::{f64x4, CmpEq, CmpGe, CmpGt, CmpLe, CmpLt};

@@ -293,11 +293,11 @@ impl Strand {
         rows.h = h;
         rows.dofs = dofs;
         rows.constraints.extend_from_slice(constraints);
-        rows.jac.resize(n * size, 0.0);
+        rows.jac.resize(size, 0.0);
         rows.reduced.resize(n * size, 0.0);
         rows.pivoted.resize(n * size, 0.0);
         for (c, pc) in constraints.iter().enumerate() {
-            let jac = &mut rows.jac[c * size..(c + 1) * size];
+            let jac = &mut rows.jac[..];
             let (x, span) = self.dynamics.point_jacobian_into(&self.model, &self.state, pc.s, jac);
             let bias = root.velocity + root.angular_velocity.cross(&(x - root.position));
             let (lc, dlc) = (&mut rows.reduced[c * size..(c + 1) * size], &mut rows.pivoted[c * size..(c + 1) * size]);
@@ -435,7 +435,8 @@ impl Strand {
 
 impl Strand {
     /// Adds `A^-1 J^T p` (the generalized response to the impulses `p`, one per constraint of `rows`, N s) to
-    /// `out` (dofs), with the step matrix of the prepared step: one articulated solve for all of them. False if
+    /// `out` (dofs), with the step matrix of the prepared step: the rows' reduced right-hand sides summed
+    /// (`L^-1 J^T p`), then one back-substitution for all of them. False if
     /// the response is not finite (`out` unchanged).
     fn add_response(&mut self, rows: &ConstraintRows, p: &[Vector3<f64>], out: &mut [f64]) -> bool {
         let mut g = std::mem::replace(&mut self.rhs, nalgebra::DVector::zeros(0));
@@ -449,12 +450,13 @@ impl Strand {
                 continue;
             }
             any = true;
-            let jac = &rows.jac[c * 3 * rows.dofs..c * 3 * rows.dofs + 3 * rows.span[c]];
-            for (o, j) in g.iter_mut().zip(jac.chunks_exact(3)) {
-                *o += j[0] * p.x + j[1] * p.y + j[2] * p.z;
+            // The reduced right-hand side of J_c^T p (linear in p): L^-1 J_c^T p.
+            let reduced = &rows.reduced[c * 3 * rows.dofs..c * 3 * rows.dofs + 3 * rows.span[c]];
+            for (o, l) in g.iter_mut().zip(reduced.chunks_exact(3)) {
+                *o += l[0] * p.x + l[1] * p.y + l[2] * p.z;
             }
         }
-        let ok = !any || self.dynamics.resolve_articulated1(&self.model, g.as_mut_slice());
+        let ok = !any || self.dynamics.back_substitute1(&self.model, g.as_mut_slice());
         if ok && any {
             for (o, x) in out.iter_mut().zip(g.iter()) {
                 *o += x;
@@ -479,10 +481,10 @@ impl ContactFrame {
     /// For a contact along `normal` with the 3 x 3 Delassus block `w` and force mixing `mix`.
     fn new(normal: &Vector3<f64>, w: &Matrix3<f64>, mix: f64) -> Self {
         let (t1, t2) = tangents(normal);
-        let wnn = (normal.dot(&(w * normal)) + mix).max(1e-300);
-        let basis = Matrix3::from_columns(&[t1, t2, *normal]);
-        let wt = basis.transpose() * w * basis;
-        let wt2 = nalgebra::Matrix2::new(wt[(0, 0)] + mix, wt[(0, 1)], wt[(1, 0)], wt[(1, 1)] + mix);
+        let wnn = (normal.dot(&mul3(w, normal)) + mix).max(1e-300);
+        // The tangential block of `w` in the basis (t1, t2): `t_a . w t_b`.
+        let (w1, w2) = (mul3(w, &t1), mul3(w, &t2));
+        let wt2 = nalgebra::Matrix2::new(t1.dot(&w1) + mix, t1.dot(&w2), t2.dot(&w1), t2.dot(&w2) + mix);
         Self { t1, t2, wnn, wt2_inv: wt2.try_inverse().unwrap_or_else(nalgebra::Matrix2::zeros) }
     }
 
@@ -528,9 +530,10 @@ pub struct ConstraintRows {
     /// The strand's degrees of freedom.
     dofs: usize,
     constraints: Vec<PointConstraint>,
-    /// Per constraint, at `c * 3 dofs`: its point's Jacobian `J_c` (3 x dofs, column-major, m per rad/m), of
-    /// which only the first `span[c]` columns can be nonzero.
+    /// Workspace: one point's Jacobian `J_c` (3 x dofs, column-major, m per rad/m) while its row is built.
     jac: Vec<f64>,
+    /// Per constraint: the number of leading columns of its Jacobian that can be nonzero (the dofs of the
+    /// segments from the root to its point's).
     span: Vec<usize>,
     /// Per constraint, at `c * 3 dofs`: its reduced right-hand sides `L^-1 J_c^T` (3 x dofs, column-major; the
     /// first `span[c]` columns can be nonzero) in the elimination `A = L D L^T` of the step matrix

@@ -253,8 +253,6 @@ pub struct Dynamics {
     coupling: Vec<Twists>,
     /// Workspace of [`Dynamics::solve_articulated`], per segment: `U_Q`, `D_Q^-1` and `c_Q`.
     articulated: Vec<(Twists, Matrix3<f64>, Vector3<f64>)>,
-    /// Workspace of [`Dynamics::resolve_articulated1`]: `c_Q` of its right-hand sides (columns).
-    articulated3: Vec<Matrix3<f64>>,
     /// Mass matrix M(q): the kinetic energy (with a fixed root) is `qdot^T M qdot / 2`, J. Assembled only by
     /// `evaluate(.., with_mass = true)` (the linearly implicit step does not need it and leaves it stale).
     pub mass: DMatrix<f64>,
@@ -299,7 +297,6 @@ impl Dynamics {
             sums: vec![empty; n],
             coupling: vec![Twists::zeros(); n],
             articulated: vec![(Twists::zeros(), Matrix3::zeros(), Vector3::zeros()); n],
-            articulated3: vec![Matrix3::zeros(); n],
             mass: DMatrix::zeros(dofs, dofs),
             forces: DVector::zeros(dofs),
             kinetic_energy: 0.0,
@@ -553,57 +550,51 @@ impl Dynamics {
         b.iter().all(|x| x.is_finite())
     }
 
-    /// Solves the system of the last [`Dynamics::solve_articulated`] for another right-hand side `b` (dofs) in
-    /// place, reusing its elimination (articulated inertias and pivots): only the bias recursion and the
-    /// back-substitution run, O(N) with a small constant. E.g. the velocity change `A^-1 J^T p` of all a
-    /// strand's constraint impulses at once.
-    pub(crate) fn resolve_articulated1(&mut self, model: &StrandModel, b: &mut [f64]) -> bool {
+    /// The root-to-tip half of an articulated solve alone (the elimination of the last
+    /// [`Dynamics::solve_articulated`]): `b` (dofs) holds reduced right-hand sides
+    /// `c = L^-1 b'` (e.g. sums of [`Dynamics::reduce_articulated3`]'s columns, weighted by impulses: the reduction
+    /// is linear) and becomes `A^-1 b'`. False if a value is not finite.
+    pub(crate) fn back_substitute1(&self, model: &StrandModel, b: &mut [f64]) -> bool {
         if model.dofs_per_segment() == 2 {
-            self.resolve_articulated_d::<2, 1>(model, b, model.segments)
+            self.back_substitute_d::<2>(model, b)
         } else {
-            self.resolve_articulated_d::<3, 1>(model, b, model.segments)
+            self.back_substitute_d::<3>(model, b)
         }
     }
 
-    /// [`Dynamics::resolve_articulated1`] for `D` coordinates per segment and `R` right-hand sides (`b`: R x dofs,
-    /// column-major; only the first `used` segments' columns nonzero, so the tip-to-root recursion starts at
-    /// segment `used - 1`): the padded rows and columns of the workspace (zero in `U`, `S` and `c`, identity in
-    /// `D^-1`) would only add exact zeros.
-    fn resolve_articulated_d<const D: usize, const R: usize>(&mut self, model: &StrandModel, b: &mut [f64], used: usize) -> bool {
-        let n = model.segments;
-        let used = used.min(n);
-        let mut pa = SMatrix::<f64, 6, R>::zeros();
-        // Beyond `used` the right-hand sides and the bias are zero.
-        self.articulated3[used..n].fill(Matrix3::zeros());
-        for i in (0..used).rev() {
-            // Rows: the segment's dofs; columns: the right-hand sides.
-            let s = self.motion[i].fixed_columns::<D>(0);
-            let s_pa = s.tr_mul(&pa);
+    /// [`Dynamics::back_substitute1`] for `D` coordinates per segment.
+    fn back_substitute_d<const D: usize>(&self, model: &StrandModel, b: &mut [f64]) -> bool {
+        let mut v = Vector6::zeros();
+        for i in 0..model.segments {
             let (u, dinv, _) = &self.articulated[i];
-            let mut c = Matrix3::zeros();
-            for k in 0..D {
-                for r in 0..R {
-                    c[(k, r)] = -s_pa[(k, r)] - b[R * (i * D + k) + r];
-                }
-            }
-            pa += u.fixed_columns::<D>(0) * (dinv.fixed_view::<D, D>(0, 0) * c.fixed_view::<D, R>(0, 0));
-            self.articulated3[i] = c;
-        }
-        let mut v = SMatrix::<f64, 6, R>::zeros();
-        for i in 0..n {
-            let (u, dinv, _) = &self.articulated[i];
-            let x = -(dinv.fixed_view::<D, D>(0, 0) * (u.fixed_columns::<D>(0).tr_mul(&v) + self.articulated3[i].fixed_view::<D, R>(0, 0)));
-            for k in 0..D {
-                for r in 0..R {
-                    b[R * (i * D + k) + r] = x[(k, r)];
-                }
-            }
+            let c = SVector::<f64, D>::from_fn(|k, _| b[i * D + k]);
+            let x = -(dinv.fixed_view::<D, D>(0, 0) * (u.fixed_columns::<D>(0).tr_mul(&v) + c));
+            b[i * D..(i + 1) * D].copy_from_slice(x.as_slice());
             v += self.motion[i].fixed_columns::<D>(0) * x;
         }
-        b[..R * n * D].iter().all(|x| x.is_finite())
+        b[..model.segments * D].iter().all(|x| x.is_finite())
     }
 
-    /// The tip-to-root half of [`Dynamics::resolve_articulated1`] alone, for three right-hand sides, for the quadratic form of `A^-1`: with
+    /// Solves the system of the last [`Dynamics::solve_articulated`] for another right-hand side `b` (dofs) in
+    /// place, reusing its elimination: [`Dynamics::reduce_articulated3`] (first column) then
+    /// [`Dynamics::back_substitute1`], as the constraint solver applies its impulses.
+    #[cfg(test)]
+    pub(crate) fn resolve_articulated1(&mut self, model: &StrandModel, b: &mut [f64]) -> bool {
+        let n = b.len();
+        let mut three = vec![0.0; 3 * n];
+        for (t, x) in three.chunks_exact_mut(3).zip(b.iter()) {
+            t[0] = *x;
+        }
+        let (mut c, mut e) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
+        let ok = self.reduce_articulated3(model, &three, model.segments, &mut c, &mut e);
+        for (x, t) in b.iter_mut().zip(c.chunks_exact(3)) {
+            *x = t[0];
+        }
+        ok && self.back_substitute1(model, b)
+    }
+
+    /// The tip-to-root half of an articulated solve alone (reusing the elimination of the last
+    /// [`Dynamics::solve_articulated`]: its articulated inertias and pivots), for three right-hand sides, for the quadratic form of `A^-1`: with
     /// the elimination `A = L D L^T` of the last [`Dynamics::solve_articulated`] (the pivots `D_Q` of each
     /// segment), the reduced right-hand sides `c = L^-1 b` give `b1^T A^-1 b2 = sum_Q c1_Q^T D_Q^-1 c2_Q`. For
     /// the three right-hand sides `b` (3 x dofs, column-major, only the first `used` segments' columns nonzero,
@@ -821,6 +812,21 @@ mod tests {
                     assert!(err <= 1e-9 * dense.amax().max(1e-300), "{kind:?}: {err} of {}", dense.amax());
                 }
             }
+            // The response to impulses at every point, A^-1 sum_c J_c^T p_c, from the reduced columns summed and
+            // one back-substitution: equal to the dense solve to 1e-9 of its largest entry.
+            let impulses: Vec<Vector3<f64>> = (0..points.len()).map(|c| Vector3::new(1.0 + c as f64, -0.5 * c as f64, 0.3)).collect();
+            let mut summed = vec![0.0; n];
+            let mut load = DVector::zeros(n);
+            for ((j, c, _, span), p) in reduced.iter().zip(&impulses) {
+                for (m, l) in c[..3 * span].chunks_exact(3).enumerate() {
+                    summed[m] += l[0] * p.x + l[1] * p.y + l[2] * p.z;
+                }
+                load += j.transpose() * p;
+            }
+            assert!(dy.back_substitute1(&m, &mut summed));
+            let dense = lu.solve(&load).expect("A is invertible");
+            let err = (DVector::from_vec(summed) - &dense).amax();
+            assert!(err <= 1e-9 * dense.amax(), "{kind:?}: response {err} of {}", dense.amax());
         }
     }
 

@@ -481,10 +481,10 @@ impl ContactFrame {
     /// For a contact along `normal` with the 3 x 3 Delassus block `w` and force mixing `mix`.
     fn new(normal: &Vector3<f64>, w: &Matrix3<f64>, mix: f64) -> Self {
         let (t1, t2) = tangents(normal);
-        let wnn = (normal.dot(&mul3(w, normal)) + mix).max(1e-300);
-        // The tangential block of `w` in the basis (t1, t2): `t_a . w t_b`.
-        let (w1, w2) = (mul3(w, &t1), mul3(w, &t2));
-        let wt2 = nalgebra::Matrix2::new(t1.dot(&w1) + mix, t1.dot(&w2), t2.dot(&w1), t2.dot(&w2) + mix);
+        let wnn = (normal.dot(&(w * normal)) + mix).max(1e-300);
+        let basis = Matrix3::from_columns(&[t1, t2, *normal]);
+        let wt = basis.transpose() * w * basis;
+        let wt2 = nalgebra::Matrix2::new(wt[(0, 0)] + mix, wt[(0, 1)], wt[(1, 0)], wt[(1, 1)] + mix);
         Self { t1, t2, wnn, wt2_inv: wt2.try_inverse().unwrap_or_else(nalgebra::Matrix2::zeros) }
     }
 

@@ -578,16 +578,24 @@ mod tests {
         // and blend back: before, they froze where the comb left them, 4.7 cm in the browser); the force above
         // 5 mN in at least 60 % of the steps with the comb in the hair; no one-step change above 0.1 N.
         let s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-comb.toml")).unwrap();
+        meets_the_comb_acceptance(&s, 500);
+    }
+
+    /// Runs the [live] comb scenario `s` and asserts issue 12's acceptance bounds (see
+    /// `live_comb_stroke_meets_the_acceptance`), the comb in the hair for more than `in_hair` steps; returns the
+    /// metrics.
+    fn meets_the_comb_acceptance(s: &LiveScenario, in_hair: usize) -> LiveSummary {
         let (trace, m) = s.run().unwrap();
         eprintln!("{m:?}");
         assert_eq!(trace.len(), (s.run_time() / 1e-3).round() as usize);
         assert_eq!((m.rejected_readings, m.failed_steps), (0, 0));
         assert_eq!(m.clamp_steps, 0, "steps at the device's clamp");
-        assert!(m.in_hair_steps > 500, "the comb must go through the hair: {} steps in it", m.in_hair_steps);
+        assert!(m.in_hair_steps > in_hair, "the comb must go through the hair: {} steps in it", m.in_hair_steps);
         assert!(m.stroke_max_displacement_m <= 0.08, "stroke displacement {} m", m.stroke_max_displacement_m);
         assert!(m.final_max_displacement_m <= 0.03, "displacement 1.2 s after the stroke {} m", m.final_max_displacement_m);
         assert!(m.in_hair_force_share >= 0.6, "share of in-hair steps above 5 mN {}", m.in_hair_force_share);
         assert!(m.max_force_change_n <= 0.1, "largest one-step change {} N", m.max_force_change_n);
+        m
     }
 
     #[test]
@@ -602,16 +610,7 @@ mod tests {
         // neighbours that hold it (`haptic::strands::contact_options`). Also asserted: the strands' tips stay
         // below 1 m/s (a comb at 0.15-0.3 m/s; 1.78 m/s before).
         let s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-comb-updown.toml")).unwrap();
-        let (trace, m) = s.run().unwrap();
-        eprintln!("{m:?}");
-        assert_eq!(trace.len(), (s.run_time() / 1e-3).round() as usize);
-        assert_eq!((m.rejected_readings, m.failed_steps), (0, 0));
-        assert_eq!(m.clamp_steps, 0, "steps at the device's clamp");
-        assert!(m.in_hair_steps > 4000, "the comb must go through the hair: {} steps in it", m.in_hair_steps);
-        assert!(m.stroke_max_displacement_m <= 0.08, "stroke displacement {} m", m.stroke_max_displacement_m);
-        assert!(m.final_max_displacement_m <= 0.03, "displacement 1.2 s after the strokes {} m", m.final_max_displacement_m);
-        assert!(m.in_hair_force_share >= 0.6, "share of in-hair steps above 5 mN {}", m.in_hair_force_share);
-        assert!(m.max_force_change_n <= 0.1, "largest one-step change {} N", m.max_force_change_n);
+        let m = meets_the_comb_acceptance(&s, 4000);
         assert!(m.max_strand_speed_m_s < 1.0, "fastest strand tip {} m/s", m.max_strand_speed_m_s);
     }
 

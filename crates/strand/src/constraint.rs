@@ -327,10 +327,17 @@ impl Strand {
             for d in c..n {
                 let common = 3 * rows.span[c].min(rows.span[d]);
                 let dlc = &rows.pivoted[d * size..d * size + common];
-                let mut block = Matrix3::zeros();
+                // The outer products summed entry by entry (the same sums in the same order as nalgebra's
+                // `block += a * b^T`, without its generic loops).
+                let mut b = [[0.0f64; 3]; 3];
                 for (jm, ym) in lc[..common].chunks_exact(3).zip(dlc.chunks_exact(3)) {
-                    block += Vector3::new(jm[0], jm[1], jm[2]) * nalgebra::RowVector3::new(ym[0], ym[1], ym[2]);
+                    for (row, &j) in b.iter_mut().zip(jm) {
+                        row[0] += j * ym[0];
+                        row[1] += j * ym[1];
+                        row[2] += j * ym[2];
+                    }
                 }
+                let block = Matrix3::new(b[0][0], b[0][1], b[0][2], b[1][0], b[1][1], b[1][2], b[2][0], b[2][1], b[2][2]);
                 rows.w[c * n + d] = block;
                 rows.w[d * n + c] = block.transpose();
             }

@@ -77,9 +77,8 @@ pub struct HapticCore {
     /// The shown guides' reference samples mapped through the lattice, kept between snapshots
     /// ([`HapticCore::snapshot`] takes `&self`, hence the cell; the core lives on one thread).
     pub(crate) references: std::cell::RefCell<reference::ReferenceCache>,
-    /// The next snapshot's staged displacements ([`HapticCore::stage_snapshot`]): per guide, the step they
-    /// were mapped at and its samples' displacements, m.
-    pub(crate) staged: std::cell::RefCell<Vec<(usize, u64, Vec<Vector3<f64>>)>>,
+    /// The next snapshot's staged displacements ([`HapticCore::stage_snapshot`]), one per shown guide.
+    pub(crate) staged: std::cell::RefCell<Vec<Staged>>,
     /// The choice of the active set in progress, if any (spread over steps).
     pub(crate) choice: Option<active::Choice>,
     /// Each guide's settled shape bounded for the choice's scan (fixed, from the scene).
@@ -119,6 +118,17 @@ pub struct HapticCore {
     pub failed: u64,
     /// Wall-clock time of the last step's stages.
     pub(crate) timings: StepPhases,
+}
+
+/// One simulated guide's displacements staged for the next snapshot ([`HapticCore::stage_snapshot`]).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Staged {
+    /// The guide.
+    pub guide: usize,
+    /// The haptic step they were mapped at.
+    pub step: u64,
+    /// Its samples' shown displacements, m.
+    pub displacement: Vec<Vector3<f64>>,
 }
 
 /// Wall-clock time of the stages of one [`HapticCore::step`] (the numbered stages of the module
@@ -356,17 +366,17 @@ impl HapticCore {
         let mut staged = self.staged.borrow_mut();
         for slot in (share..self.active.len()).step_by(every as usize) {
             let g = self.active[slot];
-            let i = match staged.iter().position(|e| e.0 == g) {
+            let i = match staged.iter().position(|e| e.guide == g) {
                 Some(i) => i,
                 None => {
-                    staged.push((g, 0, Vec::new()));
+                    staged.push(Staged { guide: g, step: 0, displacement: Vec::new() });
                     staged.len() - 1
                 }
             };
             let e = &mut staged[i];
-            e.1 = self.step;
-            e.2.clear();
-            self.displacement_into(slot, g, &mut cache, ok, &mut e.2);
+            e.step = self.step;
+            e.displacement.clear();
+            self.displacement_into(slot, g, &mut cache, ok, &mut e.displacement);
         }
     }
 
@@ -410,8 +420,8 @@ impl HapticCore {
         let mut staged = self.staged.borrow_mut();
         for (slot, &g) in self.active.iter().enumerate() {
             out.active.push(g as u32);
-            match staged.iter().find(|e| e.0 == g && e.1 + every > self.step) {
-                Some(e) => out.displacement.extend_from_slice(&e.2),
+            match staged.iter().find(|e| e.guide == g && e.step + every > self.step) {
+                Some(e) => out.displacement.extend_from_slice(&e.displacement),
                 None => self.displacement_into(slot, g, &mut cache, ok, &mut out.displacement),
             }
         }
@@ -424,7 +434,7 @@ impl HapticCore {
             }
         }
         cache.keep_only(&out.active);
-        staged.retain(|e| self.active.contains(&e.0));
+        staged.retain(|e| self.active.contains(&e.guide));
     }
 
     /// Tool contacts of the last step.

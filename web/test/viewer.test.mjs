@@ -238,6 +238,8 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     // AMD's TressFX sample hairstyle from ../shared/data (not in the repository): 2,228 strands, y up, metres.
     const file = join(repoDir, '..', 'shared', 'data', 'tressfx', 'Ratboy_mohawk.tfx');
     const buf = readFileSync(file);
+    // Forget the previous load's FIT, so that the wait below sees this file's (CI once read the earlier file's +z).
+    await page.evaluate(() => { window.coiffure.fit = null; });
     await page.setInputFiles('#load', { name: 'Ratboy_mohawk.tfx', mimeType: 'application/octet-stream', buffer: buf });
     await page.waitForFunction(() => window.coiffure.strands === 2228 && window.coiffure.fit !== null, null, { timeout: 120_000 });
     const fit = await page.evaluate(() => window.coiffure.fit);

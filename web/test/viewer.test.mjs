@@ -173,21 +173,21 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     console.log('dryer blast: lattice motion relative to the head (m)', { rest, during, after });
     assert.ok(during > rest + 0.005, `the jet moves the hairstyle: ${during} m (before ${rest} m)`);
     assert.ok(after < 0.5 * during, `it falls back: ${after} m after, ${during} m during`);
-    // Head turn of 30 degrees (key H's drag sends the same HEAD message), then back.
+    // Head turn of 30 degrees (key H's drag sends the same HEAD message), then back. The swing's peak is tracked
+    // on a 10 ms timer started before the HEAD message and kept 1.2 s after the head has turned: the swing decays
+    // with a time constant of about 0.45 s, and in software rendering a frame (and so a rAF-polled wait) can take
+    // longer than that, so a window opened only once the wait has seen the turned head read 7 mm of a swing that
+    // peaks at centimetres (CI, 2026-11-27).
+    await page.evaluate(() => {
+      const w = window;
+      w.swingPeak = 0;
+      w.swingTimer = setInterval(() => { w.swingPeak = Math.max(w.swingPeak, w.coiffure.latticeMotion()); }, 10);
+    });
     await page.evaluate(() => window.coiffure.setHead(0.5236, 0));
-    await page.waitForFunction(() => Math.abs(window.coiffure.headQuaternion[2] - Math.sin(0.2618)) < 1e-3, null, { timeout: 10_000 });
-    // The swing's peak, read at every animation frame for 0.8 s (four reads 100 ms apart once caught 22 mm of a
-    // swing that peaks higher, against 11 mm settled), then a picture.
-    const swing = await page.evaluate(() => new Promise((resolve) => {
-      const until = performance.now() + 800;
-      let peak = 0;
-      const look = () => {
-        peak = Math.max(peak, window.coiffure.latticeMotion());
-        if (performance.now() < until) requestAnimationFrame(look); else resolve(peak);
-      };
-      look();
-    }));
+    await page.waitForFunction(() => Math.abs(window.coiffure.headQuaternion[2] - Math.sin(0.2618)) < 1e-3, null, { timeout: 10_000, polling: 10 });
     await page.screenshot({ path: join(artifacts, 'head-turn-during.png') });
+    await page.waitForTimeout(1200);
+    const swing = await page.evaluate(() => { clearInterval(window.swingTimer); return window.swingPeak; });
     await page.waitForTimeout(2000);
     const settled = await motion();
     await page.screenshot({ path: join(artifacts, 'head-turn-after.png') });

@@ -5,6 +5,7 @@ import { CAMERA_VIEWS, DEFAULT_VIEW, View } from './scene';
 import { ForcePlot } from './plot';
 import { MouseDevice, TOOL_NAMES, toolModel, toolQuaternion } from './tools';
 import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS } from './hairColor';
+import { skinUnderHair } from './person';
 
 /** State exposed for the end-to-end tests and for curious users (window.coiffure). */
 interface Status {
@@ -529,4 +530,11 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
   },
   view,
   personInfo: () => view.person && { maxOutset: view.person.info.maxOutset, maxProjectionError: view.person.info.maxProjectionError },
+  /** The displayed skin under the hair: for the strands' rest vertices within `within` (m) of the collision
+   * surface, the sculpt's largest outset and inset there (person.ts `skinUnderHair`). */
+  skinUnderHair(within: number) {
+    const p = view.person, g = view.hairMesh?.geometry;
+    if (!p || !g) return null;
+    return skinUnderHair(p.metaballs, p.metaballThreshold, g.getAttribute('rest').array as Float32Array, within);
+  },
 };

@@ -66,13 +66,20 @@ describe('the look (3k render strands, small canvas)', () => {
   });
   after(async () => { await browser?.close(); if (server) console.log(await stopServer(server)); });
 
-  test('the person: the sculpted face and ears stand out of the collision surface by at most 9 mm', async () => {
+  test('the person: the sculpted face stands out of the collision surface by at most 9 mm, the skin under the hair by at most 3 mm', async () => {
     const info = await page.evaluate(() => window.coiffureDebug.personInfo());
     console.log('person', info);
     // The refined body mesh lies on the metaball surface the hair collides with (Newton projection).
     assert.ok(info.maxProjectionError < 1e-5, `refined mesh off the surface by ${info.maxProjectionError} m`);
     // Nose tip and ears rise above it (there is a face), but by no more than PERSON_MAX_OUTSET.
     assert.ok(info.maxOutset > 0.004 && info.maxOutset <= 0.009, `largest outset ${info.maxOutset} m`);
+    // Where the hair lies on the body (strand vertices within 4 mm of the collision surface at rest), the skin
+    // drawn under it is that surface within 3 mm: the hair neither sinks into the skin nor floats above it visibly.
+    const under = await page.evaluate(() => window.coiffureDebug.skinUnderHair(0.004));
+    console.log('skin under the hair', under);
+    assert.ok(under.near > 0.01 * under.points, `only ${under.near} of ${under.points} hair vertices lie on the body`);
+    assert.ok(under.maxOutset <= 0.003, `the skin stands ${under.maxOutset} m out of the surface the hair rests on`);
+    assert.ok(under.maxInset <= 0.003, `the skin is carved ${under.maxInset} m under the hair resting on the surface`);
     await render('look-face', { camera: [0.33, 0.45, 0.02], target: [0, 0.02, -0.04], light: [0.5, 0.6, 0.6], hideHair: true });
   });
 

@@ -438,9 +438,10 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     return { hairFraction: changed / n, nonBackground: nonBg / n, pixels: n };
   },
   /** Renders the scene without the tool with a colour preset, every strand at `wetness`, the key light towards `light` and the
-   * debug view (0 shaded, 1 deep-opacity transmittance, 2 highlight only); returns the RGBA pixels (base64)
+   * debug view (0 shaded, 1 deep-opacity transmittance, 2 highlight only), `clumpStrength` overriding the wet
+   * clumping's (HairLookParams); returns the RGBA pixels (base64)
    * and a PNG data URL. Restores the live state afterwards (no server message is handled in between). */
-  look(o: { colour?: string; wetness?: number; light?: [number, number, number]; view?: number; camera?: [number, number, number]; target?: [number, number, number]; hideHair?: boolean; lines?: number }) {
+  look(o: { colour?: string; wetness?: number; light?: [number, number, number]; view?: number; camera?: [number, number, number]; target?: [number, number, number]; hideHair?: boolean; lines?: number; clumpStrength?: number }) {
     const hair = view.hair!;
     const u = hair.material.uniforms;
     const oldColour = status.hairColour;
@@ -448,6 +449,8 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     const oldCam = view.camera.position.clone(), oldTarget = view.controls.target.clone();
     if (o.colour) setColour(o.colour);
     u.wetnessOverride.value = o.wetness ?? -1;
+    const oldClump = u.clumpStrength.value;
+    if (o.clumpStrength !== undefined) u.clumpStrength.value = o.clumpStrength;
     if (o.light) view.setLight(new THREE.Vector3(...o.light));
     u.debugView.value = o.view ?? 0;
     if (o.camera) view.camera.position.set(...o.camera);
@@ -469,6 +472,7 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     if (view.hairMesh) view.hairMesh.visible = true;
     [toolGroup.visible, arrow.visible, ghost.visible] = toolsShown;
     u.wetnessOverride.value = -1;
+    u.clumpStrength.value = oldClump;
     u.debugView.value = 0;
     view.setLight(oldLight);
     setColour(oldColour);

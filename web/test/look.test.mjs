@@ -133,6 +133,7 @@ describe('the look (3k render strands, small canvas)', () => {
           const img = await render(name, { ...camera, light, colour, wetness });
           times.push(img.ms);
           if (name === 'look-brown-dry-side') kept.shaded = img;
+          if (name === 'look-brown-wet-side') kept.shadedWet = img;
           const mask = hairMask(img, bare);
           const l = mask.map((i) => lum(img.px, i));
           stats[name] = {
@@ -160,6 +161,15 @@ describe('the look (3k render strands, small canvas)', () => {
         assert.ok(s(c, 'wet').median < 0.85 * s(c, 'dry').median, `${ln} ${c}: wet ${s(c, 'wet').median} vs dry ${s(c, 'dry').median}`);
       }
     }
+    // Wet strands clump (Gupta and Magnenat-Thalmann 2007): soaked, the hair with its clumping covers fewer
+    // pixels than the same wet hair without (gaps open between the clumps).
+    {
+      const light = LIGHTS.back, bare = await render(null, { ...camera, light, hideHair: true });
+      const loose = await render('look-brown-wet-unclumped-back', { ...camera, light, colour: 'brown', wetness: 1, clumpStrength: 0 });
+      const clumped = stats['look-brown-wet-back'].hairPixels, unclumped = hairMask(loose, bare).length;
+      console.log('clumping', { clumped, unclumped });
+      assert.ok(clumped < 0.95 * unclumped, `wet hair covers ${clumped} pixels clumped, ${unclumped} without clumping`);
+    }
     // The two lights give different pictures.
     assert.notDeepEqual(stats['look-brown-dry-back'], stats['look-brown-dry-side']);
   });
@@ -179,6 +189,14 @@ describe('the look (3k render strands, small canvas)', () => {
     console.log('highlight', { median, band: band.length, bandMean, cut });
     assert.ok(band.length > 0.02 * mask.length, `highlight pixels ${band.length} of ${mask.length}`);
     assert.ok(bandMean > 1.3 * median, `highlight band ${bandMean} vs hair median ${median}`);
+    // Wet: the water film's narrow Gaussian lobe peaks above the dry cuticle's R lobe (Gupta and
+    // Magnenat-Thalmann 2007): the brightest hundredth of the wet hair's highlight-only view is brighter.
+    const shadedWet = kept.shadedWet ?? await render(null, { ...camera, light, colour: 'brown', wetness: 1 });
+    const maskWet = hairMask(shadedWet, bare);
+    const hlWet = await render('look-highlight-only-wet', { ...camera, light, colour: 'brown', wetness: 1, view: 2 });
+    const peakDry = quantile(hlL, 0.99), peakWet = quantile(maskWet.map((i) => lum(hlWet.px, i)), 0.99);
+    console.log('wet highlight', { peakDry, peakWet, wetHairPixels: maskWet.length, dryHairPixels: mask.length });
+    assert.ok(peakWet > 1.2 * peakDry, `wet highlight ${peakWet} vs dry ${peakDry}`);
     // Direct transmittance exp(-n) from the deep opacity maps: shadowed hair is darker than lit hair.
     const dom = await render('look-shadow-map', { ...camera, light, colour: 'brown', view: 1 });
     const t = (i) => dom.px[4 * i] / 255;

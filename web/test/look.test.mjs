@@ -270,6 +270,17 @@ describe('the look (3k render strands, small canvas)', () => {
     assert.ok(Math.max(...diffs) <= 2 * quantile(diffs, 0.5), `orbit steps' pixel differences ${diffs}`);
   });
 
+  test('the hair is one draw call drawing every strand per line (and one for each shadow pass)', async () => {
+    // Strands wider than a pixel (here 33 hairs a render strand, close) add one call per parallel line.
+    await page.waitForFunction((n) => window.coiffure.framesRendered > n, await page.evaluate(() => window.coiffure.framesRendered));
+    const s = await page.evaluate(() => ({ calls: window.coiffure.hairDrawCalls, segments: window.coiffure.hairSegmentsPerCall, strands: window.coiffure.strands, lines: window.coiffureDebug.view.lineCount }));
+    const r = await page.evaluate(() => window.coiffureDebug.hairRest());
+    console.log('hair draw calls', s);
+    assert.ok(s.lines >= 1 && s.lines <= 4, `${s.lines} lines`);
+    assert.equal(s.calls, s.lines + 2, `lit strands (${s.lines} lines), shadow depth, shadow opacity`);
+    assert.equal(s.segments, s.strands * (r.verticesPerStrand - 1), 'the lit call draws every segment of every strand');
+  });
+
   test('frame and GPU times are reported in window.coiffure and the status panel', async () => {
     await page.waitForFunction(() => window.coiffure.frameTimes.length > 3);
     const s = await page.evaluate(() => ({ gpuTimer: window.coiffure.gpuTimer, gpu: window.coiffure.gpuFrameMs, perf: document.getElementById('perf').textContent }));

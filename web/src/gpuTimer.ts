@@ -1,5 +1,5 @@
-// GPU time of a frame from EXT_disjoint_timer_query_webgl2 where the browser exposes it (null elsewhere,
-// e.g. SwiftShader). Queries are read back a few frames later, never stalling the pipeline.
+// GPU time of a frame from EXT_disjoint_timer_query_webgl2 where the browser exposes it (Chromium with a GPU,
+// and SwiftShader too; null elsewhere). Queries are read back a few frames later, never stalling the pipeline.
 export class GpuTimer {
   private readonly ext: { TIME_ELAPSED_EXT: number; GPU_DISJOINT_EXT: number } | null;
   private readonly pending: WebGLQuery[] = [];

@@ -5,6 +5,7 @@ import { CAMERA_VIEWS, DEFAULT_VIEW, View } from './scene';
 import { ForcePlot } from './plot';
 import { MouseDevice, TOOL_NAMES, toolModel, toolQuaternion } from './tools';
 import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS } from './hairColor';
+import { skinUnderHair } from './person';
 
 /** State exposed for the end-to-end tests and for curious users (window.coiffure). */
 interface Status {
@@ -30,6 +31,8 @@ interface Status {
   frameTimes: number[];
   gpuFrameMs: number | null; // GPU time of the last measured frame (EXT_disjoint_timer_query_webgl2), null if unavailable
   gpuTimer: boolean; // the timer query extension exists
+  hairDrawCalls: number; // draw calls of the strands in the last frame (lit lines and the two shadow passes; 3 at one line, any strand count)
+  hairSegmentsPerCall: number; // strand segments the lit draw call drew in the last frame (all strands')
   hairColour: string;
   strands: number;
   /** The SCENE's hair types with their fibre sections (major-axis diameter, m; ellipticity). */
@@ -66,7 +69,7 @@ const status: Status = {
   webgl2: view.renderer.getContext() instanceof WebGL2RenderingContext,
   connected: false, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
   runaways: 0, lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], frameTimes: [], strands: 0,
-  gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairColour: DEFAULT_HAIR_COLOUR,
+  gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairDrawCalls: 0, hairSegmentsPerCall: 0, hairColour: DEFAULT_HAIR_COLOUR,
   hairTypes: [], strandWidth: () => ({ width: view.hair?.material.uniforms.strandWidth.value ?? 0, fibreWidth: view.hair?.fibreWidth ?? 0, hairsPerStrand: view.hair?.hairsPerStrand ?? 0 }),
   lastFile: null,
   fit: null,
@@ -396,6 +399,8 @@ function frame(now: number): void {
   last = now;
   sendPose();
   view.render();
+  status.hairDrawCalls = view.hairDrawCalls;
+  status.hairSegmentsPerCall = view.hairSegmentsPerCall;
   plot.draw();
   if (status.sceneLoaded) status.framesRendered++;
   requestAnimationFrame(frame);
@@ -437,9 +442,10 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     return { hairFraction: changed / n, nonBackground: nonBg / n, pixels: n };
   },
   /** Renders the scene without the tool with a colour preset, every strand at `wetness`, the key light towards `light` and the
-   * debug view (0 shaded, 1 deep-opacity transmittance, 2 highlight only); returns the RGBA pixels (base64)
+   * debug view (0 shaded, 1 deep-opacity transmittance, 2 highlight only), `clumpStrength` overriding the wet
+   * clumping's (HairLookParams); returns the RGBA pixels (base64)
    * and a PNG data URL. Restores the live state afterwards (no server message is handled in between). */
-  look(o: { colour?: string; wetness?: number; light?: [number, number, number]; view?: number; camera?: [number, number, number]; target?: [number, number, number]; hideHair?: boolean; lines?: number }) {
+  look(o: { colour?: string; wetness?: number; light?: [number, number, number]; view?: number; camera?: [number, number, number]; target?: [number, number, number]; hideHair?: boolean; lines?: number; clumpStrength?: number }) {
     const hair = view.hair!;
     const u = hair.material.uniforms;
     const oldColour = status.hairColour;
@@ -447,6 +453,8 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     const oldCam = view.camera.position.clone(), oldTarget = view.controls.target.clone();
     if (o.colour) setColour(o.colour);
     u.wetnessOverride.value = o.wetness ?? -1;
+    const oldClump = u.clumpStrength.value;
+    if (o.clumpStrength !== undefined) u.clumpStrength.value = o.clumpStrength;
     if (o.light) view.setLight(new THREE.Vector3(...o.light));
     u.debugView.value = o.view ?? 0;
     if (o.camera) view.camera.position.set(...o.camera);
@@ -468,6 +476,7 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
     if (view.hairMesh) view.hairMesh.visible = true;
     [toolGroup.visible, arrow.visible, ghost.visible] = toolsShown;
     u.wetnessOverride.value = -1;
+    u.clumpStrength.value = oldClump;
     u.debugView.value = 0;
     view.setLight(oldLight);
     setColour(oldColour);
@@ -529,4 +538,11 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
   },
   view,
   personInfo: () => view.person && { maxOutset: view.person.info.maxOutset, maxProjectionError: view.person.info.maxProjectionError },
+  /** The displayed skin under the hair: for the strands' rest vertices within `within` (m) of the collision
+   * surface, the sculpt's largest outset and inset there (person.ts `skinUnderHair`). */
+  skinUnderHair(within: number) {
+    const p = view.person, g = view.hairMesh?.geometry;
+    if (!p || !g) return null;
+    return skinUnderHair(p.metaballs, p.metaballThreshold, g.getAttribute('rest').array as Float32Array, within);
+  },
 };

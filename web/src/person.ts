@@ -2,9 +2,9 @@
 // refined twice (3 mm edges), put back on the metaball iso-surface, then sculpted into a face (eye sockets,
 // brows, nose, lips, chin, cheekbones) and ears by displacements along the normal, with eyeballs, painted
 // lips, brows and a shirt. The sculpt carves the face into the collision surface (the face region sinks by
-// 7 mm, the nose rises from it), so only the nose tip and the ears stand out, by at most
-// PERSON_MAX_OUTSET (m) beyond the surface the hair rests on; hair can float over a carved region but not
-// sink into the skin by more than that.
+// 7 mm, the nose rises from it), so only the nose tip stands out by more than a few millimetres, by at most
+// PERSON_MAX_OUTSET (m) beyond the surface the hair rests on, in the face the hair leaves free; the ears, under
+// the hair, stand out by at most EAR_MAX_OUTSET, so the hair resting on the surface does not sink into them.
 import * as THREE from 'three';
 import type { SceneMsg } from './protocol';
 import { skinFragmentBody, skinVertex } from './shaders/skin.glsl';
@@ -12,7 +12,7 @@ import { domLookupGLSL } from './shaders/deepOpacity.glsl';
 import { displayGLSL } from './shaders/display.glsl';
 import type { DeepOpacityMaps } from './deepOpacityMaps';
 
-/** Largest outward displacement of the sculpt beyond the collision surface, m (checked in person.test). */
+/** Largest outward displacement of the sculpt beyond the collision surface, m (checked in web/test/look.test.mjs). */
 export const PERSON_MAX_OUTSET = 0.009;
 
 /** The metaball field F and its gradient (the SCENE's balls: F = sum (1 - |x - c|^2 / R^2)^2 inside each). */
@@ -63,18 +63,24 @@ function bumps(list: Bump[], x: number, y: number, z: number): number {
 }
 
 const EAR = { y: -0.008, z: -0.024, halfWidth: 0.016, halfHeight: 0.029 };
-/** Relief of the ears (m, outwards) on the sides of the head. */
+/** Largest outward relief of the ears (m): the hair hangs over them and rests on the collision surface, so an
+ * ear standing out further would show through the hair (the look test bounds the skin under the hair to 3 mm). */
+export const EAR_MAX_OUTSET = 0.003;
+/** Relief of the ears (m, outwards) on the sides of the head: a groove round the root sinks the head's side so
+ * that the rim (helix), at most EAR_MAX_OUTSET out of the collision surface, stands about 5 mm above its
+ * surround; the concha is carved, the lobe raised. */
 function ears(x: number, y: number, z: number): number {
   if (Math.abs(x) < 0.055) return 0;
   const v = (y - EAR.y) / EAR.halfWidth, w = (z - EAR.z) / EAR.halfHeight;
   const rho = Math.hypot(v, w);
-  if (rho > 1.4) return 0;
+  if (rho > 1.6) return 0;
   const back = 0.6 + 0.4 * THREE.MathUtils.smoothstep(-v, -0.4, 0.6); // the helix stands out more at the back
-  const plateau = 0.0035 * (1 - THREE.MathUtils.smoothstep(rho, 0.85, 1.05));
-  const rim = 0.0045 * back * Math.exp(-(((rho - 0.86) / 0.13) ** 2));
-  const concha = -0.0045 * Math.exp(-((v - 0.15) ** 2 + (w + 0.05) ** 2) / 0.16);
-  const lobe = 0.0015 * Math.exp(-((v + 0.05) ** 2 / 0.2 + (w + 0.85) ** 2 / 0.05));
-  return plateau + rim + concha + lobe;
+  const groove = -0.0022 * Math.exp(-(((rho - 1.12) / 0.14) ** 2));
+  const plateau = 0.0008 * (1 - THREE.MathUtils.smoothstep(rho, 0.85, 1.05));
+  const rim = 0.0019 * back * Math.exp(-(((rho - 0.86) / 0.11) ** 2));
+  const concha = -0.0035 * Math.exp(-((v - 0.15) ** 2 + (w + 0.05) ** 2) / 0.16);
+  const lobe = 0.0006 * Math.exp(-((v + 0.05) ** 2 / 0.2 + (w + 0.85) ** 2 / 0.05));
+  return groove + plateau + rim + concha + lobe;
 }
 
 /** Outward displacement of the body surface at a surface point (m). */
@@ -154,6 +160,39 @@ function project(balls: Float32Array, T: number, p: number[], i: number): V3 {
   return [-g[1] / gn, -g[2] / gn, -g[3] / gn];
 }
 
+/** How the displayed skin sits under the hair: the hair rests on the metaball surface (the physics' body), the
+ * skin is that surface moved by `sculpt` along the normal. */
+export interface SkinUnderHair {
+  /** Points (hair vertices) within `within` of the collision surface: the hair lying on the body. */
+  near: number;
+  /** Points tested. */
+  points: number;
+  /** Largest outward displacement of the skin under those points (m): hair sinks into the skin by this much. */
+  maxOutset: number;
+  /** Largest inward displacement (m, positive): hair floats above the skin by this much more than on the surface. */
+  maxInset: number;
+}
+
+/** For every point (head frame, m; 3 floats each) whose distance to the collision surface F = T is below
+ * `within` (m, first-order |F - T| / |grad F|, either side), the sculpt at its projection onto the surface:
+ * how far the displayed skin is from the surface the hair rests on there. */
+export function skinUnderHair(balls: Float32Array, T: number, points: Float32Array, within: number): SkinUnderHair {
+  let near = 0, maxOutset = 0, maxInset = 0;
+  const p = [0, 0, 0];
+  for (let i = 0; i < points.length / 3; i++) {
+    const [f, gx, gy, gz] = metaballField(balls, points[3 * i], points[3 * i + 1], points[3 * i + 2]);
+    const gn = Math.hypot(gx, gy, gz);
+    if (gn < 1e-9 || Math.abs(f - T) / gn > within) continue;
+    p[0] = points[3 * i]; p[1] = points[3 * i + 1]; p[2] = points[3 * i + 2];
+    project(balls, T, p, 0);
+    const d = sculpt(p[0], p[1], p[2]);
+    near++;
+    maxOutset = Math.max(maxOutset, d);
+    maxInset = Math.max(maxInset, -d);
+  }
+  return { near, points: points.length / 3, maxOutset, maxInset };
+}
+
 export interface PersonGeometry {
   geometry: THREE.BufferGeometry;
   /** Largest outward displacement beyond the collision surface, m. */
@@ -230,9 +269,14 @@ export class Person {
   readonly info: PersonGeometry;
   readonly opacityBody: THREE.Mesh;
   readonly depthBody: THREE.Mesh;
+  /** The SCENE's metaballs (head frame; cx, cy, cz, R in m) and iso-value: the surface the hair rests on. */
+  readonly metaballs: Float32Array;
+  readonly metaballThreshold: number;
 
   constructor(msg: SceneMsg, dom: DeepOpacityMaps, shared: Record<string, THREE.IUniform>) {
     this.info = personGeometry(msg);
+    this.metaballs = msg.metaballs;
+    this.metaballThreshold = msg.metaballThreshold;
     this.material = new THREE.ShaderMaterial({
       vertexShader: skinVertex,
       fragmentShader: `precision highp float;\n${domLookupGLSL}\n${displayGLSL}\n${skinFragmentBody}`,

@@ -45,6 +45,15 @@ export class View {
   lineCount = 1;
   /** Forces the line count (tests, benchmarks); null: chosen per frame. */
   forceLines: number | null = null;
+  /** Draw calls of the strands in the last frame (lit lines and both deep-opacity passes), each drawing every
+   * strand: 3 at one line per strand, whatever the number of strands. */
+  hairDrawCalls = 0;
+  /** Strand segments one lit draw call drew in the last frame (every strand's: the index range of the hair). */
+  hairSegmentsPerCall = 0;
+  private readonly countHairDraw = (_r: THREE.WebGLRenderer, _s: THREE.Scene, _c: THREE.Camera, g: THREE.BufferGeometry): void => {
+    this.hairDrawCalls++;
+    if (g === this.hairMesh?.geometry) this.hairSegmentsPerCall = Math.min(g.drawRange.count, g.index ? g.index.count : Infinity) / 2;
+  };
   readonly compositor: HairCompositor;
   /** Holds every strand at rest with room to move (head frame, m): the front of the hair for the compositing's
    * depth weight. */
@@ -201,10 +210,12 @@ export class View {
     const material = this.hair.material;
     const lineDraw = (i: number) => () => { material.uniforms.lineIndex.value = i; material.uniformsNeedUpdate = true; };
     this.hairMesh.onBeforeRender = lineDraw(0);
+    this.hairMesh.onAfterRender = this.countHairDraw;
     for (let i = 1; i < this.hair.params.maxLines; i++) {
       const l = new THREE.LineSegments(g, material);
       l.frustumCulled = false;
       l.onBeforeRender = lineDraw(i);
+      l.onAfterRender = this.countHairDraw;
       l.visible = false;
       this.hairLines.push(l);
       this.hairScene.add(l);
@@ -219,6 +230,7 @@ export class View {
     for (const [m, s] of [[this.hair.depthMaterial, this.dom.depthScene], [this.hair.opacityMaterial, this.dom.opacityScene]] as const) {
       const l = new THREE.LineSegments(this.shadowHair, m);
       l.frustumCulled = false;
+      l.onAfterRender = this.countHairDraw;
       s.add(l);
     }
   }
@@ -251,6 +263,7 @@ export class View {
     this.controls.update();
     this.lighting.cameraPos.value.copy(this.camera.position);
     this.gpuTimer.begin();
+    this.hairDrawCalls = 0;
     if (this.hair) {
       this.dom.update(this.renderer, this.lighting.lightDirection.value);
     }

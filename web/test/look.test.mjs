@@ -37,6 +37,44 @@ function faceBox(eye, target, points) {
  * perimeter / pi (Cauchy), the perimeter by Ramanujan's formula. */
 const meanWidth = (d, e) => { const a = d / 2, b = d / (2 * e); return 3 * (a + b) - Math.sqrt((3 * a + b) * (a + 3 * b)); };
 
+/** The ink law (pixels): for strands at rest positions `pos` (head frame, m; `nv` vertices a strand) seen from
+ * `eye` towards `target` (z up) with a vertical field of view `fov` (deg) on a drawing buffer `H` pixels high,
+ * the sum over strand segments of (w f / z) L_px (w the strand width, m; f = (H / 2) / tan(fov / 2) the focal
+ * length in pixels; z the segment's view depth; L_px its length on screen); also the largest and smallest
+ * extent of a strand across its major axis (px; the coverage of its fragments on one line). */
+function inkLaw(pos, strands, nv, eye, target, width, H, fov) {
+  const f = (H / 2) / Math.tan((fov / 2) * Math.PI / 180);
+  const sub = (a, c) => a.map((x, i) => x - c[i]);
+  const dot = (a, c) => a.reduce((s, x, i) => s + x * c[i], 0);
+  const cross = (a, c) => [a[1] * c[2] - a[2] * c[1], a[2] * c[0] - a[0] * c[2], a[0] * c[1] - a[1] * c[0]];
+  const unit = (a) => a.map((x) => x / Math.hypot(...a));
+  const fw = unit(sub(target, eye)), rt = unit(cross(fw, [0, 0, 1])), up = cross(rt, fw);
+  const project = (k) => {
+    const p = [pos[3 * k], pos[3 * k + 1], pos[3 * k + 2]];
+    const q = sub(p, eye), z = dot(q, fw);
+    return [f * dot(q, rt) / z, f * dot(q, up) / z, z];
+  };
+  let ink = 0, maxCov = 0, minCov = Infinity;
+  for (let s = 0; s < strands; s++) {
+    let a = project(s * nv);
+    for (let i = 1; i < nv; i++) {
+      const c = project(s * nv + i);
+      const dx = c[0] - a[0], dy = c[1] - a[1], len = Math.hypot(dx, dy);
+      const W = width * f / (0.5 * (a[2] + c[2]));
+      ink += W * len;
+      if (len > 0) {
+        const cov = W * len / Math.max(Math.abs(dx), Math.abs(dy));
+        maxCov = Math.max(maxCov, cov); minCov = Math.min(minCov, cov);
+      }
+      a = c;
+    }
+  }
+  return { ink, maxCov, minCov };
+}
+
+/** The strands' rest positions (Float32Array, head frame, m) from coiffureDebug.hairRest(). */
+const restPositions = (r) => { const b = Buffer.from(r.rest, 'base64'); return new Float32Array(b.buffer, b.byteOffset, b.byteLength / 4); };
+
 describe('the look (3k render strands, small canvas)', () => {
   let server, browser, page;
   const render = async (name, o) => {
@@ -66,13 +104,20 @@ describe('the look (3k render strands, small canvas)', () => {
   });
   after(async () => { await browser?.close(); if (server) console.log(await stopServer(server)); });
 
-  test('the person: the sculpted face and ears stand out of the collision surface by at most 9 mm', async () => {
+  test('the person: the sculpted face stands out of the collision surface by at most 9 mm, the skin under the hair by at most 3 mm', async () => {
     const info = await page.evaluate(() => window.coiffureDebug.personInfo());
     console.log('person', info);
     // The refined body mesh lies on the metaball surface the hair collides with (Newton projection).
     assert.ok(info.maxProjectionError < 1e-5, `refined mesh off the surface by ${info.maxProjectionError} m`);
     // Nose tip and ears rise above it (there is a face), but by no more than PERSON_MAX_OUTSET.
     assert.ok(info.maxOutset > 0.004 && info.maxOutset <= 0.009, `largest outset ${info.maxOutset} m`);
+    // Where the hair lies on the body (strand vertices within 4 mm of the collision surface at rest), the skin
+    // drawn under it is that surface within 3 mm: the hair neither sinks into the skin nor floats above it visibly.
+    const under = await page.evaluate(() => window.coiffureDebug.skinUnderHair(0.004));
+    console.log('skin under the hair', under);
+    assert.ok(under.near > 0.01 * under.points, `only ${under.near} of ${under.points} hair vertices lie on the body`);
+    assert.ok(under.maxOutset <= 0.003, `the skin stands ${under.maxOutset} m out of the surface the hair rests on`);
+    assert.ok(under.maxInset <= 0.003, `the skin is carved ${under.maxInset} m under the hair resting on the surface`);
     await render('look-face', { camera: [0.33, 0.45, 0.02], target: [0, 0.02, -0.04], light: [0.5, 0.6, 0.6], hideHair: true });
   });
 
@@ -88,6 +133,7 @@ describe('the look (3k render strands, small canvas)', () => {
           const img = await render(name, { ...camera, light, colour, wetness });
           times.push(img.ms);
           if (name === 'look-brown-dry-side') kept.shaded = img;
+          if (name === 'look-brown-wet-side') kept.shadedWet = img;
           const mask = hairMask(img, bare);
           const l = mask.map((i) => lum(img.px, i));
           stats[name] = {
@@ -115,6 +161,28 @@ describe('the look (3k render strands, small canvas)', () => {
         assert.ok(s(c, 'wet').median < 0.85 * s(c, 'dry').median, `${ln} ${c}: wet ${s(c, 'wet').median} vs dry ${s(c, 'dry').median}`);
       }
     }
+    // Wet strands clump (Gupta and Magnenat-Thalmann 2007): soaked, the hair with its clumping covers fewer
+    // pixels than the same wet hair without (gaps open between the clumps).
+    {
+      const light = LIGHTS.back, bare = await render(null, { ...camera, light, hideHair: true });
+      const loose = await render('look-brown-wet-unclumped-back', { ...camera, light, colour: 'brown', wetness: 1, clumpStrength: 0 });
+      const clumped = stats['look-brown-wet-back'].hairPixels, unclumped = hairMask(loose, bare).length;
+      console.log('clumping', { clumped, unclumped });
+      assert.ok(clumped < 0.95 * unclumped, `wet hair covers ${clumped} pixels clumped, ${unclumped} without clumping`);
+      // The deep opacity maps follow the strands as they move (drawn every frame with the lit pass's deformation):
+      // with the hair hidden and its shadows kept, the skin and shirt (which do not move) see the clumps' shadows.
+      // Clumping opens gaps, and the mean of exp(-n) over a clumped layer is larger (Jensen), so the body is
+      // lighter under clumped hair; and its shadow pattern changes.
+      const body = (img) => { const m = []; for (let i = 0; i < img.px.length / 4; i++) if (Math.abs(img.px[4 * i] - 0x1d) + Math.abs(img.px[4 * i + 1] - 0x1f) + Math.abs(img.px[4 * i + 2] - 0x24) > 12) m.push(i); return m; };
+      const shClumped = await render('look-shadow-clumped-back', { ...camera, light, colour: 'brown', wetness: 1, hideHair: true });
+      const shLoose = await render(null, { ...camera, light, colour: 'brown', wetness: 1, hideHair: true, clumpStrength: 0 });
+      const onBody = body(shLoose);
+      const meanOn = (img) => mean(onBody.map((i) => lum(img.px, i)));
+      const changed = onBody.filter((i) => Math.abs(lum(shClumped.px, i) - lum(shLoose.px, i)) > 4).length;
+      console.log('shadows follow the clumps', { bodyPixels: onBody.length, changed, clumped: meanOn(shClumped), loose: meanOn(shLoose) });
+      assert.ok(changed > 0.05 * onBody.length, `the clumps change the body's shadows at ${changed} of ${onBody.length} pixels`);
+      assert.ok(meanOn(shClumped) > meanOn(shLoose), `body under clumped hair ${meanOn(shClumped)} vs loose ${meanOn(shLoose)}`);
+    }
     // The two lights give different pictures.
     assert.notDeepEqual(stats['look-brown-dry-back'], stats['look-brown-dry-side']);
   });
@@ -134,6 +202,14 @@ describe('the look (3k render strands, small canvas)', () => {
     console.log('highlight', { median, band: band.length, bandMean, cut });
     assert.ok(band.length > 0.02 * mask.length, `highlight pixels ${band.length} of ${mask.length}`);
     assert.ok(bandMean > 1.3 * median, `highlight band ${bandMean} vs hair median ${median}`);
+    // Wet: the water film's narrow Gaussian lobe peaks above the dry cuticle's R lobe (Gupta and
+    // Magnenat-Thalmann 2007): the brightest hundredth of the wet hair's highlight-only view is brighter.
+    const shadedWet = kept.shadedWet ?? await render(null, { ...camera, light, colour: 'brown', wetness: 1 });
+    const maskWet = hairMask(shadedWet, bare);
+    const hlWet = await render('look-highlight-only-wet', { ...camera, light, colour: 'brown', wetness: 1, view: 2 });
+    const peakDry = quantile(hlL, 0.99), peakWet = quantile(maskWet.map((i) => lum(hlWet.px, i)), 0.99);
+    console.log('wet highlight', { peakDry, peakWet, wetHairPixels: maskWet.length, dryHairPixels: mask.length });
+    assert.ok(peakWet > 1.2 * peakDry, `wet highlight ${peakWet} vs dry ${peakDry}`);
     // Direct transmittance exp(-n) from the deep opacity maps: shadowed hair is darker than lit hair.
     const dom = await render('look-shadow-map', { ...camera, light, colour: 'brown', view: 1 });
     const t = (i) => dom.px[4 * i] / 255;
@@ -168,6 +244,56 @@ describe('the look (3k render strands, small canvas)', () => {
     assert.ok(unchanged > 0.9 * n, `hair over the face: only ${unchanged} of ${n} face pixels as without hair`);
   });
 
+  test('no popping when the camera moves: the ink follows the width law through the line-count switch, an orbit changes the picture smoothly', async () => {
+    // A dolly in 8 % steps from 1.3 m to 0.55 m on the 200-pixel canvas: the nearest strands grow from about
+    // 0.6 to 1.5 pixels wide, so the viewer goes from one line per strand to parallel lines on the way. The
+    // hair's ink must follow the width law at every step (3 %) and its ratio to the law must not jump between
+    // steps by more than 1.5 % (a pop; lines whose coverage were not shared would jump by 100 %). Measured: 0.8 %
+    // at the switch, where the steepest diagonal strands, up to sqrt 2 times wider across their major axis than
+    // the nearest strand's width that sets the count, were clamped to one pixel just before it.
+    const r = await page.evaluate(() => window.coiffureDebug.hairRest());
+    const pos = restPositions(r);
+    const target = [0, 0, -0.05];
+    const dir = [0.3, -0.9, 0.27].map((x, _, a) => x / Math.hypot(...a));
+    const at = (d) => target.map((t, i) => t + d * dir[i]);
+    const width = (await page.evaluate(() => window.coiffure.strandWidth())).width;
+    const ds = [];
+    for (let d = 1.3; d > 0.55; d /= 1.08) ds.push(d);
+    const got = await page.evaluate((v) => window.coiffureDebug.hairInk(v), ds.map((d) => ({ camera: at(d), target })));
+    const ratios = got.map((g, k) => g.ink / inkLaw(pos, r.strands, r.verticesPerStrand, at(ds[k]), target, width, r.height, r.fov).ink);
+    const steps = ratios.slice(1).map((q, k) => Math.abs(q / ratios[k] - 1));
+    console.log('dolly', ds.map((d, k) => ({ d: +d.toFixed(3), lines: got[k].lines, inkOverLaw: +ratios[k].toFixed(4) })));
+    assert.ok(got[0].lines === 1 && got.at(-1).lines >= 2, `lines ${got.map((g) => g.lines)}: the dolly must cross the switch`);
+    ratios.forEach((q, k) => assert.ok(Math.abs(q - 1) < 0.03, `${ds[k]} m (${got[k].lines} lines): ink ${q} x the law`));
+    assert.ok(Math.max(...steps) < 0.015, `ink over the law jumps by ${Math.max(...steps)} between steps`);
+    // An orbit in 0.5 degree steps about the target, shaded: the frame's mean luminance changes by less than
+    // 1 % a step and no step changes the picture much more than the others (mean absolute pixel difference at
+    // most 2x the median step's).
+    const base = [0.3, -0.9, 0.22], c = Math.cos(Math.PI / 360), sn = Math.sin(Math.PI / 360);
+    const frames = [];
+    let eye = base.map((x, i) => x - target[i]);
+    for (let k = 0; k < 5; k++) {
+      frames.push(await render(k === 0 || k === 4 ? `look-orbit-${k}` : null, { camera: eye.map((x, i) => x + target[i]), target, light: LIGHTS.back, colour: 'brown' }));
+      eye = [c * eye[0] - sn * eye[1], sn * eye[0] + c * eye[1], eye[2]];
+    }
+    const meanL = frames.map((f) => { let t = 0; for (let i = 0; i < f.px.length / 4; i++) t += lum(f.px, i); return t / (f.px.length / 4); });
+    const diffs = frames.slice(1).map((f, k) => { let t = 0; for (let i = 0; i < f.px.length; i++) if (i % 4 !== 3) t += Math.abs(f.px[i] - frames[k].px[i]); return t / (0.75 * f.px.length); });
+    console.log('orbit', { meanL, diffs });
+    meanL.slice(1).forEach((m, k) => assert.ok(Math.abs(m / meanL[k] - 1) < 0.01, `orbit step ${k}: mean luminance ${meanL[k]} -> ${m}`));
+    assert.ok(Math.max(...diffs) <= 2 * quantile(diffs, 0.5), `orbit steps' pixel differences ${diffs}`);
+  });
+
+  test('the hair is one draw call drawing every strand per line (and one for each shadow pass)', async () => {
+    // Strands wider than a pixel (here 33 hairs a render strand, close) add one call per parallel line.
+    await page.waitForFunction((n) => window.coiffure.framesRendered > n, await page.evaluate(() => window.coiffure.framesRendered));
+    const s = await page.evaluate(() => ({ calls: window.coiffure.hairDrawCalls, segments: window.coiffure.hairSegmentsPerCall, strands: window.coiffure.strands, lines: window.coiffureDebug.view.lineCount }));
+    const r = await page.evaluate(() => window.coiffureDebug.hairRest());
+    console.log('hair draw calls', s);
+    assert.ok(s.lines >= 1 && s.lines <= 4, `${s.lines} lines`);
+    assert.equal(s.calls, s.lines + 2, `lit strands (${s.lines} lines), shadow depth, shadow opacity`);
+    assert.equal(s.segments, s.strands * (r.verticesPerStrand - 1), 'the lit call draws every segment of every strand');
+  });
+
   test('frame and GPU times are reported in window.coiffure and the status panel', async () => {
     await page.waitForFunction(() => window.coiffure.frameTimes.length > 3);
     const s = await page.evaluate(() => ({ gpuTimer: window.coiffure.gpuTimer, gpu: window.coiffure.gpuFrameMs, perf: document.getElementById('perf').textContent }));
@@ -189,44 +315,12 @@ describe('the look (3k render strands, small canvas)', () => {
     // strands' rest positions (the GPU draws them deformed by the lattice at rest and pushed out of the body,
     // hence a 3 % tolerance on the absolute ink; measured 0.05 % and 0.07 %), and as ratios (same hair state).
     const r = await page.evaluate(() => window.coiffureDebug.hairRest());
-    const b = Buffer.from(r.rest, 'base64');
-    const pos = new Float32Array(b.buffer, b.byteOffset, b.byteLength / 4);
-    const nv = r.verticesPerStrand;
+    const pos = restPositions(r);
     const target = [0, 0, -0.05];
     const dir = [0.3, -0.9, 0.27].map((x, _, a) => x / Math.hypot(...a)); // the back view's direction
     const at = (d) => target.map((t, i) => t + d * dir[i]);
-    /** Expected ink for a camera at distance d (drawing buffer H pixels high), and the largest and smallest
-     * extent of a strand across its major axis (px; the coverage of its fragments on one line). */
-    const expected = (d, width, H = r.height) => {
-      const f = (H / 2) / Math.tan((r.fov / 2) * Math.PI / 180);
-      const eye = at(d);
-      const sub = (a, c) => a.map((x, i) => x - c[i]);
-      const dot = (a, c) => a.reduce((s, x, i) => s + x * c[i], 0);
-      const cross = (a, c) => [a[1] * c[2] - a[2] * c[1], a[2] * c[0] - a[0] * c[2], a[0] * c[1] - a[1] * c[0]];
-      const unit = (a) => a.map((x) => x / Math.hypot(...a));
-      const fw = unit(sub(target, eye)), rt = unit(cross(fw, [0, 0, 1])), up = cross(rt, fw);
-      const project = (k) => {
-        const p = [pos[3 * k], pos[3 * k + 1], pos[3 * k + 2]];
-        const q = sub(p, eye), z = dot(q, fw);
-        return [f * dot(q, rt) / z, f * dot(q, up) / z, z];
-      };
-      let ink = 0, maxCov = 0, minCov = Infinity;
-      for (let s = 0; s < r.strands; s++) {
-        let a = project(s * nv);
-        for (let i = 1; i < nv; i++) {
-          const c = project(s * nv + i);
-          const dx = c[0] - a[0], dy = c[1] - a[1], len = Math.hypot(dx, dy);
-          const W = width * f / (0.5 * (a[2] + c[2]));
-          ink += W * len;
-          if (len > 0) {
-            const cov = W * len / Math.max(Math.abs(dx), Math.abs(dy));
-            maxCov = Math.max(maxCov, cov); minCov = Math.min(minCov, cov);
-          }
-          a = c;
-        }
-      }
-      return { ink, maxCov, minCov };
-    };
+    /** Expected ink for a camera at distance d (drawing buffer H pixels high). */
+    const expected = (d, width, H = r.height) => inkLaw(pos, r.strands, r.verticesPerStrand, at(d), target, width, H, r.fov);
     const types = await page.evaluate(() => window.coiffure.hairTypes);
     const widths = types.map((t) => meanWidth(t.diameter, t.ellipticity));
     const near = 1.6, far = 3.2;

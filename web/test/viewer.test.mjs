@@ -32,6 +32,13 @@ describe('the default scene (100k render strands)', () => {
     const median = times[Math.floor(times.length / 2)];
     writeFileSync(join(artifacts, 'frame-times-default.json'), JSON.stringify({ strands: 100000, frames: times.length, median_ms: median, times_ms: times }));
     console.log(`viewer frame time, default scene, software rendering: median ${median.toFixed(1)} ms over ${times.length} frames`);
+    // The CPU's work for the hair is flat in the number of strands: one lit draw call drawing all 100k strands
+    // and one per shadow pass, as for the look test's 3k.
+    const calls = await page.evaluate(() => ({ calls: window.coiffure.hairDrawCalls, segments: window.coiffure.hairSegmentsPerCall, lines: window.coiffureDebug.view.lineCount }));
+    console.log('hair draw calls', calls);
+    assert.equal(calls.lines, 1, 'strands of one hair are below a pixel');
+    assert.equal(calls.calls, 3, 'lit strands, shadow depth, shadow opacity');
+    assert.ok(calls.segments % 100000 === 0 && calls.segments / 100000 >= 4, `the lit call draws ${calls.segments} segments (every segment of the 100k strands)`);
     assert.ok(!logs.some((l) => l.startsWith('pageerror')), logs.join('\n'));
   });
 });

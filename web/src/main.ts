@@ -31,8 +31,8 @@ interface Status {
   frameTimes: number[];
   gpuFrameMs: number | null; // GPU time of the last measured frame (EXT_disjoint_timer_query_webgl2), null if unavailable
   gpuTimer: boolean; // the timer query extension exists
-  hairDrawCalls: number; // draw calls of the strands in the last frame (lit lines and the two shadow passes; 3 at one line, any strand count)
-  hairSegmentsPerCall: number; // strand segments the lit draw call drew in the last frame (all strands')
+  readonly hairDrawCalls: number; // draw calls of the strands in the last frame (lit lines and the two shadow passes; 3 at one line, any strand count)
+  readonly hairSegmentsPerCall: number; // strand segments the lit draw call drew in the last frame (all strands')
   hairColour: string;
   strands: number;
   /** The SCENE's hair types with their fibre sections (major-axis diameter, m; ellipticity). */
@@ -69,7 +69,9 @@ const status: Status = {
   webgl2: view.renderer.getContext() instanceof WebGL2RenderingContext,
   connected: false, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
   runaways: 0, lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], frameTimes: [], strands: 0,
-  gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairDrawCalls: 0, hairSegmentsPerCall: 0, hairColour: DEFAULT_HAIR_COLOUR,
+  gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairColour: DEFAULT_HAIR_COLOUR,
+  get hairDrawCalls() { return view.hairDrawCalls; },
+  get hairSegmentsPerCall() { return view.hairSegmentsPerCall; },
   hairTypes: [], strandWidth: () => ({ width: view.hair?.material.uniforms.strandWidth.value ?? 0, fibreWidth: view.hair?.fibreWidth ?? 0, hairsPerStrand: view.hair?.hairsPerStrand ?? 0 }),
   lastFile: null,
   fit: null,
@@ -399,8 +401,6 @@ function frame(now: number): void {
   last = now;
   sendPose();
   view.render();
-  status.hairDrawCalls = view.hairDrawCalls;
-  status.hairSegmentsPerCall = view.hairSegmentsPerCall;
   plot.draw();
   if (status.sceneLoaded) status.framesRendered++;
   requestAnimationFrame(frame);

@@ -62,7 +62,9 @@ describe('a comb stroke through the hair (issue 12; 5k render strands standing f
     assert.equal(await page.evaluate(() => window.coiffure.youControl), true, 'the first viewer controls');
     await page.screenshot({ path: join(artifacts, 'comb-before.png') });
     await page.evaluate(() => { window.coiffure.peakForce = 0; window.coiffure.maxDisplacement = 0; });
-    // Down the back of the head, through the hanging hair (18 cm at about 0.09 m/s), a screenshot half way.
+    // Down the back of the head, through the hanging hair, a screenshot half way: 18 cm at about 0.09 m/s as
+    // written, but in software rendering each pointer move takes ~1.2 s, so in CI the comb goes about 11 cm at
+    // 1.5-2 mm/s over 60-90 s (bench/RESULTS.md, the browser comb stroke row).
     let during = null;
     await dragWorld(page, [0.0, -0.1, 0.06], [0.0, -0.1, -0.12], 50, 40, (i) => {
       if (i === 25) during = page.screenshot({ path: join(artifacts, 'comb-during.png') });

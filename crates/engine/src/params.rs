@@ -37,8 +37,11 @@ pub struct SessionParams {
     pub max_chosen: usize,
     /// Most guide strands simulated at once: the chosen ones and those still relaxing after they left (the
     /// relaxing ones that left first are let go first beyond it; strands let go are no longer simulated while
-    /// their shown displacement fades out), >= `max_chosen`. Bounds the haptic step's cost. Default 64
-    /// (within the 1 ms haptic step: bench/RESULTS.md).
+    /// their shown displacement fades out), >= `max_chosen`. Bounds the haptic step's cost. Default 56: the
+    /// hold of the neighbours (`HapticParams::hold_distance`, 2026-11-27) made a step with the comb in the hair
+    /// ~15 % dearer at 64; 56 keeps the mean step where 64 had it (live_profile on bench/device-comb.toml: mean
+    /// 514 us against 508-527 us before, 593-596 us at 64) with the peak force 0.104 N (0.110 N before;
+    /// bench/RESULTS.md).
     pub max_active: usize,
     /// A guide joins the active set when its settled shape comes within this distance of the tool's shape
     /// (its capsules) on its way over the next `HapticParams::lookahead` s, m. Default 0.03.
@@ -80,7 +83,7 @@ pub struct SessionParams {
 
 impl Default for SessionParams {
     fn default() -> Self {
-        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 64, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0 }, input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default() }
+        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 56, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0 }, input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default() }
     }
 }
 
@@ -205,11 +208,21 @@ pub struct HapticParams {
     /// and 0.027 N largest step, but carries guides 0.136 m from their settled place during the stroke (0.08 m
     /// allowed; measured 2026-11-24, docs/scenarios.md).
     pub entanglement: bool,
+    /// The hold of the unsimulated neighbours on each local strand (`tools::interaction::LocalInteraction::
+    /// hold_distance`): a spring per unit length towards the strand's place in the hair volume (its groom
+    /// carried by the lattice) that carries the strand's own weight at this displacement, m; infinite: none.
+    /// A simulated guide has one fibre's mechanics, and groomed along the curved head it is only a local
+    /// equilibrium: pushed far enough by a slow comb it rolled round the side of the head (13.8 cm in the
+    /// replayed record of issue 12's failing browser stroke), where real hair is held by the hair around it.
+    /// At 3 cm the hold is about 2e-6 N on a guide, far below the tool's push on it (~1e-4 N). With it that
+    /// record gives 4.1 cm (0.01: 4.7 cm; the peak force 0.14 N against 0.086 N without; docs/physics.md).
+    /// Default 0.03.
+    pub hold_distance: f64,
 }
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false }
+        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03 }
     }
 }
 
@@ -234,6 +247,9 @@ impl HapticParams {
             if !(v > 0.0 && v.is_finite()) {
                 return p(format!("haptic.{k} must be > 0 s, got {v}"));
             }
+        }
+        if !(self.hold_distance > 0.0) {
+            return p(format!("haptic.hold_distance must be > 0 m (infinite: no hold), got {}", self.hold_distance));
         }
         if !(self.rest_speed > 0.0 && self.rest_speed.is_finite()) {
             return p(format!("haptic.rest_speed must be > 0 m/s, got {}", self.rest_speed));

@@ -249,7 +249,6 @@ impl MetaballSet {
     pub fn push_out(&self, x: &Point3<f64>, threshold: f64, skin: f64) -> Point3<f64> {
         let skin = if skin.is_finite() { skin.max(0.0) } else { 0.0 };
         let tol = 1e-3 * skin.max(1e-6);
-        let cap = self.balls.iter().map(|b| b.radius).fold(0.0, f64::max);
         // first-order distance at p (m), +inf outside every ball; normal fallback for |g| = 0
         let dist = |p: &Point3<f64>| -> (f64, Vector3<f64>) {
             let (f, g) = self.field_and_gradient(p);
@@ -278,6 +277,7 @@ impl MetaballSet {
         if d0 >= skin - tol {
             return *x;
         }
+        let cap = self.balls.iter().map(|b| b.radius).fold(0.0, f64::max);
         let (mut lo, mut hi): (f64, Option<f64>) = (0.0, None);
         let mut t = (skin - d0).clamp(tol, cap);
         let mut prev = (0.0, d0 - skin);

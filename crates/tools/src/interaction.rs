@@ -140,9 +140,24 @@ pub struct LocalInteraction {
     pub use_batches: bool,
     /// Constraint model: the body the strands rest on (the head, neck and shoulders as metaballs, world
     /// frame) and its iso-surface threshold. Each strand's sampled points that are inside it, or within a
-    /// hair's radius of its surface, get a frictionless contact pushing them out (the tool does not feel
-    /// it). Default None (no body).
+    /// hair's radius of its surface, get a contact pushing them out with Coulomb friction
+    /// `body_friction` (the tool does not feel it). Default None (no body).
     pub body: Option<(lattice::metaball::MetaballSet, f64)>,
+    /// Where the hair volume holds each strand ([`Hold`]; one entry per strand, None: not held). The caller
+    /// keeps it up to date; [`LocalInteraction::set_strands`] carries each strand's over (None for a new
+    /// one). Default empty.
+    pub holds: Vec<Option<Hold>>,
+    /// The hold's displacement scale, m: the unsimulated neighbours pull a held strand back towards its place
+    /// with a spring per unit length that carries the strand's own weight at this displacement,
+    /// `k = lambda |g| / hold_distance` (N/m per m of strand), applied explicitly at [`HOLD_LOADS`] points per
+    /// strand. Infinite: no hold. Default infinite.
+    pub hold_distance: f64,
+    /// Which strands get their hold this step ([`HOLD_EVERY`]).
+    hold_phase: usize,
+    /// Constraint model: Coulomb friction coefficient of the body contacts (dimensionless, >= 0): a strand
+    /// lies on the scalp and on the hair beneath it, and without friction a strand resting on the curved
+    /// head is free to slide round it. Default 0 (frictionless).
+    pub body_friction: f64,
     /// Constraint model: contact and friction between the simulated strands ([`HairContact`]). Default None
     /// (strands pass through each other).
     pub hair_contact: Option<HairContact>,
@@ -191,6 +206,39 @@ pub struct LocalInteraction {
     warm: Vec<Vec<Warm>>,
     /// Workspace of [`LocalInteraction::warm_start`]: which of a strand's last impulses are taken.
     warm_used: Vec<bool>,
+}
+
+/// Loads per held strand that carry the hold ([`LocalInteraction::hold_distance`]).
+pub const HOLD_LOADS: usize = 4;
+
+/// A held strand gets its hold every this many steps, that many times as strong (in turns: strand `k` at the
+/// steps where the step count modulo this is `k` modulo this). 4 ms at 1 kHz against the hold's period of
+/// about 0.3 s (`2 pi sqrt(hold_distance / |g|)`), so the impulses act as the steady spring.
+pub const HOLD_EVERY: usize = 4;
+
+/// Where the hair volume holds a simulated strand: its place among the unsimulated neighbours (e.g. the
+/// groomed strand carried by the global layer's lattice), as points evenly spaced in arc length.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hold {
+    /// Points from the root (first) to the tip (last) of the uncut strand, evenly spaced in arc length, m
+    /// (the strands' frame); at least two.
+    pub points: Vec<Vector3<f64>>,
+    /// The uncut strand's length the points span, m.
+    pub length: f64,
+}
+
+impl Hold {
+    /// The hold's point at arc length `s` (m; clamped to the points' span), linearly interpolated.
+    pub fn at(&self, s: f64) -> Vector3<f64> {
+        let n = self.points.len();
+        if n < 2 {
+            return self.points.first().copied().unwrap_or_else(Vector3::zeros);
+        }
+        let u = (s / self.length.max(1e-12) * (n - 1) as f64).clamp(0.0, (n - 1) as f64);
+        let i = (u.floor() as usize).min(n - 2);
+        let f = u - i as f64;
+        self.points[i] * (1.0 - f) + self.points[i + 1] * f
+    }
 }
 
 /// One side of a hair-hair contact: the `pair`-th pair of the step ([`HairContactFinder::contacts`]), at its first
@@ -242,6 +290,10 @@ impl LocalInteraction {
             pins: Vec::new(),
             use_batches: true,
             body: None,
+            body_friction: 0.0,
+            holds: Vec::new(),
+            hold_distance: f64::INFINITY,
+            hold_phase: 0,
             hair_contact: None,
             entanglement: None,
             wetness: Vec::new(),
@@ -263,6 +315,48 @@ impl LocalInteraction {
             warm: vec![Vec::new(); strands_len],
             warm_used: Vec::new(),
         }
+    }
+
+    /// The hold of the unsimulated neighbours ([`LocalInteraction::hold_distance`]) as loads for this step:
+    /// from last step's collision pieces (the strands' points at the start of that step; none right after
+    /// the strands changed), each held strand's pieces in [`HOLD_LOADS`] runs along its length, each run one
+    /// load at its pieces' mean arc length: the sum of `-k length (midpoint - hold point)` over its pieces.
+    /// A strand is held every [`HOLD_EVERY`] steps (strand index modulo, in turns), that many times as
+    /// strongly: the same impulse over that time, at a quarter of the cost per step.
+    fn hold_strands(&mut self) {
+        self.hold_phase = (self.hold_phase + 1) % HOLD_EVERY;
+        if !(self.hold_distance > 0.0 && self.hold_distance.is_finite()) || self.rebuild_tree || self.holds.is_empty() {
+            return;
+        }
+        let phase = self.hold_phase;
+        let mut run: Option<(usize, usize, f64, f64, Vector3<f64>)> = None; // (strand, run, s weight, weight, force)
+        let flush = |run: &mut Option<(usize, usize, f64, f64, Vector3<f64>)>, loads: &mut Vec<Vec<PointForce>>| {
+            if let Some((k, _, sw, w, f)) = run.take() {
+                if w > 0.0 && f.iter().all(|x| x.is_finite()) {
+                    loads[k].push(PointForce::new(sw / w, f));
+                }
+            }
+        };
+        for p in &self.pieces {
+            if p.strand % HOLD_EVERY != phase {
+                continue;
+            }
+            let (Some(Some(hold)), Some(strand)) = (self.holds.get(p.strand), self.strands.get(p.strand)) else { continue };
+            let length = strand.model.length;
+            let k = HOLD_EVERY as f64 * strand.model.linear_density() * strand.model.gravity.norm() / self.hold_distance;
+            let s = p.s + 0.5 * p.length;
+            let bin = ((s / length.max(1e-9)) * HOLD_LOADS as f64).floor().clamp(0.0, (HOLD_LOADS - 1) as f64) as usize;
+            if run.map_or(true, |(rk, rb, ..)| rk != p.strand || rb != bin) {
+                flush(&mut run, &mut self.surface_torques);
+                run = Some((p.strand, bin, 0.0, 0.0, Vector3::zeros()));
+            }
+            if let Some((_, _, sw, w, f)) = run.as_mut() {
+                *f -= (0.5 * (p.a + p.b) - hold.at(s)) * (k * p.length);
+                *sw += s * p.length;
+                *w += p.length;
+            }
+        }
+        flush(&mut run, &mut self.surface_torques);
     }
 
     /// Replaces the strands by `strands`, keeping the workspaces (the batches' solver storage, the contact
@@ -321,6 +415,11 @@ impl LocalInteraction {
         self.lane_of.clear();
         self.lane_of.resize(strands.len(), None);
         self.pins.clear();
+        let mut holds = std::mem::take(&mut self.holds);
+        self.holds = (0..strands.len()).map(|i| match from.get(i).copied().flatten() {
+            Some(j) if j < holds.len() => holds[j].take(),
+            _ => None,
+        }).collect();
         self.strands = strands;
         // The collision tree is built anew at the next step (`Bvh::rebuild`, about the cost of a refit); the
         // hair-hair sweep's order is re-sorted from the last one.
@@ -565,6 +664,7 @@ impl LocalInteraction {
         let clock = std::time::Instant::now();
         let mut first_error = None;
         let constraint = matches!(self.model, ForceModel::Constraint { .. });
+        self.hold_strands();
         self.prepared.iter_mut().for_each(|p| *p = false);
         if constraint {
             if self.use_batches {
@@ -668,14 +768,21 @@ impl LocalInteraction {
         let mut rows = std::mem::take(&mut self.rows);
         let mut used = 0;
         let mut forces: Vec<(Vector3<f64>, Vector3<f64>)> = Vec::new();
+        // Per-strand buffers, kept across the strands (no allocation per strand and step).
+        let mut mine: Vec<&Contact> = Vec::new();
+        let mut resting: Vec<PointConstraint> = Vec::new();
+        let mut cons: Vec<PointConstraint> = Vec::new();
         for (k, strand) in self.strands.iter_mut().enumerate() {
             let t_strand = clock.elapsed().as_secs_f64();
             // A clip's jaws hold the strands it pins rather than pushing them.
             let held = self.shape.kind == crate::shape::ToolKind::Clip && self.pins.iter().any(|p| p.0 == k);
-            let mine: Vec<&Contact> = if held { Vec::new() } else { contacts.iter().filter(|c| c.strand == k).collect() };
+            mine.clear();
+            if !held {
+                mine.extend(contacts.iter().filter(|c| c.strand == k));
+            }
             let pinned = self.pins.iter().any(|p| p.0 == k);
             // Body contacts (constraint model): sampled points inside the body or within a hair's radius of it.
-            let mut resting: Vec<PointConstraint> = Vec::new();
+            resting.clear();
             let t_body = clock.elapsed().as_secs_f64();
             if let (Some((body, threshold)), ForceModel::Constraint { .. }) = (&self.body, &self.model) {
                 // Each piece's start, and the strand's last end (a piece's end is the next one's start). The
@@ -690,7 +797,7 @@ impl LocalInteraction {
                     let d = q - x;
                     let depth = d.norm();
                     if depth > 0.0 {
-                        let kind = ConstraintKind::Contact { normal: d / depth, depth, friction: 0.0 };
+                        let kind = ConstraintKind::Contact { normal: d / depth, depth, friction: self.body_friction };
                         resting.push(PointConstraint { s, kind, velocity: Vector3::zeros() });
                     }
                 }
@@ -728,7 +835,7 @@ impl LocalInteraction {
                     // Each tool contact found within the wisp's reach: a non-penetration contact where the
                     // capsule touches the centreline's fibre, and (with the entanglement) a drag against the
                     // fibres it parts. `touching[i]`: the contact behind tool constraint i, if a contact.
-                    let mut cons: Vec<PointConstraint> = Vec::with_capacity(2 * mine.len());
+                    cons.clear();
                     let mut levers: Vec<Vector3<f64>> = Vec::with_capacity(2 * mine.len());
                     let mut touching: Vec<Option<Contact>> = Vec::with_capacity(2 * mine.len());
                     let mut tags: Vec<(WarmTag, f64)> = Vec::with_capacity(2 * mine.len());
@@ -930,6 +1037,51 @@ mod tests {
                 Strand::new(m.clone(), root).unwrap()
             })
             .collect()
+    }
+
+    #[test]
+    fn the_hold_pulls_a_strand_towards_its_place_with_its_weight_per_hold_distance() {
+        // A straight 10 cm H1 strand hanging at rest, held at its own line shifted by D = (2, -1, 0) mm, hold
+        // distance 3 cm, the comb far away. Over HOLD_EVERY steps it gets its hold once: HOLD_LOADS loads
+        // summing to HOLD_EVERY k L D with k = lambda |g| / 0.03 (relative error 1e-9: the strand is exactly on
+        // its line). Stepped 0.3 s, its tip moves towards D (measured 0.57 mm, along -y: the reduced strand bends
+        // about one axis, so it follows the part of D in its bending plane); without a hold it stays on its line.
+        let model = ForceModel::Constraint { friction: HairType::H1.friction_coefficient(), options: ConstraintOptions::default() };
+        let d = Vector3::new(0.002, -0.001, 0.0);
+        let line = |s: f64| Vector3::new(-0.01, 0.0, 0.3 - s);
+        let run = |held: bool| {
+            let mut it = LocalInteraction::new(patch(1), ToolShape::builtin("comb").unwrap(), comb_at(0.5), model);
+            it.step(1e-3, comb_at(0.5)).unwrap();
+            if held {
+                it.holds = vec![Some(Hold { points: (0..16).map(|i| line(0.1 * i as f64 / 15.0) + d).collect(), length: 0.1 })];
+                it.hold_distance = 0.03;
+            }
+            let (mut total, mut turns) = (Vector3::zeros(), 0);
+            for _ in 0..HOLD_EVERY {
+                it.surface_torques[0].clear();
+                it.hold_strands();
+                if !it.surface_torques[0].is_empty() {
+                    turns += 1;
+                    assert_eq!(it.surface_torques[0].len(), HOLD_LOADS);
+                    total += it.surface_torques[0].iter().map(|f| f.force).sum::<Vector3<f64>>();
+                }
+            }
+            it.surface_torques[0].clear();
+            for _ in 0..300 {
+                it.step(1e-3, comb_at(0.5)).unwrap();
+            }
+            let tip = strand::kinematics::centerline(&it.strands[0].model, &it.strands[0].state, 2)[1].1 - line(0.1);
+            (turns, total, tip, it.strands[0].model.linear_density() * 9.81 / 0.03)
+        };
+        let (turns, total, tip, k) = run(true);
+        let want = d * (HOLD_EVERY as f64 * k * 0.1);
+        eprintln!("hold: {turns} turn(s), {total:?} N (want {want:?}); tip moved {tip:?} m");
+        assert_eq!(turns, 1, "one turn in HOLD_EVERY steps");
+        assert!((total - want).norm() <= 1e-9 * want.norm(), "{total:?} vs {want:?}");
+        assert!(tip.dot(&d) > 1e-3 * d.norm() * d.norm() && tip.norm() > 1e-4, "the tip follows the hold: {tip:?}");
+        let (turns, _, free_tip, _) = run(false);
+        assert_eq!(turns, 0);
+        assert!(free_tip.norm() < 1e-9, "not held, the strand stays on its line: {free_tip:?}");
     }
 
     fn comb_at(y: f64) -> ToolPose {

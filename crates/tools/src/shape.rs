@@ -29,6 +29,18 @@ pub enum ToolKind {
     Sprayer,
 }
 
+impl ToolKind {
+    /// A solid body in the hair (finger, clip, scissors' blades), which the hair volume (the global layer's
+    /// lattice) meets as an obstacle. Not the comb and the brush: the hair passes between their 0.4-0.6 mm
+    /// teeth or bristles 5-8 mm apart, which 5 cm lattice cells cannot resolve (as an obstacle with the
+    /// lattice's 2 cm margin a comb ploughed the hair volume ahead of a slow stroke); not the dryer and the
+    /// sprayer, whose tool point is where they aim, their nozzle a hand's distance away. Those act on the
+    /// hair through the local strands.
+    pub fn lattice_obstacle(self) -> bool {
+        matches!(self, ToolKind::Finger | ToolKind::Clip | ToolKind::Scissors)
+    }
+}
+
 /// A capsule: the points within `radius` of the segment `[a, b]` (tool frame, m).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -8,8 +8,10 @@
 //!    cut for a worker thread ([`GlobalCore::defer_cuts`]).
 //! 2. **Dryer jet**: the held dryer's drag on the hair each lattice node carries, as external node forces
 //!    ([`GlobalCore::blow`]; `tools::dryer::HairDryer::hair_force`, quadratic in the air speed).
-//! 3. **Lattice**: the lattice step with the tool as an obstacle and the jet's forces
-//!    (`LatticeModel::step_with_forces`).
+//! 3. **Lattice**: the lattice step with a solid tool (clip, scissors: `ToolKind::lattice_obstacle`) as an
+//!    obstacle and the jet's forces (`LatticeModel::step_with_forces`). The comb and the brush are none (the
+//!    lattice's 5 cm cells cannot resolve their teeth, which the hair passes between), nor are the nozzles
+//!    (their tool point is where they aim); the local strands carry their touch.
 //! 4. **Body**: nodes that started outside the body are pushed back out of it ([`body`]).
 //! 5. **Recovery**: a non-finite lattice is put back to rest (and reported).
 //! 6. **Wetness**: the held sprayer or dryer wets or dries the guides in its cone ([`GlobalCore::moisten`]).
@@ -232,7 +234,8 @@ impl GlobalCore {
             }
         }
         self.blow(input);
-        let obstacle = input.present.then(|| tool_metaballs(&self.shapes[input.tool as usize], &input.position, &input.rotation, &self.params));
+        let shape = &self.shapes[input.tool as usize];
+        let obstacle = (input.present && shape.kind.lattice_obstacle()).then(|| tool_metaballs(shape, &input.position, &input.rotation, &self.params));
         if self.model.step_with_forces(&mut self.state, &mut self.workspace, dt, &self.head, obstacle.as_ref(), &self.forces).is_err() {
             // A non-finite jet force (never expected): the step without it, counted.
             self.failed += 1;
@@ -291,18 +294,22 @@ mod tests {
     use crate::tool::Tool;
 
     #[test]
-    fn the_tool_pushes_the_lattice_and_does_not_drag_it() {
-        // Two lattices side by side, one with the comb held still in the hair behind the head. Relative to
-        // the free one: every node the comb touches (its metaball field at the free position >= 0.1, the
-        // surface being at 0.25) ends where the comb's field is lower (pushed out, never pulled in); the
-        // whole lattice moves less than 3 cm (the lost helper's attraction dragged hair 0.37 m); and once
-        // the comb leaves, the hair goes back.
+    fn a_solid_tool_pushes_the_lattice_and_does_not_drag_it() {
+        // Two lattices side by side, one with a clip (a solid tool) held still in the hair behind the head, on a
+        // lattice node.
+        // Relative to the free one: every node the clip holds inside its surface (its metaball field at the
+        // free position >= 0.25) ends where the clip's field is lower (pushed out, never pulled
+        // in); the whole lattice moves less than 5 cm (the node the clip sits on leaves its surface, 2.2 cm from the
+        // jaws: 3.8 cm; the lost helper's attraction dragged hair 0.37 m); and
+        // once the clip leaves, the hair goes back.
         let scene = small_scene();
         let p = SessionParams::default();
         let (mut free, mut pushed) = (GlobalCore::new(scene.clone(), &p), GlobalCore::new(scene.clone(), &p));
-        let tool = Vector3::new(0.0, -0.13, 0.0);
-        let input = ToolInput { tool: Tool::Comb, present: true, position: tool, rotation: test_rot(), pressed: false, cuts: 0, ..ToolInput::default() };
-        let balls = tool_metaballs(&Tool::Comb.shape(), &tool, &test_rot(), &GlobalParams::default());
+        // On the lattice node nearest a point behind the head (the clip is smaller than a cell).
+        let behind = Vector3::new(0.0, -0.13, 0.0);
+        let tool = free.positions().iter().map(|x| x.coords).min_by(|a, b| (a - behind).norm().total_cmp(&(b - behind).norm())).unwrap();
+        let input = ToolInput { tool: Tool::Clip, present: true, position: tool, rotation: test_rot(), pressed: false, cuts: 0, ..ToolInput::default() };
+        let balls = tool_metaballs(&Tool::Clip.shape(), &tool, &test_rot(), &GlobalParams::default());
         for _ in 0..30 {
             free.step(0.01, &ToolInput::default());
             pushed.step(0.01, &input);
@@ -311,21 +318,38 @@ mod tests {
         for (a, b) in pushed.positions().iter().zip(free.positions()) {
             most = most.max((a - b).norm());
             let (fa, fb) = (balls.field(a), balls.field(b));
-            if fb >= 0.1 {
+            if fb >= 0.25 {
                 touched += 1;
-                assert!(fa < fb, "a touched node is pushed out of the comb: field {fb} -> {fa}");
+                assert!(fa < fb, "a touched node is pushed out of the clip: field {fb} -> {fa}");
             }
         }
         eprintln!("{touched} nodes touched, largest difference {most} m");
-        assert!(touched >= 1 && most > 2e-3, "the comb pushes the hair: {touched} nodes, {most} m");
-        assert!(most < 0.03, "no drag: {most} m");
+        assert!(touched >= 1 && most > 2e-3, "the clip pushes the hair: {touched} nodes, {most} m");
+        assert!(most < 0.05, "no drag: {most} m");
         for _ in 0..200 {
             free.step(0.01, &ToolInput::default());
             pushed.step(0.01, &ToolInput::default());
         }
         let after = pushed.positions().iter().zip(free.positions()).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
-        eprintln!("largest difference {after} m 2 s after the comb left");
+        eprintln!("largest difference {after} m 2 s after the clip left");
         assert!(after < 0.2 * most, "the hair goes back: {after} m vs {most} m");
+    }
+
+    #[test]
+    fn a_comb_passes_through_the_hair_volume() {
+        // Issue 12: a comb drawn slowly (2 cm/s, 10 cm down the back of the head) leaves the lattice exactly
+        // where a free one is: its teeth are no obstacle (as one, with a 2 cm margin, the failing browser
+        // stroke's comb at 1.8 mm/s ploughed the hair volume 8.4 cm ahead of it).
+        let scene = small_scene();
+        let p = SessionParams::default();
+        let (mut free, mut combed) = (GlobalCore::new(scene.clone(), &p), GlobalCore::new(scene.clone(), &p));
+        for n in 0..500 {
+            let input = ToolInput { tool: Tool::Comb, present: true, position: Vector3::new(0.0, -0.12, 0.04 - 0.02 * n as f64 * 0.01), rotation: test_rot(), ..ToolInput::default() };
+            free.step(0.01, &ToolInput::default());
+            combed.step(0.01, &input);
+        }
+        let ploughed = combed.positions().iter().zip(free.positions()).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+        assert!(ploughed < 1e-12, "the comb's teeth are no obstacle: {ploughed} m");
     }
 
     #[test]

@@ -13,7 +13,9 @@
 //! 3. **Active set**: the guides near the tool's path over the next `HapticParams::lookahead` s become the
 //!    local strands; strands that left it are still stepped until at rest, then fade back to the global
 //!    layer ([`active`]).
-//! 4. **Roots**: the local strands' roots stay with the head (rigid), not with the tool-deformed lattice.
+//! 4. **Roots**: the local strands' roots stay with the head (rigid), not with the tool-deformed lattice;
+//!    the hair volume holds each strand near its place (its groom through the lattice,
+//!    `HapticParams::hold_distance`).
 //! 5. **Wetness**: the guides' wetness from the lattice snapshot sets the strands' material and the
 //!    friction, and the wet-set law updates their rest shapes as they dry ([`wetness`]).
 //! 6. **Tool actions**: scissors cut, clip pins, dryer blows ([`actions`]).
@@ -188,7 +190,8 @@ impl HapticCore {
         let pose = ToolPose { position: start, rotation: Matrix3::identity() };
         let n = scene.guides.len();
         let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape()).collect();
-        let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
+        let mut interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
+        interaction.hold_distance = params.haptic.hold_distance;
         let bounds = active::GuideBounds::new(&scene);
         Ok(Self {
             scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), references: Default::default(), staged: Default::default(), choice: None, bounds, queued: Vec::new(), max_tip_speed: 0.0, interaction,
@@ -286,6 +289,7 @@ impl HapticCore {
         let velocity = self.coupling.proxy_velocity;
         self.update_active(&proxy, &velocity, &r.rotation, &lattice.positions);
         self.roots_follow(dt);
+        self.hold_in_place(lattice);
         let t2 = clock.elapsed().as_secs_f64();
         self.timings.active = t2 - t1;
         // 5. Wetness.

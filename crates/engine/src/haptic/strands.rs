@@ -8,7 +8,8 @@ use crate::scene::Scene;
 use nalgebra::Vector3;
 use strand::{HairType, Strand};
 use strand::constraint::ConstraintOptions;
-use tools::interaction::{Entanglement, ForceModel, HairContact, LocalInteraction};
+use crate::snapshot::LatticeSnapshot;
+use tools::interaction::{Entanglement, ForceModel, HairContact, Hold, LocalInteraction};
 
 /// `it` with the scene's body (head, neck, shoulders; the live head frame is the world frame) for its strands
 /// to rest on.
@@ -60,9 +61,45 @@ impl HapticCore {
         if !self.params.haptic.hair_contact {
             return None;
         }
-        let d = HairContact::default();
-        let wet = self.wet_model.friction(d.friction, wetness.clamp(0.0, 1.0)).unwrap_or(d.friction);
-        Some(HairContact { fibres: self.hairs_per_guide(), friction: self.params.haptic.combing_friction(wet, self.combing_ease), ..d })
+        Some(HairContact { fibres: self.hairs_per_guide(), friction: self.fibre_friction(wetness), ..HairContact::default() })
+    }
+
+    /// Where the hair volume holds each local strand (`LocalInteraction::holds`): its guide's reference
+    /// samples carried by the lattice `lattice` (the shape the viewer shows for it when not simulated). A
+    /// strand without one gets it now; the others are taken again a tenth at a time (each every 10 steps, the
+    /// global layer's period at 1 kHz), so that no step maps every strand's references through a new lattice.
+    pub(crate) fn hold_in_place(&mut self, lattice: &LatticeSnapshot) {
+        const SHARES: u64 = 10;
+        let n = self.active.len();
+        self.interaction.holds.resize(n, None);
+        let share = (self.step % SHARES) as usize;
+        let ok = lattice.positions.len() == self.scene.lattice.node_count();
+        let mut cache = self.references.borrow_mut();
+        cache.use_nodes(&lattice.positions);
+        for (slot, &g) in self.active.iter().enumerate() {
+            let hold = &mut self.interaction.holds[slot];
+            if hold.is_some() && slot % SHARES as usize != share {
+                continue;
+            }
+            let bases = cache.bases(&self.scene, g, ok);
+            match hold {
+                Some(h) => {
+                    h.points.clear();
+                    h.points.extend_from_slice(bases);
+                }
+                None => *hold = Some(Hold { points: bases.to_vec(), length: self.scene.guides[g].model.length }),
+            }
+        }
+    }
+
+    /// Fibre-on-fibre friction coefficient at wetness `wetness` (in [0, 1]), dimensionless: `HairContact`'s
+    /// dry value raised by the wetness model's one friction law and lowered by the combing ease (the one
+    /// combing-ease law). The hair-hair contacts take it, and so do the strands' contacts with the body
+    /// (`LocalInteraction::body_friction`): a strand lies on the scalp under the hair beneath it.
+    pub(crate) fn fibre_friction(&self, wetness: f64) -> f64 {
+        let d = HairContact::default().friction;
+        let wet = self.wet_model.friction(d, wetness.clamp(0.0, 1.0)).unwrap_or(d);
+        self.params.haptic.combing_friction(wet, self.combing_ease)
     }
 
     /// A new local interaction over `strands` with the selected tool's shape (built once) and the current
@@ -73,6 +110,8 @@ impl HapticCore {
         let model = Self::force_model(&self.params.haptic, &self.hair_type, self.combing_ease);
         let mut it = LocalInteraction::new(strands, self.shapes[self.tool as usize].clone(), self.interaction.pose, model);
         it.body = body;
+        it.body_friction = self.fibre_friction(0.0);
+        it.hold_distance = self.params.haptic.hold_distance;
         it.hair_contact = self.hair_contact(0.0);
         if self.params.haptic.entanglement {
             it.entanglement = Some(Entanglement::default());

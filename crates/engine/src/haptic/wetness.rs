@@ -52,6 +52,7 @@ impl HapticCore {
             self.interaction.model = ForceModel::Constraint { friction: self.params.haptic.combing_friction(m.friction, self.combing_ease), options };
         }
         self.interaction.hair_contact = self.hair_contact(mean);
+        self.interaction.body_friction = self.fibre_friction(mean);
     }
 }
 

@@ -214,8 +214,9 @@ pub struct HapticParams {
     /// A simulated guide has one fibre's mechanics, and groomed along the curved head it is only a local
     /// equilibrium: pushed far enough by a slow comb it rolled round the side of the head (13.8 cm in the
     /// replayed record of issue 12's failing browser stroke), where real hair is held by the hair around it.
-    /// At 3 cm the hold is about 2e-6 N on a guide, far below the tool's push on it (~1e-4 N). With it that
-    /// record gives 4.1 cm (0.01: 4.7 cm; the peak force 0.14 N against 0.086 N without; docs/physics.md).
+    /// A whole guide 3 cm out of place is pulled back by its weight (1.4e-5 N for 25 cm), below the tool's
+    /// push on it (~1e-4 N). With it that record gives 4.1 cm (0.01: 4.7 cm; the peak force 0.14 N against
+    /// 0.086 N without; docs/physics.md).
     /// Default 0.03.
     pub hold_distance: f64,
 }

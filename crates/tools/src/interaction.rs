@@ -212,8 +212,9 @@ pub struct LocalInteraction {
 pub const HOLD_LOADS: usize = 4;
 
 /// A held strand gets its hold every this many steps, that many times as strong (in turns: strand `k` at the
-/// steps where the step count modulo this is `k` modulo this). 4 ms at 1 kHz against the hold's period of
-/// about 0.3 s (`2 pi sqrt(hold_distance / |g|)`), so the impulses act as the steady spring.
+/// steps where the step count modulo this is `k` modulo this). 4 ms at 1 kHz against the hold's period
+/// `2 pi sqrt(hold_distance / |g|)` (0.35 s at the live session's 3 cm), so the impulses act as the steady
+/// spring.
 pub const HOLD_EVERY: usize = 4;
 
 /// Where the hair volume holds a simulated strand: its place among the unsimulated neighbours (e.g. the
@@ -328,35 +329,35 @@ impl LocalInteraction {
         if !(self.hold_distance > 0.0 && self.hold_distance.is_finite()) || self.rebuild_tree || self.holds.is_empty() {
             return;
         }
-        let phase = self.hold_phase;
-        let mut run: Option<(usize, usize, f64, f64, Vector3<f64>)> = None; // (strand, run, s weight, weight, force)
-        let flush = |run: &mut Option<(usize, usize, f64, f64, Vector3<f64>)>, loads: &mut Vec<Vec<PointForce>>| {
-            if let Some((k, _, sw, w, f)) = run.take() {
-                if w > 0.0 && f.iter().all(|x| x.is_finite()) {
-                    loads[k].push(PointForce::new(sw / w, f));
-                }
-            }
-        };
-        for p in &self.pieces {
-            if p.strand % HOLD_EVERY != phase {
+        let mut i = 0;
+        while i < self.pieces.len() {
+            // The pieces are contiguous per strand, in strand order.
+            let k = self.pieces[i].strand;
+            let end = i + self.pieces[i..].iter().take_while(|p| p.strand == k).count();
+            let pieces = &self.pieces[i..end];
+            i = end;
+            let (Some(Some(hold)), Some(strand)) = (self.holds.get(k), self.strands.get(k)) else { continue };
+            if k % HOLD_EVERY != self.hold_phase {
                 continue;
             }
-            let (Some(Some(hold)), Some(strand)) = (self.holds.get(p.strand), self.strands.get(p.strand)) else { continue };
-            let length = strand.model.length;
-            let k = HOLD_EVERY as f64 * strand.model.linear_density() * strand.model.gravity.norm() / self.hold_distance;
-            let s = p.s + 0.5 * p.length;
-            let bin = ((s / length.max(1e-9)) * HOLD_LOADS as f64).floor().clamp(0.0, (HOLD_LOADS - 1) as f64) as usize;
-            if run.map_or(true, |(rk, rb, ..)| rk != p.strand || rb != bin) {
-                flush(&mut run, &mut self.surface_torques);
-                run = Some((p.strand, bin, 0.0, 0.0, Vector3::zeros()));
+            // Spring per unit length, N/m per m, times HOLD_EVERY (this strand's turn stands for that many steps).
+            let stiffness = HOLD_EVERY as f64 * strand.model.linear_density() * strand.model.gravity.norm() / self.hold_distance;
+            let length = strand.model.length.max(1e-9);
+            // Per run along the strand: sum of s x piece length (m^2), of piece lengths (m), of forces (N).
+            let mut runs = [(0.0, 0.0, Vector3::zeros()); HOLD_LOADS];
+            for p in pieces {
+                let s = p.s + 0.5 * p.length;
+                let run = &mut runs[((s / length * HOLD_LOADS as f64) as usize).min(HOLD_LOADS - 1)];
+                run.0 += s * p.length;
+                run.1 += p.length;
+                run.2 -= (0.5 * (p.a + p.b) - hold.at(s)) * (stiffness * p.length);
             }
-            if let Some((_, _, sw, w, f)) = run.as_mut() {
-                *f -= (0.5 * (p.a + p.b) - hold.at(s)) * (k * p.length);
-                *sw += s * p.length;
-                *w += p.length;
+            for (sw, w, f) in runs {
+                if w > 0.0 && f.iter().all(|x| x.is_finite()) {
+                    self.surface_torques[k].push(PointForce::new(sw / w, f));
+                }
             }
         }
-        flush(&mut run, &mut self.surface_torques);
     }
 
     /// Replaces the strands by `strands`, keeping the workspaces (the batches' solver storage, the contact

@@ -390,6 +390,9 @@ function sendPose(): void {
 }
 
 const perfEl = document.getElementById('perf') as HTMLSpanElement;
+/** While true the frame loop sends the pose but draws nothing (`coiffureDebug.holdFrames`: a test's stroke at a
+ * hand's pace in software rendering, whose frames stall the page for up to seconds). */
+let framesHeld = false;
 let last = performance.now();
 function frame(now: number): void {
   status.frameTimes.push(now - last);
@@ -400,8 +403,10 @@ function frame(now: number): void {
   if (status.frameTimes.length > 600) status.frameTimes.shift();
   last = now;
   sendPose();
-  view.render();
-  plot.draw();
+  if (!framesHeld) {
+    view.render();
+    plot.draw();
+  }
   if (status.sceneLoaded) status.framesRendered++;
   requestAnimationFrame(frame);
 }
@@ -410,6 +415,8 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
 
 // Hooks for the end-to-end tests: project a world point to client pixels, pixel statistics of the frame.
 (window as unknown as { coiffureDebug: unknown }).coiffureDebug = {
+  /** Stops (true) or resumes (false) drawing; the session, the pointer and the messages go on. */
+  holdFrames(on: boolean): void { framesHeld = on; },
   project(x: number, y: number, z: number): [number, number] {
     const v = new THREE.Vector3(x, y, z).project(view.camera);
     const r = canvas.getBoundingClientRect();

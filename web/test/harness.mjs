@@ -86,3 +86,44 @@ export async function dragWorld(page, a, b, steps = 40, pause = 30, onStep = nul
   }
   await page.mouse.up();
 }
+
+/** A stroke at a hand's pace whatever the frame rate: the pointer over world point a for `hoverMs`, the left
+ * button pressed there (real pointer events) for `pressMs`, then the pointer moved to b over `seconds` by moves dispatched to the viewer's canvas from a
+ * timer in the page at `hz` (the viewer's own pointer handlers, which send a POSE each), then released at b. In
+ * software rendering a real pointer move waits for the next frame (0.5-1.3 s), so a stroke of page.mouse
+ * moves goes at a few mm/s, and a frame or a screenshot can stop the page's timers for seconds: the viewer
+ * draws nothing during the moves (`coiffureDebug.holdFrames`; the session, its messages and the viewer's
+ * pseudo-haptics go on), and a screenshot belongs in `beforeRelease`, awaited with the tool still pressed at b. Resolves with the moves dispatched, the stroke's duration (ms) and the largest
+ * gap between moves (ms), as the page timed them. */
+export async function strokeWorld(page, a, b, seconds, hz = 100, { hoverMs = 1500, pressMs = 400, beforeRelease = null } = {}) {
+  const pa = await page.evaluate((p) => window.coiffureDebug.project(...p), a);
+  const pb = await page.evaluate((p) => window.coiffureDebug.project(...p), b);
+  // As a hand: over a first (the tool comes to it, `hoverMs`), pressed into the hair there (`pressMs`), then drawn.
+  await page.mouse.move(pa[0], pa[1]);
+  await page.waitForTimeout(hoverMs);
+  await page.mouse.down();
+  await page.waitForTimeout(pressMs);
+  // The viewer draws nothing during the moves: a software-rendered frame can stall the page for seconds.
+  await page.evaluate(() => window.coiffureDebug.holdFrames(true));
+  const timing = await page.evaluate(({ pa, pb, seconds, hz }) => new Promise((done) => {
+    const canvas = document.getElementById('view');
+    const t0 = performance.now();
+    let moves = 0, last = t0, gap = 0;
+    const tick = () => {
+      const now = performance.now();
+      const t = Math.min(1, (now - t0) / (1000 * seconds));
+      canvas.dispatchEvent(new PointerEvent('pointermove', { bubbles: true, pointerId: 1, pointerType: 'mouse', isPrimary: true, buttons: 1,
+        clientX: pa[0] + t * (pb[0] - pa[0]), clientY: pa[1] + t * (pb[1] - pa[1]) }));
+      moves++;
+      gap = Math.max(gap, now - last);
+      last = now;
+      if (t < 1) setTimeout(tick, 1000 / hz); else done({ moves, ms: now - t0, maxGapMs: gap });
+    };
+    tick();
+  }), { pa, pb, seconds, hz });
+  await page.evaluate(() => window.coiffureDebug.holdFrames(false));
+  await page.mouse.move(pb[0], pb[1]);
+  if (beforeRelease) await beforeRelease();
+  await page.mouse.up();
+  return timing;
+}

@@ -183,6 +183,11 @@ pub struct LiveSummary {
     /// Share of the in-hair steps with a force above `ContinuityParams::force_floor` (5 mN), in [0, 1]
     /// (0 without an in-hair step).
     pub in_hair_force_share: f64,
+    /// The tool's path while in the hair (its proxy's, summed over the in-hair steps), m.
+    pub in_hair_path_m: f64,
+    /// The stroke's speed: the tool's (proxy's) mean speed over the in-hair steps in which it moves (faster than
+    /// `ContinuityParams::moving_speed`, 0.01 m/s), m/s (0 if none). Issue 12's stroke is 0.1-0.2 m/s.
+    pub in_hair_speed_m_s: f64,
     /// Largest change of the force between two consecutive steps, N.
     pub max_force_change_n: f64,
     /// Fastest tip of a simulated strand over the run, m/s.
@@ -210,7 +215,8 @@ pub struct LiveSummary {
 }
 
 impl LiveSummary {
-    pub(crate) fn new(trace: &ForceTrace, max_force: f64, meter: &super::live::Meter, timing: &mut [f64], rejected: u64, failed: u64, wall: f64) -> Self {
+    /// `dt`: the haptic step, s.
+    pub(crate) fn new(trace: &ForceTrace, max_force: f64, dt: f64, meter: &super::live::Meter, timing: &mut [f64], rejected: u64, failed: u64, wall: f64) -> Self {
         let stats = ForceStats::of((0..trace.len()).map(|i| (trace.force(i).norm(), trace.contacts[i] > 0)), max_force);
         // Continuity: the steps with the tool in the hair and their share above the force floor; the largest
         // change between consecutive steps over the whole run.
@@ -239,6 +245,8 @@ impl LiveSummary {
             stroke_max_displacement_m: meter.stroke_max,
             in_hair_steps: in_hair,
             in_hair_force_share: if in_hair > 0 { felt as f64 / in_hair as f64 } else { 0.0 },
+            in_hair_path_m: meter.in_hair_path,
+            in_hair_speed_m_s: if meter.moving_steps > 0 { meter.moving_path / (meter.moving_steps as f64 * dt) } else { 0.0 },
             max_force_change_n: change,
             max_strand_speed_m_s: meter.max_tip_speed,
             max_depth_in_body_m: meter.max_depth,

@@ -187,6 +187,8 @@ pub struct LocalInteraction {
     /// and the loads given to [`LocalInteraction::add_load`].
     surface_torques: Vec<Vec<PointForce>>,
     pieces: Vec<Piece>,
+    /// Each strand's tip at the start of the last step (its last piece's end), m; NaN before its first step.
+    tips: Vec<Vector3<f64>>,
     bvh: Bvh,
     /// Build the tree anew at the next step rather than refit it.
     rebuild_tree: bool,
@@ -301,6 +303,7 @@ impl LocalInteraction {
             hair_finder: HairContactFinder::new(),
             rest_shapes: vec![Vec::new(); strands_len],
             rest_pieces: Vec::new(),
+            tips: Vec::new(),
             rest_stale: false,
             batches: Vec::new(),
             lane_of,
@@ -422,9 +425,16 @@ impl LocalInteraction {
             _ => None,
         }).collect();
         self.strands = strands;
+        self.tips.clear();
         // The collision tree is built anew at the next step (`Bvh::rebuild`, about the cost of a refit); the
         // hair-hair sweep's order is re-sorted from the last one.
         self.rebuild_tree = true;
+    }
+
+    /// Strand `k`'s tip at the start of the last step (read from that step's collision pieces, no kinematics of
+    /// its own), m; None before the strand's first step (or when `k` is out of range).
+    pub fn tip_at_last_step(&self, k: usize) -> Option<Vector3<f64>> {
+        self.tips.get(k).copied().filter(|x| x.x.is_finite())
     }
 
     /// Gives strand `k` its rest shape for hair-hair contact: `rest`'s centreline (the same model and
@@ -692,6 +702,12 @@ impl LocalInteraction {
             } else {
                 Self::sample_strand(k, strand, &mut self.pieces);
             }
+        }
+        self.tips.clear();
+        self.tips.resize(self.strands.len(), Vector3::repeat(f64::NAN));
+        for p in &self.pieces {
+            // Contiguous per strand, root to tip: the last one written is the tip.
+            self.tips[p.strand] = p.b;
         }
         let radius = Self::hair_radius(&self.strands);
         let reach = self.reach_radius(radius);
@@ -1116,6 +1132,31 @@ mod tests {
             // The strands' tips moved along the stroke.
             let moved = it.strands.iter().map(|s| segment_frames(&s.model, &s.state)[8].position.y).fold(f64::NEG_INFINITY, f64::max);
             assert!(moved > 1e-3, "{model:?}: tips moved {moved}");
+        }
+    }
+
+    #[test]
+    fn the_tip_at_the_last_step_is_the_strands_tip_before_it() {
+        // For both contact models (pieces from the prepared sweep, and sampled): after each step of a comb stroke,
+        // `tip_at_last_step` is the tip the strand's kinematics give for its state before that step, to 1e-12 m;
+        // none before the first step and after new strands are set.
+        for model in [
+            ForceModel::Constraint { friction: HairType::H1.friction_coefficient(), options: ConstraintOptions::default() },
+            ForceModel::Paper { gain: 1.0 },
+        ] {
+            let mut it = LocalInteraction::new(patch(3), ToolShape::builtin("comb").unwrap(), comb_at(-0.01), model);
+            assert_eq!(it.tip_at_last_step(0), None);
+            for n in 0..40 {
+                let before: Vec<Vector3<f64>> = it.strands.iter().map(|s| segment_frames(&s.model, &s.state).last().unwrap().position).collect();
+                it.step(1e-3, comb_at(-0.01 + 2.5e-4 * n as f64)).unwrap();
+                for (k, want) in before.iter().enumerate() {
+                    let got = it.tip_at_last_step(k).unwrap();
+                    assert!((got - want).norm() < 1e-12, "{model:?} step {n} strand {k}: {got:?} vs {want:?}");
+                }
+            }
+            let strands = it.strands.clone();
+            it.set_strands(strands, &[Some(0), Some(1), Some(2)]);
+            assert_eq!(it.tip_at_last_step(0), None);
         }
     }
 

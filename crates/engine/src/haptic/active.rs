@@ -386,14 +386,16 @@ impl HapticCore {
         s
     }
 
-    /// Stage 8 of the step: each simulated strand's tip speed over the step `dt` (s), the leaving strands'
-    /// rest, and the display weights (fading in, and the let-go strands' out, over `blend_time`).
+    /// Stage 8 of the step: each simulated strand's tip speed over a step `dt` (s; the step before this one:
+    /// the tips at the start of each step, read from the interaction's collision pieces, one step behind), the
+    /// leaving strands' rest, and the display weights (fading in, and the let-go strands' out, over
+    /// `blend_time`).
     pub(crate) fn track_active(&mut self, dt: f64) {
         let h = self.params.haptic;
         let fade = dt / h.blend_time;
         self.max_tip_speed = 0.0;
-        for (m, s) in self.members.iter_mut().zip(&self.interaction.strands) {
-            let x = tip(s);
+        for (k, (m, s)) in self.members.iter_mut().zip(&self.interaction.strands).enumerate() {
+            let x = self.interaction.tip_at_last_step(k).unwrap_or_else(|| tip(s));
             m.tip_speed = m.tip.map_or(0.0, |p| (x - p).norm() / dt);
             m.tip = Some(x);
             if m.tip_speed.is_finite() {

@@ -91,7 +91,10 @@ describe('a comb stroke through the hair (issue 12; 5k render strands standing f
     // The stroke the server felt is the hand's: the comb's mean speed in the hair within issue 12's 0.1-0.2 m/s.
     assert.ok(s.in_hair_speed_m_s >= 0.1 && s.in_hair_speed_m_s <= 0.2, `the comb's speed in the hair ${s.in_hair_speed_m_s} m/s (page: ${JSON.stringify(timing)})`);
     assert.ok(s.final_max_displacement_m <= 0.03, `displacement at the end ${s.final_max_displacement_m} m`);
-    assert.ok(s.in_hair_force_share >= 0.6, `share of in-hair steps above 5 mN ${s.in_hair_force_share}`);
+    // Continuity over the stroke's steps (the comb moving in the hair): the comb also rests pressed in the hair
+    // for the seconds its screenshot takes, where a still comb feels the hair's static push only (5-10 mN).
+    assert.ok(s.stroke_steps > 500, `stroke steps (in the hair, moving): ${s.stroke_steps}`);
+    assert.ok(s.stroke_force_share >= 0.6, `share of the stroke's steps above 5 mN ${s.stroke_force_share} (in-hair steps: ${s.in_hair_force_share})`);
     // Issue 12's bounds: at most 0.08 m during the stroke and 0.1 N per step. The largest steps were the comb
     // catching a wisp near its roots (a strand point 5 mm from the root, where it can hardly move): the proxy
     // slowed by 0.01-0.016 m/s in one step and the coupling's plain damper (10 N s/m) passed it to the hand

@@ -247,13 +247,13 @@ fn live_text(head: &str, o: &ScenarioOutput, trace: &Path, out: &Path) -> String
          mean force      {:.4e} N (over steps with contact)\n\
          displacement    largest {:.4e} m during the run, {:.4e} m during the stroke, {:.4e} m at the end (guide points from their settled positions, relative to the head)\n\
          body            deepest sampled render vertex {:.4e} m inside the head and body as shown ({:.4e} m before the viewer's push-out)\n\
-         continuity      {} steps with the tool in the hair (its path there {:.4} m, {:.3} m/s), {:.1} % of them above 5 mN; largest one-step change {:.4e} N; fastest strand tip {:.3} m/s\n\
+         continuity      {} steps with the tool in the hair (its path there {:.4} m; {} moving, at {:.3} m/s, {:.1} % of them above 5 mN), {:.1} % of them above 5 mN; largest one-step change {:.4e} N; fastest strand tip {:.3} m/s\n\
          haptic step     p50 {:.1} us, p99 {:.1} us, p99.9 {:.1} us, mean {:.1} us (one thread, lockstep)\n\
          wall time       {:.2} s\n\
          outputs         {}, {}, {}\n",
         s.steps, s.contact_steps, s.clamp_steps, s.rejected_readings, s.failed_steps,
         s.peak_force_n, s.mean_force_n, s.max_displacement_m, s.stroke_max_displacement_m, s.final_max_displacement_m, s.max_depth_in_body_m, s.max_depth_before_push_out_m,
-        s.in_hair_steps, s.in_hair_path_m, s.in_hair_speed_m_s, 100.0 * s.in_hair_force_share, s.max_force_change_n, s.max_strand_speed_m_s,
+        s.in_hair_steps, s.in_hair_path_m, s.stroke_steps, s.in_hair_speed_m_s, 100.0 * s.stroke_force_share, 100.0 * s.in_hair_force_share, s.max_force_change_n, s.max_strand_speed_m_s,
         s.haptic_step_p50_us, s.haptic_step_p99_us, s.haptic_step_p999_us, s.haptic_step_mean_us, s.wall_time_s,
         trace.display(), out.join("summary.txt").display(), out.join("summary.json").display()
     )

@@ -420,9 +420,9 @@ pub(crate) struct Meter {
     /// The tool's path (its proxy's) over the steps with the tool in the hair (a step counts from the
     /// previous step's position), m.
     pub in_hair_path: f64,
-    /// The in-hair steps in which the tool moves faster than `ContinuityParams::moving_speed`, and its path
-    /// over them, m.
-    pub moving_steps: usize,
+    /// Each traced step: the tool in the hair and moving faster than `ContinuityParams::moving_speed` (a
+    /// stroke's step); and the tool's path over those steps, m.
+    pub moving: Vec<bool>,
     pub moving_path: f64,
     /// The tool's proxy at the last traced step, m.
     last_tool: Option<Vector3<f64>>,
@@ -440,7 +440,7 @@ const DEPTH_SAMPLE_EVERY: usize = 25;
 
 impl Meter {
     fn new(scene: &Arc<Scene>) -> Self {
-        Self { scene: scene.clone(), settled: Vec::new(), params: ContinuityParams::default(), max: 0.0, last: 0.0, stroke_max: 0.0, in_hair: Vec::new(), in_hair_path: 0.0, moving_steps: 0, moving_path: 0.0, last_tool: None, max_tip_speed: 0.0, max_depth: 0.0, max_depth_raw: 0.0 }
+        Self { scene: scene.clone(), settled: Vec::new(), params: ContinuityParams::default(), max: 0.0, last: 0.0, stroke_max: 0.0, in_hair: Vec::new(), in_hair_path: 0.0, moving: Vec::new(), moving_path: 0.0, last_tool: None, max_tip_speed: 0.0, max_depth: 0.0, max_depth_raw: 0.0 }
     }
     /// Guide points as shown, in the head frame (relative to the head), m.
     fn points(&self, ls: &Lockstep) -> Vec<Vector3<f64>> {
@@ -515,14 +515,16 @@ impl Meter {
             shape.capsules.iter().any(|c| tools::geometry::point_segment_distance(&q, &Vector3::from(c.a), &Vector3::from(c.b)) - c.radius < self.params.in_hair_distance)
         });
         self.in_hair.push(inside);
+        let mut moving = false;
         if let (true, Some(last)) = (inside, self.last_tool) {
             let step = (input.position - last).norm();
             self.in_hair_path += step;
             if step > self.params.moving_speed * ls.dt {
-                self.moving_steps += 1;
+                moving = true;
                 self.moving_path += step;
             }
         }
+        self.moving.push(moving);
         self.last_tool = input.present.then_some(input.position);
         self.max_tip_speed = self.max_tip_speed.max(ls.haptic.max_tip_speed());
     }
@@ -618,6 +620,7 @@ mod tests {
         assert!(m.stroke_max_displacement_m <= 0.08, "stroke displacement {} m", m.stroke_max_displacement_m);
         assert!(m.final_max_displacement_m <= 0.03, "displacement 1.2 s after the stroke {} m", m.final_max_displacement_m);
         assert!(m.in_hair_force_share >= 0.6, "share of in-hair steps above 5 mN {}", m.in_hair_force_share);
+        assert!(m.stroke_force_share >= 0.6 && m.stroke_steps > in_hair / 2, "share of the {} stroke steps above 5 mN {}", m.stroke_steps, m.stroke_force_share);
         assert!(m.max_force_change_n <= 0.1, "largest one-step change {} N", m.max_force_change_n);
         m
     }

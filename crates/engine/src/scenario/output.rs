@@ -188,6 +188,12 @@ pub struct LiveSummary {
     /// The stroke's speed: the tool's (proxy's) mean speed over the in-hair steps in which it moves (faster than
     /// `ContinuityParams::moving_speed`, 0.01 m/s), m/s (0 if none). Issue 12's stroke is 0.1-0.2 m/s.
     pub in_hair_speed_m_s: f64,
+    /// The stroke's steps: the in-hair steps in which the tool moves (as for `in_hair_speed_m_s`).
+    pub stroke_steps: usize,
+    /// Share of the stroke's steps with a force above `ContinuityParams::force_floor` (5 mN), in [0, 1] (0
+    /// without one): `in_hair_force_share` without the steps in which the tool rests in the hair, where a still
+    /// comb feels only the hair's static push (5-10 mN).
+    pub stroke_force_share: f64,
     /// Largest change of the force between two consecutive steps, N.
     pub max_force_change_n: f64,
     /// Fastest tip of a simulated strand over the run, m/s.
@@ -221,10 +227,16 @@ impl LiveSummary {
         // Continuity: the steps with the tool in the hair and their share above the force floor; the largest
         // change between consecutive steps over the whole run.
         let (mut in_hair, mut felt, mut change) = (0usize, 0usize, 0.0f64);
+        let (mut moving, mut felt_moving) = (0usize, 0usize);
         for i in 0..trace.len() {
+            let above = trace.force(i).norm() > meter.force_floor();
             if meter.in_hair.get(i) == Some(&true) {
                 in_hair += 1;
-                felt += (trace.force(i).norm() > meter.force_floor()) as usize;
+                felt += above as usize;
+            }
+            if meter.moving.get(i) == Some(&true) {
+                moving += 1;
+                felt_moving += above as usize;
             }
             if i > 0 {
                 change = change.max((trace.force(i) - trace.force(i - 1)).norm());
@@ -246,7 +258,9 @@ impl LiveSummary {
             in_hair_steps: in_hair,
             in_hair_force_share: if in_hair > 0 { felt as f64 / in_hair as f64 } else { 0.0 },
             in_hair_path_m: meter.in_hair_path,
-            in_hair_speed_m_s: if meter.moving_steps > 0 { meter.moving_path / (meter.moving_steps as f64 * dt) } else { 0.0 },
+            in_hair_speed_m_s: if moving > 0 { meter.moving_path / (moving as f64 * dt) } else { 0.0 },
+            stroke_steps: moving,
+            stroke_force_share: if moving > 0 { felt_moving as f64 / moving as f64 } else { 0.0 },
             max_force_change_n: change,
             max_strand_speed_m_s: meter.max_tip_speed,
             max_depth_in_body_m: meter.max_depth,

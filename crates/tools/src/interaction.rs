@@ -337,30 +337,42 @@ impl LocalInteraction {
             // The pieces are contiguous per strand, in strand order.
             let k = self.pieces[i].strand;
             let end = i + self.pieces[i..].iter().take_while(|p| p.strand == k).count();
-            let pieces = &self.pieces[i..end];
+            let pieces = i..end;
             i = end;
-            let (Some(Some(hold)), Some(strand)) = (self.holds.get(k), self.strands.get(k)) else { continue };
             if k % HOLD_EVERY != self.hold_phase {
                 continue;
             }
-            // Spring per unit length, N/m per m, times HOLD_EVERY (this strand's turn stands for that many steps).
-            let stiffness = HOLD_EVERY as f64 * strand.model.linear_density() * strand.model.gravity.norm() / self.hold_distance;
-            let length = strand.model.length.max(1e-9);
-            // Per run along the strand: sum of s x piece length (m^2), of piece lengths (m), of forces (N).
-            let mut runs = [(0.0, 0.0, Vector3::zeros()); HOLD_LOADS];
-            for p in pieces {
-                let s = p.s + 0.5 * p.length;
-                let run = &mut runs[((s / length * HOLD_LOADS as f64) as usize).min(HOLD_LOADS - 1)];
-                run.0 += s * p.length;
-                run.1 += p.length;
-                run.2 -= (0.5 * (p.a + p.b) - hold.at(s)) * (stiffness * p.length);
-            }
-            for (sw, w, f) in runs {
-                if w > 0.0 && f.iter().all(|x| x.is_finite()) {
-                    self.surface_torques[k].push(PointForce::new(sw / w, f));
-                }
+            for load in self.hold_loads(k, pieces).into_iter().flatten() {
+                // Not finite (never expected): left out.
+                self.add_load(k, load);
             }
         }
+    }
+
+    /// The hold's [`HOLD_LOADS`] loads on strand `k` (see [`LocalInteraction::hold_strands`]) from its collision
+    /// pieces `pieces` (indices into the last step's pieces): forces in N at the runs' mean arc lengths in m,
+    /// [`HOLD_EVERY`] times the spring's; None for a run without pieces, or for all if the strand is not held.
+    fn hold_loads(&self, k: usize, pieces: std::ops::Range<usize>) -> [Option<PointForce>; HOLD_LOADS] {
+        let mut loads = [None; HOLD_LOADS];
+        let (Some(Some(hold)), Some(strand)) = (self.holds.get(k), self.strands.get(k)) else { return loads };
+        // Spring per unit length, N/m per m, times HOLD_EVERY (this strand's turn stands for that many steps).
+        let stiffness = HOLD_EVERY as f64 * strand.model.linear_density() * strand.model.gravity.norm() / self.hold_distance;
+        let length = strand.model.length.max(1e-9);
+        // Per run along the strand: sum of s x piece length (m^2), of piece lengths (m), of forces (N).
+        let mut runs = [(0.0, 0.0, Vector3::zeros()); HOLD_LOADS];
+        for p in &self.pieces[pieces] {
+            let s = p.s + 0.5 * p.length;
+            let run = &mut runs[((s / length * HOLD_LOADS as f64) as usize).min(HOLD_LOADS - 1)];
+            run.0 += s * p.length;
+            run.1 += p.length;
+            run.2 -= (0.5 * (p.a + p.b) - hold.at(s)) * (stiffness * p.length);
+        }
+        for (load, (sw, w, f)) in loads.iter_mut().zip(runs) {
+            if w > 0.0 {
+                *load = Some(PointForce::new(sw / w, f));
+            }
+        }
+        loads
     }
 
     /// Replaces the strands by `strands`, keeping the workspaces (the batches' solver storage, the contact

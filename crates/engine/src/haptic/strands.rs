@@ -66,19 +66,20 @@ impl HapticCore {
 
     /// Where the hair volume holds each local strand (`LocalInteraction::holds`): its guide's reference
     /// samples carried by the lattice `lattice` (the shape the viewer shows for it when not simulated). A
-    /// strand without one gets it now; the others are taken again a tenth at a time (each every 10 steps, the
-    /// global layer's period at 1 kHz), so that no step maps every strand's references through a new lattice.
+    /// strand without one gets it now; the others are taken again a share at a time, each once per global step
+    /// (`SessionParams::haptic_rate_hz / global_rate_hz` haptic steps: 10 by default), so that no step maps
+    /// every strand's references through a new lattice.
     pub(crate) fn hold_in_place(&mut self, lattice: &LatticeSnapshot) {
-        const SHARES: u64 = 10;
+        let shares = (self.params.haptic_rate_hz / self.params.global_rate_hz).round().max(1.0) as u64;
         let n = self.active.len();
         self.interaction.holds.resize(n, None);
-        let share = (self.step % SHARES) as usize;
+        let share = (self.step % shares) as usize;
         let ok = lattice.positions.len() == self.scene.lattice.node_count();
         let mut cache = self.references.borrow_mut();
         cache.use_nodes(&lattice.positions);
         for (slot, &g) in self.active.iter().enumerate() {
             let hold = &mut self.interaction.holds[slot];
-            if hold.is_some() && slot % SHARES as usize != share {
+            if hold.is_some() && slot % shares as usize != share {
                 continue;
             }
             let bases = cache.bases(&self.scene, g, ok);

@@ -134,12 +134,12 @@ fn tip(s: &Strand) -> Vector3<f64> {
 }
 
 impl HapticCore {
-    /// Copies the active strands' states back into the guide store.
+    /// Moves the active strands back into the guide store as they are: the interaction keeps none, so the
+    /// active set must be cleared next ([`HapticCore::clear_active`]).
     pub(crate) fn write_back(&mut self) {
-        for (slot, &g) in self.active.iter().enumerate() {
-            if let Some(s) = self.interaction.strands.get(slot) {
-                self.strands[g] = s.clone();
-            }
+        let strands = std::mem::take(&mut self.interaction.strands);
+        for (s, &g) in strands.into_iter().zip(&self.active) {
+            self.strands[g] = Some(s);
         }
     }
 
@@ -323,14 +323,20 @@ impl HapticCore {
         let mut old: Vec<Option<Strand>> = std::mem::take(&mut self.interaction.strands).into_iter().map(Some).collect();
         let mut strands = Vec::with_capacity(guides.len());
         let mut from = Vec::with_capacity(guides.len());
-        for &g in &guides {
+        let (mut kept, mut kept_members) = (Vec::with_capacity(guides.len()), Vec::with_capacity(guides.len()));
+        for (&g, m) in guides.iter().zip(members) {
             let i = old_guides.iter().position(|&o| o == g);
-            strands.push(match i {
-                Some(i) => old[i].take().expect("each old strand is taken once"),
+            // A guide whose strand is in neither place (none is: each is in the store or simulated) is left out.
+            let Some(s) = (match i {
+                Some(i) => old[i].take(),
                 None => self.joining(g),
-            });
+            }) else { continue };
+            strands.push(s);
             from.push(i);
+            kept.push(g);
+            kept_members.push(m);
         }
+        let (guides, members) = (kept, kept_members);
         let samples = self.scene.samples();
         for (i, s) in old.into_iter().enumerate() {
             if let Some(s) = s {
@@ -339,7 +345,7 @@ impl HapticCore {
                 if weight > 0.0 {
                     self.faded.push(Faded { guide: g, samples: samples_along(&s, self.scene.guides[g].model.length, samples), weight });
                 }
-                self.strands[g] = self.let_go(g, s);
+                self.strands[g] = Some(self.let_go(g, s));
             }
         }
         self.active = guides;
@@ -359,16 +365,17 @@ impl HapticCore {
         self.wet_version = u64::MAX;
     }
 
-    /// Guide `g`'s stored strand ready to join: at rest (zero velocities), its root on the head at rest.
-    fn joining(&self, g: usize) -> Strand {
-        let mut s = self.strands[g].clone();
+    /// Guide `g`'s stored strand, taken from the store, ready to join: at rest (zero velocities), its root on
+    /// the head at rest. None if the store does not have it.
+    fn joining(&mut self, g: usize) -> Option<Strand> {
+        let mut s = self.strands.get_mut(g)?.take()?;
         s.state.qdot.fill(0.0);
         let root = &mut s.state.root;
         root.position = self.scene.guides[g].state.root.position;
         root.velocity = Vector3::zeros();
         root.angular_velocity = Vector3::zeros();
         root.acceleration = Vector3::zeros();
-        s
+        Some(s)
     }
 
     /// A strand of guide `g` leaving the simulation: velocities zeroed; back to its groomed shape if its tip is

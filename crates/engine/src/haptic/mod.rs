@@ -68,8 +68,9 @@ pub struct HapticCore {
     pub(crate) coupling: Coupling,
     /// Device point following the pointer's target, interpolated between its events.
     pub(crate) device: Option<TargetFilter>,
-    /// Every guide's strand (inactive ones keep their last state).
-    pub(crate) strands: Vec<Strand>,
+    /// Every guide's strand while it is not simulated (it keeps its last state there); None while it is: the
+    /// interaction has it (moved, not copied: a copy of a strand's workspaces was most of a joining step).
+    pub(crate) strands: Vec<Option<Strand>>,
     /// Simulated guides, in the interaction's order (their strands live in the interaction meanwhile and
     /// move back to `strands` when they leave), and each one's membership.
     pub(crate) active: Vec<usize>,
@@ -185,6 +186,7 @@ impl HapticCore {
         let h = scene.hair_type;
         let strands = Self::build_strands(&scene, &h, 0.0, params.haptic.min_air_drag)?;
         let sets = strands.iter().map(|s| SetState::new(&s.model)).collect();
+        let strands = strands.into_iter().map(Some).collect();
         let start = Vector3::from(params.haptic.start);
         let coupling = Coupling::new(params.profile, CouplingParams::for_profile(&params.profile), start);
         let pose = ToolPose { position: start, rotation: Matrix3::identity() };
@@ -220,7 +222,7 @@ impl HapticCore {
                 if h != self.hair_type || c != self.curliness {
                     if let Ok(s) = Self::build_strands(&self.scene, &h, c, self.params.haptic.min_air_drag) {
                         self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
-                        self.strands = s;
+                        self.strands = s.into_iter().map(Some).collect();
                     }
                 }
                 self.hair_type = h;
@@ -235,9 +237,11 @@ impl HapticCore {
                 }
             }
             Command::Reset => {
+                // Back to the store first: if the rebuild fails, the store keeps every strand.
+                self.write_back();
                 if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, self.params.haptic.min_air_drag) {
                     self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
-                    self.strands = s;
+                    self.strands = s.into_iter().map(Some).collect();
                 }
                 self.clear_active();
                 self.clipped = false;

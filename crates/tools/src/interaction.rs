@@ -822,6 +822,9 @@ impl LocalInteraction {
                     std::iter::once((p.s, p.a)).chain(last.then_some((p.s + p.length, p.b)))
                 });
                 for (s, x) in points {
+                    if body.clear_of(&x.into(), *threshold, radius) {
+                        continue;
+                    }
                     let q = body.push_out(&x.into(), *threshold, radius).coords;
                     let d = q - x;
                     let depth = d.norm();

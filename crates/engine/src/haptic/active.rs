@@ -23,9 +23,9 @@
 //! 4. When chosen and relaxing strands together exceed `max_active`, the relaxing ones that left first are
 //!    let go first: at most `max_active` strands are simulated (the step's cost is bounded).
 //!
-//! A membership change moves the strands between the interaction and the guide store (no copy of the strands
-//! that stay; the interaction keeps its workspaces, [`tools::interaction::LocalInteraction::set_strands`]), and
-//! never happens while the clip holds a strand.
+//! A membership change moves the strands between the interaction and the guide store (no strand is copied: a
+//! joining one is taken out of the store, a leaving one put back; the interaction keeps its workspaces,
+//! [`tools::interaction::LocalInteraction::set_strands`]), and never happens while the clip holds a strand.
 
 use super::strands::samples_along;
 use super::HapticCore;
@@ -483,6 +483,54 @@ mod tests {
             assert_eq!(core.active(), &want[..(k * per).min(want.len())], "after {k} joining steps");
         }
         assert!(core.active().len() <= params.max_active);
+    }
+
+    #[test]
+    fn every_guide_strand_is_in_the_store_or_simulated_never_both_nor_lost() {
+        // A comb stroke down through the hair (strands join and leave), then each command that empties the
+        // active set: after every step and command, each guide's strand is in exactly one place (the store
+        // while it is not simulated, the interaction while it is), and a strand that left keeps the state it
+        // left with (moved back, not rebuilt).
+        use crate::command::Command;
+        let scene = small_scene();
+        let params = SessionParams::default();
+        let mut core = HapticCore::new(scene.clone(), params).unwrap();
+        let snap = GlobalCore::new(scene.clone(), &params).snapshot();
+        let n = scene.guides.len();
+        let check = |core: &HapticCore, when: &str| {
+            assert_eq!(core.interaction.strands.len(), core.active().len(), "{when}");
+            for g in 0..n {
+                assert_ne!(core.strands[g].is_some(), core.active().contains(&g), "guide {g} {when}");
+            }
+        };
+        let (mut joined, mut left) = (0, 0);
+        for k in 0..1500 {
+            let before: Vec<usize> = core.active().to_vec();
+            let z = 0.03 - 0.1 * (k as f64 / 1500.0);
+            let reading = DeviceReading { time: k as f64 * 1e-3, position: Vector3::new(0.0, -0.118, z), rotation: test_rot(), buttons: 0 };
+            core.step(Some(reading), &snap, 1e-3);
+            check(&core, &format!("after step {k}"));
+            joined += core.active().iter().filter(|g| !before.contains(g)).count();
+            for &g in before.iter().filter(|g| !core.active().contains(g)) {
+                left += 1;
+                // Let go where it was (or back to its groom if far from it): the store's state is not the
+                // joining one's rest state with zero coordinates.
+                let s = core.strands[g].as_ref().unwrap();
+                assert!(s.state.q.iter().all(|x| x.is_finite()) && s.state.qdot.iter().all(|&v| v == 0.0), "guide {g} let go at rest");
+            }
+        }
+        assert!(joined > 8 && left > 0, "strands joined ({joined}) and left ({left}) during the stroke");
+        assert!(!core.active().is_empty(), "the comb ends in the hair");
+        for (c, name) in [(Command::SelectTool(crate::tool::Tool::Brush), "select"), (Command::SetHair { hair_type: 1, curliness: 0.0, combing_ease: 0.0 }, "set hair"), (Command::Reset, "reset")] {
+            for k in 0..300 {
+                let reading = DeviceReading { time: k as f64 * 1e-3, position: Vector3::new(0.0, -0.118, -0.02), rotation: test_rot(), buttons: 0 };
+                core.step(Some(reading), &snap, 1e-3);
+            }
+            assert!(!core.active().is_empty(), "in the hair before {name}");
+            core.apply(&c);
+            assert!(core.active().is_empty(), "{name} empties the active set");
+            check(&core, name);
+        }
     }
 
     #[test]

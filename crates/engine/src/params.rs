@@ -203,10 +203,12 @@ pub struct HapticParams {
     pub groomed_overlap: bool,
     /// The tool drags through the local strands against the fibres it parts (`tools::entanglement`, the tress
     /// scenarios' law: bending of the parted fibres and, wet, the water bridges on the tooth; each guide's
-    /// drag times the real hairs it stands for). Default false: on, the `[live]` acceptance stroke
-    /// (examples/scenarios/live-comb.toml) gives 0.25 N peak, force above 5 mN in 99.5 % of its in-hair steps
-    /// and 0.027 N largest step, but carries guides 0.136 m from their settled place during the stroke (0.08 m
-    /// allowed; measured 2026-11-24, docs/scenarios.md).
+    /// drag times the real hairs it stands for). Default false. On (measured 2026-11-28, with the hold of the
+    /// neighbours): the `[live]` down stroke (examples/scenarios/live-comb.toml) meets issue 12's acceptance
+    /// (0.24 N peak, guides 2.8 cm from their settled place, force above 5 mN in 98.7 % of its in-hair steps,
+    /// 0.013 N largest step), but the strokes up and down (live-comb-updown.toml) carry guides 0.123 m (0.08 m
+    /// allowed; tips 2.2 m/s: a tooth drawn towards the roots drags the parted fibres up with it), and the haptic
+    /// step costs about 50 us (11 %) more (`live_profile bench/device-comb.toml`: mean 517-527 vs 464-474 us).
     pub entanglement: bool,
     /// The hold of the unsimulated neighbours on each local strand (`tools::interaction::LocalInteraction::
     /// hold_distance`): a spring per unit length towards the strand's place in the hair volume (its groom

@@ -233,6 +233,16 @@ impl MetaballSet {
 /// Default skin of [`MetaballSet::push_out`]: how far outside the surface a pushed point is put, m.
 pub const PUSH_OUT_SKIN: f64 = 5e-4;
 
+/// The skin [`MetaballSet::push_out`] uses for a given `skin` (m): non-negative, 0 if not finite.
+fn push_out_skin(skin: f64) -> f64 {
+    if skin.is_finite() { skin.max(0.0) } else { 0.0 }
+}
+
+/// How near the offset surface [`MetaballSet::push_out`] puts a point, m, for a sanitized `skin` (m).
+fn push_out_tolerance(skin: f64) -> f64 {
+    1e-3 * skin.max(1e-6)
+}
+
 impl MetaballSet {
     /// True if [`MetaballSet::push_out`] certainly leaves `x` (m) where it is: `x` is farther than `skin`
     /// (m) outside the body {F > `threshold`} by the first-order distance, with a margin of 1e-9 of it. No
@@ -240,10 +250,10 @@ impl MetaballSet {
     /// with many points mostly clear of the body tests them with this first, and pushes out the others.
     /// False does not mean the push-out moves `x`.
     pub fn clear_of(&self, x: &Point3<f64>, threshold: f64, skin: f64) -> bool {
-        let skin = if skin.is_finite() { skin.max(0.0) } else { 0.0 };
+        let skin = push_out_skin(skin);
         let (f, g) = self.field_and_gradient(x);
         // push_out returns x when (T - F) / |g| >= skin - tol (or F <= 0).
-        let margin = (skin - 1e-3 * skin.max(1e-6)).max(0.0) * (1.0 + 1e-9);
+        let margin = (skin - push_out_tolerance(skin)).max(0.0) * (1.0 + 1e-9);
         let gap = threshold - f;
         f <= 0.0 || (gap > 0.0 && gap * gap > margin * margin * g.norm_squared())
     }
@@ -261,8 +271,8 @@ impl MetaballSet {
     /// The result is continuous in `x` (points within the skin are moved onto it, not only
     /// points inside), so hair rendered on the offset surface does not flicker.
     pub fn push_out(&self, x: &Point3<f64>, threshold: f64, skin: f64) -> Point3<f64> {
-        let skin = if skin.is_finite() { skin.max(0.0) } else { 0.0 };
-        let tol = 1e-3 * skin.max(1e-6);
+        let skin = push_out_skin(skin);
+        let tol = push_out_tolerance(skin);
         // first-order distance at p (m), +inf outside every ball; normal fallback for |g| = 0
         let dist = |p: &Point3<f64>| -> (f64, Vector3<f64>) {
             let (f, g) = self.field_and_gradient(p);

@@ -245,10 +245,10 @@ fn push_out_tolerance(skin: f64) -> f64 {
 
 impl MetaballSet {
     /// True if [`MetaballSet::push_out`] certainly leaves `x` (m) where it is: `x` is farther than `skin`
-    /// (m) outside the body {F > `threshold`} by the first-order distance, with a margin of 1e-9 of it. No
-    /// division or square root (the push-out's first test, rearranged, takes about half the time): a caller
-    /// with many points mostly clear of the body tests them with this first, and pushes out the others.
-    /// False does not mean the push-out moves `x`.
+    /// (m) outside the body {F > `threshold`} by the first-order distance, with a margin of 1e-9 of it. The
+    /// push-out's first test rearranged, without division or square root: a caller with many points mostly
+    /// clear of the body tests them with this first, and pushes out the others (the local strands' body
+    /// contacts: 38-46 us a step against 47-55 us). False does not mean the push-out moves `x`.
     pub fn clear_of(&self, x: &Point3<f64>, threshold: f64, skin: f64) -> bool {
         let skin = push_out_skin(skin);
         let (f, g) = self.field_and_gradient(x);

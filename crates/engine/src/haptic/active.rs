@@ -489,8 +489,8 @@ mod tests {
     fn every_guide_strand_is_in_the_store_or_simulated_never_both_nor_lost() {
         // A comb stroke down through the hair (strands join and leave), then each command that empties the
         // active set: after every step and command, each guide's strand is in exactly one place (the store
-        // while it is not simulated, the interaction while it is), and a strand that left keeps the state it
-        // left with (moved back, not rebuilt).
+        // while it is not simulated, the interaction while it is), and a strand that left is in the store let
+        // go (finite coordinates, at rest).
         use crate::command::Command;
         let scene = small_scene();
         let params = SessionParams::default();
@@ -513,8 +513,7 @@ mod tests {
             joined += core.active().iter().filter(|g| !before.contains(g)).count();
             for &g in before.iter().filter(|g| !core.active().contains(g)) {
                 left += 1;
-                // Let go where it was (or back to its groom if far from it): the store's state is not the
-                // joining one's rest state with zero coordinates.
+                // Let go where it was (or back to its groom if far from it), at rest.
                 let s = core.strands[g].as_ref().unwrap();
                 assert!(s.state.q.iter().all(|x| x.is_finite()) && s.state.qdot.iter().all(|&v| v == 0.0), "guide {g} let go at rest");
             }

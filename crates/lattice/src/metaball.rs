@@ -244,9 +244,38 @@ fn push_out_tolerance(skin: f64) -> f64 {
 }
 
 impl MetaballSet {
+    /// The first-order signed distance from `x` (m) to the body's surface {F = `threshold`},
+    /// d = (T - F)/|grad F| (m; < 0 inside, +infinity where F = 0, outside every ball), and the outward
+    /// normal there, n = -grad F/|grad F| (unitless; zero where F = 0). Where the gradient vanishes (e.g. a
+    /// ball's centre) the normal is the ray from the largest contributing ball's centre (+z at the centre
+    /// itself) and the distance minus that ball's radius inside, +infinity outside. The distance
+    /// [`MetaballSet::push_out`] iterates on.
+    pub fn distance(&self, x: &Point3<f64>, threshold: f64) -> (f64, Vector3<f64>) {
+        let (f, g) = self.field_and_gradient(x);
+        if f <= 0.0 {
+            return (f64::INFINITY, Vector3::zeros());
+        }
+        let gn = g.norm();
+        if gn > 1e-12 {
+            return ((threshold - f) / gn, -g / gn);
+        }
+        let (mut best, mut best_f) = (0usize, -1.0);
+        for (i, b) in self.balls.iter().enumerate() {
+            let fb = b.term(x).0;
+            if fb > best_f {
+                best = i;
+                best_f = fb;
+            }
+        }
+        let n = (x - self.balls[best].centre).try_normalize(1e-300).unwrap_or_else(Vector3::z);
+        let d = if f > threshold { -self.balls[best].radius } else { f64::INFINITY };
+        (d, n)
+    }
+
     /// True if [`MetaballSet::push_out`] certainly leaves `x` (m) where it is: `x` is farther than `skin`
     /// (m) outside the body {F > `threshold`} by the first-order distance, with a margin of 1e-9 of it. The
-    /// push-out's first test rearranged, without division or square root: a caller with many points mostly
+    /// push-out's first test ([`MetaballSet::distance`] against the skin) rearranged, without division or
+    /// square root: a caller with many points mostly
     /// clear of the body tests them with this first, and pushes out the others (the local strands' body
     /// contacts: 38-46 us a step against 47-55 us). False does not mean the push-out moves `x`.
     pub fn clear_of(&self, x: &Point3<f64>, threshold: f64, skin: f64) -> bool {
@@ -273,30 +302,7 @@ impl MetaballSet {
     pub fn push_out(&self, x: &Point3<f64>, threshold: f64, skin: f64) -> Point3<f64> {
         let skin = push_out_skin(skin);
         let tol = push_out_tolerance(skin);
-        // first-order distance at p (m), +inf outside every ball; normal fallback for |g| = 0
-        let dist = |p: &Point3<f64>| -> (f64, Vector3<f64>) {
-            let (f, g) = self.field_and_gradient(p);
-            if f <= 0.0 {
-                return (f64::INFINITY, Vector3::zeros());
-            }
-            let gn = g.norm();
-            if gn > 1e-12 {
-                return ((threshold - f) / gn, -g / gn);
-            }
-            let (mut best, mut best_f) = (0usize, -1.0);
-            for (i, b) in self.balls.iter().enumerate() {
-                let fb = b.term(p).0;
-                if fb > best_f {
-                    best = i;
-                    best_f = fb;
-                }
-            }
-            let n = (p - self.balls[best].centre)
-                .try_normalize(1e-300)
-                .unwrap_or_else(Vector3::z);
-            let d = if f > threshold { -self.balls[best].radius } else { f64::INFINITY };
-            (d, n)
-        };
+        let dist = |p: &Point3<f64>| self.distance(p, threshold);
         let (d0, n) = dist(x);
         if d0 >= skin - tol {
             return *x;
@@ -550,15 +556,8 @@ mod tests {
 
     /// `clear_of` is never true where `push_out` moves a point (skins of a hair's radius to a
     /// centimetre, points from inside the head to 5 cm outside it, and at the surface's skin to
-    /// 1e-6 of it), and it is true for most points beyond the skin (it would be useless otherwise).
-    impl MetaballSet {
-        /// The first-order distance (T - F)/|grad F| at `x`, m (+infinity where F = 0).
-        fn distance_estimate(&self, x: &Point3<f64>, t: f64) -> f64 {
-            let (f, g) = self.field_and_gradient(x);
-            if f <= 0.0 { f64::INFINITY } else { (t - f) / g.norm() }
-        }
-    }
-
+    /// 1e-6 of it), and it is true for at least 99 % of the points beyond twice the skin by the
+    /// first-order distance (it would be useless otherwise).
     #[test]
     fn clear_of_never_hides_a_point_the_push_out_moves() {
         let t = 0.25;
@@ -585,7 +584,7 @@ mod tests {
                 let c = body.clear_of(&x, t, skin);
                 assert!(!(c && pushed), "skin {skin}: {x:?} clear but pushed out");
                 moved += pushed as usize;
-                if !pushed && body.distance_estimate(&x, t) > 2.0 * skin {
+                if !pushed && body.distance(&x, t).0 > 2.0 * skin {
                     beyond += 1;
                     clear += c as usize;
                 }

@@ -134,18 +134,13 @@ fn tip(s: &Strand) -> Vector3<f64> {
 }
 
 impl HapticCore {
-    /// Moves the active strands back into the guide store as they are: the interaction keeps none, so the
-    /// active set must be cleared next ([`HapticCore::clear_active`]).
-    pub(crate) fn write_back(&mut self) {
+    /// Empties the active set, its strands moved back into the guide store as they are (the interaction keeps
+    /// none), and forgets the fading ones and any choice in progress.
+    pub(crate) fn clear_active(&mut self) {
         let strands = std::mem::take(&mut self.interaction.strands);
         for (s, &g) in strands.into_iter().zip(&self.active) {
             self.strands[g] = Some(s);
         }
-    }
-
-    /// Empties the active set (the strands written back as they are) and forgets the fading ones and any
-    /// choice in progress.
-    pub(crate) fn clear_active(&mut self) {
         self.active.clear();
         self.members.clear();
         self.faded.clear();
@@ -326,7 +321,8 @@ impl HapticCore {
         let (mut kept, mut kept_members) = (Vec::with_capacity(guides.len()), Vec::with_capacity(guides.len()));
         for (&g, m) in guides.iter().zip(members) {
             let i = old_guides.iter().position(|&o| o == g);
-            // A guide whose strand is in neither place (none is: each is in the store or simulated) is left out.
+            // A guide whose strand is in neither place is left out (none is: each is in the store or simulated,
+            // `every_guide_strand_is_in_the_store_or_simulated_never_both_nor_lost`).
             let Some(s) = (match i {
                 Some(i) => old[i].take(),
                 None => self.joining(g),

@@ -72,7 +72,7 @@ pub struct HapticCore {
     /// interaction has it (moved, not copied: a copy of a strand's workspaces was most of a joining step).
     pub(crate) strands: Vec<Option<Strand>>,
     /// Simulated guides, in the interaction's order (their strands live in the interaction meanwhile and
-    /// move back to `strands` when they leave), and each one's membership.
+    /// move back to `strands` when they leave or the set is cleared), and each one's membership.
     pub(crate) active: Vec<usize>,
     pub(crate) members: Vec<active::Member>,
     /// Strands let go whose shown displacement is fading out (no longer simulated).
@@ -206,9 +206,8 @@ impl HapticCore {
         self.wet_version = u64::MAX;
         match *c {
             Command::SelectTool(t) => {
-                self.write_back();
-                self.tool = t;
                 self.clear_active();
+                self.tool = t;
                 self.clipped = false;
                 self.renew_interaction(Vec::new());
             }
@@ -216,7 +215,6 @@ impl HapticCore {
                 let h = HairType::ALL.get(hair_type as usize).copied().unwrap_or(self.hair_type);
                 let (c, e) = (if curliness.is_finite() { curliness.clamp(0.0, 1.0) } else { 0.0 }, if combing_ease.is_finite() { combing_ease.clamp(0.0, 1.0) } else { 0.0 });
                 // The simulated strands go back to the store (and are rebuilt there for a new hair).
-                self.write_back();
                 self.clear_active();
                 self.clipped = false;
                 if h != self.hair_type || c != self.curliness {
@@ -238,12 +236,11 @@ impl HapticCore {
             }
             Command::Reset => {
                 // Back to the store first: if the rebuild fails, the store keeps every strand.
-                self.write_back();
+                self.clear_active();
                 if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, self.params.haptic.min_air_drag) {
                     self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
                     self.strands = s.into_iter().map(Some).collect();
                 }
-                self.clear_active();
                 self.clipped = false;
                 self.renew_interaction(Vec::new());
                 self.wet_version = u64::MAX;

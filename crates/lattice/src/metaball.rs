@@ -149,6 +149,19 @@ impl MetaballSet {
         (f, g)
     }
 
+    /// Index of the ball whose term is largest at `x` (m; the first of equal ones, 0 if none contributes).
+    fn strongest_ball(&self, x: &Point3<f64>) -> usize {
+        let (mut best, mut best_f) = (0usize, -1.0);
+        for (i, b) in self.balls.iter().enumerate() {
+            let fb = b.term(x).0;
+            if fb > best_f {
+                best = i;
+                best_f = fb;
+            }
+        }
+        best
+    }
+
     /// True if `x` (m) is inside the body, F(x) > `threshold` (dimensionless).
     pub fn inside(&self, x: &Point3<f64>, threshold: f64) -> bool {
         self.field(x) > threshold
@@ -176,15 +189,7 @@ impl MetaballSet {
         }
         let gn = g.norm();
         // largest contributing ball, for the degenerate-gradient fallback and the depth cap
-        let (mut best, mut best_f) = (0usize, -1.0);
-        for (i, b) in self.balls.iter().enumerate() {
-            let fb = b.term(x).0;
-            if fb > best_f {
-                best = i;
-                best_f = fb;
-            }
-        }
-        let ball = self.balls[best];
+        let ball = self.balls[self.strongest_ball(x)];
         let cap = ball.radius;
         let (normal, mut d) = if gn > 1e-9 / cap {
             (-g / gn, (params.threshold - f) / gn)
@@ -259,14 +264,7 @@ impl MetaballSet {
         if gn > 1e-12 {
             return ((threshold - f) / gn, -g / gn);
         }
-        let (mut best, mut best_f) = (0usize, -1.0);
-        for (i, b) in self.balls.iter().enumerate() {
-            let fb = b.term(x).0;
-            if fb > best_f {
-                best = i;
-                best_f = fb;
-            }
-        }
+        let best = self.strongest_ball(x);
         let n = (x - self.balls[best].centre).try_normalize(1e-300).unwrap_or_else(Vector3::z);
         let d = if f > threshold { -self.balls[best].radius } else { f64::INFINITY };
         (d, n)

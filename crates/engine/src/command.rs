@@ -28,6 +28,10 @@ pub enum Command {
         /// Rotation of the head frame, rotation vector, rad.
         rotation: Vector3<f64>,
     },
+    /// Simulate at most this many strands near the tool (clamped to 1..=`SessionParams::max_active`): the
+    /// live haptic thread's strand budget (`crate::budget`) when its steps run long or have room again. Not a
+    /// viewer message; recorded so that a replay simulates the same strands.
+    LimitStrands(u32),
 }
 
 /// The head pose of a [`Command::SetHead`], if its values are finite and within range (position within 1 m,

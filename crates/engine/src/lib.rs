@@ -17,6 +17,7 @@
 //! live cores driven by device inputs in lockstep (`[live]`); with tool paths from [`path`]. One engine:
 //! the headless doors run the live session's own cores (tests check them against the live ones to the bit).
 
+pub mod budget;
 pub mod command;
 pub mod error;
 pub mod global;

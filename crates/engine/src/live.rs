@@ -18,6 +18,7 @@
 //! version used; [`crate::replay::replay`] re-runs the global and haptic cores in lockstep on one thread and
 //! gives the same forces bit for bit.
 
+use crate::budget::{BudgetReport, StrandBudget};
 use crate::command::Command;
 use crate::error::SessionError;
 use crate::global::{CutResult, GlobalCore};
@@ -67,6 +68,8 @@ pub struct SessionReport {
     pub global_recoveries: u64,
     /// The record, if asked for.
     pub record: Option<Record>,
+    /// What the haptic thread's strand budget did (`crate::budget`).
+    pub budget: BudgetReport,
 }
 
 /// A running session: a global thread and a haptic loop thread.
@@ -78,6 +81,7 @@ pub struct Session {
     global: Option<JoinHandle<GlobalRun>>,
     haptic: Option<HapticLoop<Box<dyn HapticDevice>>>,
     record: Arc<std::sync::Mutex<Option<Record>>>,
+    budget: Arc<std::sync::Mutex<BudgetReport>>,
 }
 
 impl Session {
@@ -167,11 +171,25 @@ impl Session {
         let mut recorder = params.record.then(|| Recorder { local: Vec::with_capacity(4096), shared: record.clone() });
         let epoch_h = reset_epoch.clone();
         let publish_every = params.publish_every;
+        let budget_report = Arc::new(std::sync::Mutex::new(BudgetReport { lowest: params.max_active, last: params.max_active, ..BudgetReport::default() }));
+        let mut budget = params.budget.enabled.then(|| BudgetRun {
+            budget: StrandBudget::new(params.budget, dt, params.max_active),
+            report: BudgetReport::default(),
+            change: None,
+            shared: budget_report.clone(),
+        });
         let step = move |reading: Option<DeviceReading>, _t: f64, dt: f64| -> DeviceCommand {
+            let started = Instant::now();
             let mut cmds = Vec::new();
+            // The strand budget's change decided after the last step, applied and recorded first.
+            if let Some(c) = budget.as_mut().and_then(|b| b.change.take()) {
+                core.apply(&c);
+                cmds.push(c);
+            }
             // At most MAX_COMMANDS_PER_STEP viewer commands per haptic step (the rest wait for the next steps):
             // a burst (1,000 RESETs) must not stall the loop.
-            while cmds.len() < MAX_COMMANDS_PER_STEP {
+            let budgeted = cmds.len();
+            while cmds.len() < MAX_COMMANDS_PER_STEP + budgeted {
                 let Ok(c) = cmd_rx.try_recv() else { break };
                 if c == Command::Reset {
                     epoch_h.fetch_add(1, Ordering::Release);
@@ -194,12 +212,16 @@ impl Session {
                 core.snapshot(lattice, dt, &mut out);
                 hap_in.publish();
             }
+            if let Some(b) = budget.as_mut() {
+                b.change = b.budget.observe(started.elapsed().as_secs_f64(), core.active().len());
+                b.budget.tally(&mut b.report, b.change.is_some());
+            }
             cmd
         };
         let on_refused = |why: String| tracing::warn!("haptic thread: {why}");
         let haptic = HapticLoop::spawn_with_priority(params.haptic_rate_hz, dev, step, None, params.haptic_priority, on_refused)
             .map_err(SessionError::Start)?;
-        let session = Session { scene, params, stop, reset_epoch, global: Some(global_thread), haptic: Some(haptic), record };
+        let session = Session { scene, params, stop, reset_epoch, global: Some(global_thread), haptic: Some(haptic), record, budget: budget_report };
         Ok((session, SessionIo { device: handle, commands: cmd_tx, lattice: lat_v_out, haptic: hap_out }))
     }
 
@@ -224,7 +246,8 @@ impl Session {
             r.global_resets = g.resets;
             r.global_inputs = g.inputs;
         }
-        SessionReport { haptic, global_steps: g.steps, global_step_mean: g.mean, global_recoveries: g.recoveries, record }
+        let budget = self.budget.lock().map(|b| *b).unwrap_or_default();
+        SessionReport { haptic, global_steps: g.steps, global_step_mean: g.mean, global_recoveries: g.recoveries, record, budget }
     }
 }
 
@@ -247,6 +270,23 @@ struct GlobalRun {
     recoveries: u64,
     resets: Vec<u64>,
     inputs: Vec<ToolInput>,
+}
+
+/// The haptic thread's strand budget, its change to apply before the next step, and its tally, handed over
+/// when the loop ends (on drop; no lock on the haptic path).
+struct BudgetRun {
+    budget: StrandBudget,
+    report: BudgetReport,
+    change: Option<Command>,
+    shared: Arc<std::sync::Mutex<BudgetReport>>,
+}
+
+impl Drop for BudgetRun {
+    fn drop(&mut self) {
+        if let Ok(mut g) = self.shared.lock() {
+            *g = self.report;
+        }
+    }
 }
 
 /// Collects step records on the haptic thread and hands them over in batches: the lock is only tried on

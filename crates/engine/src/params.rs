@@ -2,6 +2,7 @@
 //! constants of the haptic step ([`HapticParams`]) and of the global step ([`GlobalParams`]); every field
 //! with its meaning, unit and default.
 
+pub use crate::budget::BudgetParams;
 use crate::error::SessionError;
 use haptics::device::DeviceProfile;
 use haptics::target::TargetParams;
@@ -79,11 +80,15 @@ pub struct SessionParams {
     pub haptic: HapticParams,
     /// Constants of the global step. Default [`GlobalParams::default`].
     pub global: GlobalParams,
+    /// The live haptic thread's strand budget (`crate::budget`): fewer strands simulated while the steps run
+    /// long on this machine. Default [`BudgetParams::default`] (on; headless runs and replays never time
+    /// their steps).
+    pub budget: BudgetParams,
 }
 
 impl Default for SessionParams {
     fn default() -> Self {
-        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 56, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0 }, input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default() }
+        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 56, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0 }, input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default(), budget: BudgetParams::default() }
     }
 }
 
@@ -118,6 +123,7 @@ impl SessionParams {
             return p(format!("haptic_priority must be in 1..=99, got {prio}"));
         }
         self.haptic.validate()?;
+        self.budget.validate()?;
         self.global.validate()
     }
 }

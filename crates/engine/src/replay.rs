@@ -76,7 +76,8 @@ mod tests {
         let rec = report.record.expect("recorded");
         assert!(rec.steps.len() >= 1800, "{} steps", rec.steps.len());
         assert_eq!(rec.global_resets.len(), 1, "one lattice reset recorded");
-        assert_eq!(rec.steps.iter().map(|s| s.commands.len()).sum::<usize>(), 3);
+        // The viewer's three commands (and whatever the strand budget decided on this machine, replayed too).
+        assert_eq!(rec.steps.iter().flat_map(|s| &s.commands).filter(|c| !matches!(c, Command::LimitStrands(_))).count(), 3);
         assert_eq!(rec.global_inputs.len() as u64, report.global_steps);
         assert!(rec.global_inputs.iter().any(|g| g.tool == Tool::Sprayer && g.pressed), "the sprayer sprayed");
         assert_eq!(rec.global_inputs.last().map(|g| g.cuts), Some(1), "one scissors close");
@@ -89,6 +90,48 @@ mod tests {
         let worst = forces.iter().zip(&rec.steps).map(|(f, s)| (f - s.force).norm()).fold(0.0, f64::max);
         eprintln!("replayed {} steps, peak {peak} N, largest difference {worst} N", forces.len());
         assert!(worst <= 1e-9, "largest force difference {worst} N");
+    }
+
+    #[test]
+    fn the_strand_budgets_changes_are_recorded_and_replayed_to_the_same_forces() {
+        // A live session whose strand budget finds every step too slow (target 0.1 % of the period, a change
+        // allowed every 20 ms) while the comb strokes down the back hair: its limit falls to the floor, 24
+        // strands (so the limit bound the stroke), and each change is in the record as a LimitStrands command;
+        // the record replayed in lockstep, where nothing is timed, gives every force again to the bit.
+        use crate::budget::BudgetParams;
+        let scene = small_scene();
+        let budget = BudgetParams { target: 0.001, hold: 0.02, ..BudgetParams::default() };
+        let params = SessionParams { record: true, budget, ..SessionParams::default() };
+        let (session, mut io) = Session::start(scene.clone(), params).unwrap();
+        let rot = test_rot();
+        loop {
+            let step = io.haptic.read().step;
+            if step >= 1500 {
+                break;
+            }
+            let t = step as f64 * 1e-3;
+            io.device.push(DeviceReading { time: t, position: Vector3::new(0.0, -0.118, 0.04 - 0.1 * t), rotation: rot, buttons: 0 });
+            std::thread::sleep(Duration::from_micros(500));
+        }
+        let report = session.stop();
+        let rec = report.record.expect("recorded");
+        let limits: Vec<u32> = rec.steps.iter().flat_map(|s| &s.commands).filter_map(|c| match c {
+            Command::LimitStrands(n) => Some(*n),
+            _ => None,
+        }).collect();
+        eprintln!("budget {:?}, limits recorded {limits:?}", report.budget);
+        assert_eq!(limits, vec![52, 48, 44, 40, 36, 32, 28, 24], "lowered in steps of 4 to the floor");
+        assert_eq!((report.budget.changes, report.budget.lowest, report.budget.last), (8, 24, 24));
+        assert!(report.budget.limited_steps > 0 && report.budget.limited_steps < report.budget.steps);
+        let back = Record::from_bytes(&rec.to_bytes()).unwrap();
+        assert_eq!(back, rec);
+        let forces = replay(scene, params, &back).unwrap();
+        assert_eq!(forces.len(), rec.steps.len());
+        for (i, (f, s)) in forces.iter().zip(&rec.steps).enumerate() {
+            assert!(f.iter().zip(s.force.iter()).all(|(a, b)| a.to_bits() == b.to_bits()), "step {i}: {f:?} vs {:?}", s.force);
+        }
+        let peak = rec.steps.iter().map(|s| s.force.norm()).fold(0.0, f64::max);
+        assert!(peak > 1e-4, "the stroke was felt: peak {peak} N");
     }
 
     #[test]

@@ -35,6 +35,7 @@ fn command() -> impl Strategy<Value = Command> {
         (any::<u8>(), x(), x()).prop_map(|(hair_type, curliness, combing_ease)| Command::SetHair { hair_type, curliness, combing_ease }),
         Just(Command::Reset),
         (v3(), v3()).prop_map(|(position, rotation)| Command::SetHead { position, rotation }),
+        any::<u32>().prop_map(Command::LimitStrands),
     ]
 }
 

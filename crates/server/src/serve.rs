@@ -68,6 +68,10 @@ pub struct ServeArgs {
     /// at normal priority and a warning says so.
     #[arg(long, default_value_t = 10)]
     pub haptic_priority: i32,
+    /// Run the haptic loop without its strand budget (`SessionParams::budget`, docs/protocol.md "Strand budget"): always
+    /// up to 56 strands near the tool, however long the steps take on this machine (for benchmarks).
+    #[arg(long)]
+    pub no_strand_budget: bool,
     /// Haptic loop rate, Hz, in (0, 4000] (`SessionParams::haptic_rate_hz`).
     #[arg(long, default_value_t = 1000.0)]
     pub haptic_rate: f64,
@@ -265,6 +269,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     if let Some(lag) = args.max_proxy_lag {
         params.haptic.max_proxy_lag = lag;
     }
+    params.budget.enabled = !args.no_strand_budget;
     params.validate().context("--hairs-per-render-strand, --haptic-rate, --max-proxy-lag")?;
     let udp = match &args.device {
         Some(spec) => {
@@ -444,6 +449,15 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame; {} more than a period late, the latest {:.1} ms behind, built in at most {:.1} ms); haptic loop: {} steps at {} Hz, step mean {:.1} us, p50 {:.0} us, p99 {:.0} us, p99.9 {:.0} us, max {:.0} us, {} misses ({} periods skipped), {} step panics, {} runaways, real-time priority: {}; global: {} steps, mean {:.2} ms; delivery: {}",
         st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, st.late, 1e3 * st.max_late, 1e3 * st.max_build, report.haptic.steps, args.haptic_rate, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p50, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, 1e6 * report.haptic.step_max, report.haptic.misses, report.haptic.skipped, report.haptic.panics, st.runaways, report.haptic.realtime, report.global_steps, 1e3 * report.global_step_mean, app_end.delivery.summary()
     );
+    let b = &report.budget;
+    if b.enabled {
+        println!(
+            "strand budget: {} changes, lowest {} strands, {} at the end (of {}), {:.1} % of {} steps limited",
+            b.changes, b.lowest, b.last, params.max_active, 100.0 * b.limited_steps as f64 / b.steps.max(1) as f64, b.steps
+        );
+    } else {
+        println!("strand budget: off");
+    }
     if let Some((_, status)) = &app_end.udp {
         let c = status.counts();
         println!(

@@ -21,7 +21,10 @@
 //!    (what the viewer shows of it once faded out); the displacement shown of where it was fades out over
 //!    `blend_time` ([`Faded`], no longer simulated). Nothing stays frozen where the tool left it.
 //! 4. When chosen and relaxing strands together exceed `max_active`, the relaxing ones that left first are
-//!    let go first: at most `max_active` strands are simulated (the step's cost is bounded).
+//!    let go first: at most `max_active` strands are simulated (the step's cost is bounded). A strand limit
+//!    below it (`Command::LimitStrands`, the live thread's strand budget, `crate::budget`) takes its place: a
+//!    new choice takes the same share of it as `max_chosen` of `max_active`, and the relaxing strands beyond
+//!    it are let go at once.
 //!
 //! A membership change moves the strands between the interaction and the guide store (no strand is copied: a
 //! joining one is taken out of the store, a leaving one put back; the interaction keeps its workspaces,
@@ -210,10 +213,20 @@ impl HapticCore {
         c.next = end;
     }
 
-    /// The chosen guides of a finished scan: nearest first, at most `max_chosen`.
+    /// The chosen guides of a finished scan: nearest first, at most [`HapticCore::chosen_limit`].
     fn chosen(&self, mut c: Choice) -> Vec<usize> {
         c.near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        c.near.iter().take(self.params.max_chosen).map(|x| x.1).collect()
+        c.near.iter().take(self.chosen_limit()).map(|x| x.1).collect()
+    }
+
+    /// The most guides a choice takes: `max_chosen`, or under a strand limit ([`HapticCore::strand_limit`])
+    /// the same share of it as `max_chosen` of `max_active` (room is left for relaxing strands), at least 1.
+    pub(crate) fn chosen_limit(&self) -> usize {
+        let (chosen, active) = (self.params.max_chosen, self.params.max_active.max(1));
+        if self.strand_limit >= active {
+            return chosen;
+        }
+        (self.strand_limit * chosen / active).clamp(1, chosen)
     }
 
     /// Stage 3 of the step: the choice (started when the tool, the proxy at `proxy`, m, moving at `velocity`,
@@ -248,6 +261,9 @@ impl HapticCore {
                 self.join(&chosen, &guides, &mut members);
             }
         }
+        // Beyond the strand limit the relaxing strands that left first are let go (after a lowered limit, also
+        // when no guide joins).
+        Self::let_go_beyond(self.strand_limit, &mut members);
         // Let-go strands leave the simulation.
         let mut k = 0;
         while k < guides.len() {
@@ -283,8 +299,7 @@ impl HapticCore {
     }
 
     /// The next `HapticParams::joins_per_step` queued guides join (a guide fading out is simulated again from
-    /// its stored state), and the relaxing ones that left first are let go while there are more than
-    /// `max_active`.
+    /// its stored state); beyond the strand limit, relaxing strands make room ([`HapticCore::let_go_beyond`]).
     fn admit(&mut self, guides: &mut Vec<usize>, members: &mut Vec<Member>) {
         for _ in 0..self.params.haptic.joins_per_step {
             let Some(g) = self.queued.pop() else { break };
@@ -294,7 +309,16 @@ impl HapticCore {
                 self.faded.retain(|f| f.guide != g);
             }
         }
-        let mut over = members.iter().filter(|m| m.phase != Phase::Fading).count().saturating_sub(self.params.max_active);
+    }
+
+    /// While more than `limit` strands (`max_active`, or the strand limit) would stay simulated, the relaxing
+    /// ones that left first are let go (marked Fading). Chosen strands are never let go here: a choice takes
+    /// at most [`HapticCore::chosen_limit`] <= `limit`.
+    fn let_go_beyond(limit: usize, members: &mut [Member]) {
+        let mut over = members.iter().filter(|m| m.phase != Phase::Fading).count().saturating_sub(limit);
+        if over == 0 {
+            return;
+        }
         let mut relaxing: Vec<(f64, usize)> = members.iter().enumerate().filter_map(|(i, m)| match m.phase {
             Phase::Relaxing { since, .. } => Some((since, i)),
             _ => None,
@@ -526,6 +550,55 @@ mod tests {
             assert!(core.active().is_empty(), "{name} empties the active set");
             check(&core, name);
         }
+    }
+
+    #[test]
+    fn a_strand_limit_bounds_the_simulated_strands_within_a_choice_and_lifting_it_restores_them() {
+        // A comb stroke down the back hair with the default limits (48 chosen, 56 simulated). Halfway, the
+        // strand budget's command limits the strands to 20: within a new choice (`choice_steps`) plus the
+        // joins it needs, at most 20 are simulated, every step after, and the choice takes 20 x 48 / 56 = 17;
+        // no strand is lost (each guide's strand in the store or simulated). Lifted back to 56 the stroke
+        // simulates more than 20 again. Without any limit the same stroke simulates more than 20 at that point
+        // (the limit, not the hair, made the difference).
+        use crate::command::Command;
+        let scene = small_scene();
+        let params = SessionParams::default();
+        let snap = GlobalCore::new(scene.clone(), &params).snapshot();
+        let reading = |k: usize| {
+            let z = 0.03 - 0.1 * (k as f64 / 2400.0);
+            DeviceReading { time: k as f64 * 1e-3, position: Vector3::new(0.0, -0.118, z), rotation: test_rot(), buttons: 0 }
+        };
+        let mut free = HapticCore::new(scene.clone(), params).unwrap();
+        let mut core = HapticCore::new(scene.clone(), params).unwrap();
+        let settle = params.haptic.choice_steps + 2 * params.max_active.div_ceil(params.haptic.joins_per_step);
+        let (mut most_free, mut most_limited, mut most_after) = (0, 0, 0);
+        for k in 0..2400 {
+            if k == 800 {
+                core.apply(&Command::LimitStrands(20));
+                assert_eq!(core.strand_limit(), 20);
+                assert_eq!(core.chosen_limit(), 17);
+            }
+            if k == 1600 {
+                core.apply(&Command::LimitStrands(1000));
+                assert_eq!(core.strand_limit(), params.max_active, "clamped to max_active");
+            }
+            free.step(Some(reading(k)), &snap, 1e-3);
+            core.step(Some(reading(k)), &snap, 1e-3);
+            for g in 0..scene.guides.len() {
+                assert_ne!(core.strands[g].is_some(), core.active().contains(&g), "guide {g} after step {k}");
+            }
+            if (800 + settle..1600).contains(&k) {
+                assert!(core.active().len() <= 20, "{} simulated at step {k}", core.active().len());
+                most_limited = most_limited.max(core.active().len());
+                most_free = most_free.max(free.active().len());
+            }
+            if k >= 1600 + settle {
+                most_after = most_after.max(core.active().len());
+            }
+        }
+        assert!(most_free > 20, "without a limit the stroke simulates {most_free}");
+        assert!(most_limited >= 10, "the limited stroke still simulates strands: {most_limited}");
+        assert!(most_after > 20, "lifted, the stroke simulates {most_after}");
     }
 
     #[test]

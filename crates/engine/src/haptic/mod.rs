@@ -110,6 +110,9 @@ pub struct HapticCore {
     pub(crate) last_contacts: u32,
     pub(crate) last_select: Option<Vector3<f64>>,
     pub(crate) clipped: bool,
+    /// The most strands simulated now ([`Command::LimitStrands`], the live thread's strand budget), in
+    /// 1..=`SessionParams::max_active`; `max_active` unless limited.
+    pub(crate) strand_limit: usize,
     /// The head pose (head frame to world): the roots and the body follow it. Identity unless a scenario
     /// or the viewer moves the head ([`HapticCore::set_head_pose`]).
     pub(crate) head: nalgebra::Isometry3<f64>,
@@ -197,7 +200,7 @@ impl HapticCore {
         let bounds = active::GuideBounds::new(&scene);
         Ok(Self {
             scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), references: Default::default(), staged: Default::default(), choice: None, bounds, queued: Vec::new(), max_tip_speed: 0.0, interaction,
-            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, head: nalgebra::Isometry3::identity(), rejected: 0, runaways: 0, failed: 0, timings: StepPhases::default(),
+            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, strand_limit: params.max_active, head: nalgebra::Isometry3::identity(), rejected: 0, runaways: 0, failed: 0, timings: StepPhases::default(),
         })
     }
 
@@ -232,6 +235,15 @@ impl HapticCore {
                 // Out of range or non-finite: ignored (the server checks and answers before).
                 if let Some(head) = crate::command::head_pose(&position, &rotation) {
                     self.set_head_pose(head);
+                }
+            }
+            Command::LimitStrands(n) => {
+                let n = (n as usize).clamp(1, self.params.max_active);
+                if n != self.strand_limit {
+                    self.strand_limit = n;
+                    // A new choice at the next step, of as many strands as the limit leaves room for; the
+                    // strands beyond it are let go from the next step on (`HapticCore::update_active`).
+                    self.last_select = None;
                 }
             }
             Command::Reset => {
@@ -466,6 +478,10 @@ impl HapticCore {
     /// Guide indices currently simulated.
     pub fn active(&self) -> &[usize] {
         &self.active
+    }
+    /// The most strands simulated now ([`Command::LimitStrands`]; `SessionParams::max_active` unless limited).
+    pub fn strand_limit(&self) -> usize {
+        self.strand_limit
     }
     /// Wetness per guide as last read from the lattice snapshot.
     pub fn wetness(&self) -> &[f32] {

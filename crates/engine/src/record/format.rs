@@ -67,6 +67,10 @@ impl Record {
                         b.push(3);
                         position.iter().chain(rotation.iter()).for_each(|&x| f(&mut b, x));
                     }
+                    Command::LimitStrands(n) => {
+                        b.push(4);
+                        b.extend_from_slice(&n.to_le_bytes());
+                    }
                 }
             }
         }
@@ -154,6 +158,7 @@ impl Record {
                     1 => Command::SetHair { hair_type: r.u8()?, curliness: r.f64()?, combing_ease: r.f64()? },
                     2 => Command::Reset,
                     3 => Command::SetHead { position: Vector3::new(r.f64()?, r.f64()?, r.f64()?), rotation: Vector3::new(r.f64()?, r.f64()?, r.f64()?) },
+                    4 => Command::LimitStrands(r.u32()?),
                     k => return Err(RecordError::Bad { offset: at, what: format!("command kind {k}") }),
                 });
             }
@@ -184,6 +189,9 @@ impl<'a> Reader<'a> {
     }
     fn u8(&mut self) -> Result<u8, RecordError> {
         self.0.u8("a byte").map_err(Self::err)
+    }
+    fn u32(&mut self) -> Result<u32, RecordError> {
+        self.0.u32("a u32").map_err(Self::err)
     }
     fn u64(&mut self) -> Result<u64, RecordError> {
         self.0.u64("a u64").map_err(Self::err)

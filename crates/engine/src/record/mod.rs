@@ -5,7 +5,8 @@
 //! File format ([`format`]) (little-endian, f64 kept exactly): magic `CFREC1\0\0`, f64 haptic rate (Hz), u64 number of
 //! resets then each u64 global version, u64 number of steps, then per step: u8 has-reading; if 1: f64 time,
 //! 3 f64 position (m), 9 f64 rotation (column-major), u32 buttons; u64 lattice version; 3 f64 force (N);
-//! u8 number of commands, each: u8 kind (0 tool: u8 id; 1 hair: u8 type, f64 curliness, f64 ease; 2 reset).
+//! u8 number of commands, each: u8 kind (0 tool: u8 id; 1 hair: u8 type, f64 curliness, f64 ease; 2 reset;
+//! 3 head: 3 f64 position (m), 3 f64 rotation vector (rad); 4 strand limit: u32).
 //!
 //! Version 2 (magic `CFREC2\0\0`, written now) adds the tool input of every global step right after the
 //! resets: u64 number of global steps, then per step: u8 tool id, u8 flags (bit 0 present, bit 1 primary

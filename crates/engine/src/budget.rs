@@ -1,0 +1,284 @@
+//! The strand budget: how many strands the live haptic thread can afford to simulate on this machine now.
+//!
+//! The haptic step's cost grows with the strands simulated near the tool (about 8 us each with the comb in
+//! the hair and hair-hair contact on), and the speed of a shared machine moves through the day by 1.3-1.4x
+//! (bench/HISTORY.md, 2026-11-28): the same 56 strands that leave the 1 kHz loop room to spare in one hour
+//! make it late in another. A [`StrandBudget`] watches the wall time of the live haptic thread's steps and
+//! lowers the number of strands simulated when their running mean exceeds its target share of the period,
+//! and raises it again once the steps would have room for more: the loop keeps its rate at the price of
+//! fewer strands near the tool (a lighter force, bench/RESULTS.md), rather than late steps.
+//!
+//! Its decisions reach the simulation as [`Command::LimitStrands`], applied by the haptic thread before its
+//! next step and recorded like the viewer's commands, so a replay of the record makes the same choices
+//! without timing anything (the headless scenarios and the replays never run a budget of their own).
+//!
+//! Each step ([`StrandBudget::observe`]):
+//! 1. The step's wall time, at most two periods (a step the host preempted for 50 ms is not a trend), enters
+//!    a running mean with time constant [`BudgetParams::time_constant`].
+//! 2. Within [`BudgetParams::hold`] of the last change nothing changes (the strands need a new choice of the
+//!    active set, `HapticParams::choice_steps` steps, before the cost follows).
+//! 3. A mean above `target` periods lowers the limit by [`BudgetParams::step`] strands (not below
+//!    [`BudgetParams::min_strands`]).
+//! 4. A mean that, scaled by the strands `step` more would add, stays below `target (1 - margin)` periods
+//!    raises it by `step` (not above `SessionParams::max_active`), but only [`BudgetParams::raise_after`]
+//!    after the last change and while the limit binds (as many strands simulated as it allows): with the
+//!    comb out of the hair the steps are cheap whatever the limit.
+
+use crate::command::Command;
+use crate::error::SessionError;
+
+/// Parameters of the live haptic thread's [`StrandBudget`], each with its meaning, unit and default.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BudgetParams {
+    /// Whether the live session runs the budget. Off: always `SessionParams::max_active` strands at most, late
+    /// steps or not. Default true.
+    pub enabled: bool,
+    /// Running mean of the step's wall time the budget keeps below, as a share of the haptic period,
+    /// dimensionless in (0, 1). Default 0.45: in the server the 99.9th percentile of the step has been 1.8-2.4x
+    /// its mean (bench/device_loop.sh, 2026-11-28), so a mean of 0.45 periods keeps it within one.
+    pub target: f64,
+    /// Room kept below `target` before raising, as a share of it, in [0, 1): the mean expected with `step`
+    /// more strands must stay below `target (1 - margin)`. Default 0.1 (no raising and lowering in turn).
+    pub margin: f64,
+    /// Time constant of the step time's running mean, s, > 0. Default 0.05 (50 steps at 1 kHz).
+    pub time_constant: f64,
+    /// Least time between two changes of the limit, s, >= 0. Default 0.1 (two time constants, and the
+    /// new choice of the active set ten steps long).
+    pub hold: f64,
+    /// Least time since the last change before the limit is raised, s, >= `hold`. Default 1: the cheap
+    /// moments of a stroke (the comb turning at its end) do not bring back strands that the next pass
+    /// cannot afford (with 0.1 s the device strokes changed the limit 22 times in 6.5 s).
+    pub raise_after: f64,
+    /// Strands added or removed at a change, > 0. Default 4.
+    pub step: usize,
+    /// The least strands the budget leaves simulated, > 0 (at most `SessionParams::max_active`). Default 24:
+    /// the comb's teeth still meet hair along a stroke (bench/RESULTS.md).
+    pub min_strands: usize,
+}
+
+impl Default for BudgetParams {
+    fn default() -> Self {
+        Self { enabled: true, target: 0.45, margin: 0.1, time_constant: 0.05, hold: 0.1, raise_after: 1.0, step: 4, min_strands: 24 }
+    }
+}
+
+impl BudgetParams {
+    /// Checks every field; the error names the bad one.
+    pub fn validate(&self) -> Result<(), SessionError> {
+        let p = |m: String| Err(SessionError::Param(m));
+        if !(self.target > 0.0 && self.target < 1.0) {
+            return p(format!("budget.target must be in (0, 1), got {}", self.target));
+        }
+        if !(self.margin >= 0.0 && self.margin < 1.0) {
+            return p(format!("budget.margin must be in [0, 1), got {}", self.margin));
+        }
+        if !(self.time_constant > 0.0 && self.time_constant.is_finite()) {
+            return p(format!("budget.time_constant must be finite and > 0 s, got {}", self.time_constant));
+        }
+        if !(self.hold >= 0.0 && self.hold.is_finite()) {
+            return p(format!("budget.hold must be finite and >= 0 s, got {}", self.hold));
+        }
+        if !(self.raise_after >= self.hold && self.raise_after.is_finite()) {
+            return p(format!("budget.raise_after must be finite and >= budget.hold ({} s), got {}", self.hold, self.raise_after));
+        }
+        if self.step == 0 || self.min_strands == 0 {
+            return p(format!("budget.step and budget.min_strands must be > 0, got {} and {}", self.step, self.min_strands));
+        }
+        Ok(())
+    }
+}
+
+/// The live haptic thread's strand budget (see the module's documentation): fed every step's wall time,
+/// it returns the [`Command::LimitStrands`] to apply before the next step when the limit changes.
+#[derive(Debug, Clone)]
+pub struct StrandBudget {
+    params: BudgetParams,
+    /// Haptic period, s.
+    period: f64,
+    /// The most strands the session allows (`SessionParams::max_active`).
+    max: usize,
+    /// The current limit, in [min(min_strands, max), max].
+    limit: usize,
+    /// Running mean of the step's wall time, s (None before the first step).
+    mean: Option<f64>,
+    /// Time since the last change, s.
+    since_change: f64,
+}
+
+impl StrandBudget {
+    /// A budget for a loop of `period` s allowing at most `max_active` strands, starting there.
+    pub fn new(params: BudgetParams, period: f64, max_active: usize) -> Self {
+        Self { params, period, max: max_active, limit: max_active, mean: None, since_change: 0.0 }
+    }
+
+    /// The current limit on simulated strands.
+    pub fn limit(&self) -> usize {
+        self.limit
+    }
+
+    /// The running mean of the step's wall time, s (0 before the first step).
+    pub fn mean(&self) -> f64 {
+        self.mean.unwrap_or(0.0)
+    }
+
+    /// Takes a step that took `seconds` of wall time with `simulated` strands simulated; returns the command
+    /// that changes the limit, to apply before the next step, if it changes.
+    pub fn observe(&mut self, seconds: f64, simulated: usize) -> Option<Command> {
+        let p = &self.params;
+        let t = if seconds.is_finite() { seconds.clamp(0.0, 2.0 * self.period) } else { 2.0 * self.period };
+        let a = (self.period / p.time_constant).min(1.0);
+        let mean = self.mean.map_or(t, |m| m + a * (t - m));
+        self.mean = Some(mean);
+        self.since_change += self.period;
+        if self.since_change < p.hold {
+            return None;
+        }
+        let floor = p.min_strands.min(self.max);
+        let target = p.target * self.period;
+        let next = if mean > target && self.limit > floor {
+            self.limit.saturating_sub(p.step).max(floor)
+        } else if self.since_change >= p.raise_after && self.limit < self.max && simulated >= self.limit && simulated > 0 && mean * (self.limit + p.step) as f64 / simulated as f64 <= target * (1.0 - p.margin) {
+            (self.limit + p.step).min(self.max)
+        } else {
+            return None;
+        };
+        self.limit = next;
+        self.since_change = 0.0;
+        Some(Command::LimitStrands(next as u32))
+    }
+}
+
+/// What the strand budget did over a live session (`SessionReport::budget`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct BudgetReport {
+    /// Whether the session ran a budget ([`BudgetParams::enabled`]).
+    pub enabled: bool,
+    /// Times the limit changed.
+    pub changes: u64,
+    /// The lowest limit, strands (`SessionParams::max_active` if never lowered).
+    pub lowest: usize,
+    /// The limit when the session stopped, strands.
+    pub last: usize,
+    /// Haptic steps run under a limit below `SessionParams::max_active`.
+    pub limited_steps: u64,
+    /// Haptic steps in all.
+    pub steps: u64,
+}
+
+impl StrandBudget {
+    /// Counts one step under the current limit into `report` (and a change, if `changed`).
+    pub fn tally(&self, report: &mut BudgetReport, changed: bool) {
+        report.enabled = true;
+        report.steps += 1;
+        report.changes += changed as u64;
+        report.lowest = if report.steps == 1 { self.limit } else { report.lowest.min(self.limit) };
+        report.last = self.limit;
+        report.limited_steps += (self.limit < self.max) as u64;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Runs `steps` steps of a loop whose step costs `per_strand` s per simulated strand plus `fixed` s, the
+    /// simulated strands being the limit (the comb in the hair); returns the limits after each step.
+    fn run(budget: &mut StrandBudget, steps: usize, fixed: f64, per_strand: f64) -> Vec<usize> {
+        (0..steps)
+            .map(|_| {
+                let n = budget.limit();
+                if let Some(Command::LimitStrands(m)) = budget.observe(fixed + per_strand * n as f64, n) {
+                    assert_eq!(m as usize, budget.limit());
+                }
+                budget.limit()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_slow_machine_gets_fewer_strands_and_a_fast_one_all_of_them() {
+        // A 1 kHz loop allowing 56 strands; target 0.45 ms. Fast host: 6 us a strand + 50 us (386 us at 56):
+        // the limit never moves. Slow host: 10 us a strand + 30 us (590 us at 56): lowered in steps of 4 until
+        // the mean is at most 450 us (40 strands: 430 us; 44 would give 470 us), within a second, and kept there
+        // (44 strands would be expected to cost 473 us, above 0.9 x 450 us).
+        let params = BudgetParams::default();
+        let mut fast = StrandBudget::new(params, 1e-3, 56);
+        assert!(run(&mut fast, 3000, 50e-6, 6e-6).iter().all(|&n| n == 56));
+        let mut slow = StrandBudget::new(params, 1e-3, 56);
+        let limits = run(&mut slow, 3000, 30e-6, 10e-6);
+        let settled = limits.iter().position(|&n| n == 40).expect("reaches 40 strands");
+        assert!(settled < 1000, "took {settled} steps");
+        assert!(limits[settled..].iter().all(|&n| n == 40), "no raising and lowering in turn: {:?}", &limits[settled..settled + 20]);
+        assert!(slow.mean() <= 0.45e-3 + 1e-12, "mean {} s", slow.mean());
+        // The host speeds up again (6 us a strand): back up to 56, in steps of 4 a second apart.
+        let limits = run(&mut slow, 5000, 30e-6, 6e-6);
+        assert_eq!(*limits.last().unwrap(), 56);
+        assert!(limits.windows(2).all(|w| w[1] >= w[0] && w[1] - w[0] <= 4));
+        let raised: Vec<usize> = (1..limits.len()).filter(|&i| limits[i] != limits[i - 1]).collect();
+        assert!(raised.windows(2).all(|w| w[1] - w[0] >= 1000), "raised at steps {raised:?}");
+    }
+
+    #[test]
+    fn a_preempted_step_is_not_a_trend_and_a_free_limit_is_not_raised() {
+        // One 50 ms step (the host took the CPU) among 300 us steps: it counts as two periods, the mean rises
+        // by (2 ms - 0.3 ms) / 50 = 34 us, and nothing changes.
+        let mut b = StrandBudget::new(BudgetParams::default(), 1e-3, 56);
+        for _ in 0..500 {
+            assert_eq!(b.observe(300e-6, 56), None);
+        }
+        assert_eq!(b.observe(50e-3, 56), None);
+        assert!((b.mean() - 0.334e-3).abs() < 1e-6, "mean {}", b.mean());
+        // A lowered limit stays while the comb is out of the hair (10 strands, cheap steps): it only rises again
+        // once the strands it allows are simulated and cheap enough.
+        for _ in 0..200 {
+            b.observe(800e-6, 56);
+        }
+        // The comb leaves the hair: the mean falls below the target (lowering a last time on its way down).
+        for _ in 0..300 {
+            b.observe(60e-6, 10);
+        }
+        let lowered = b.limit();
+        assert!(lowered < 56);
+        for _ in 0..2000 {
+            assert_eq!(b.observe(60e-6, 10), None);
+        }
+        assert_eq!(b.limit(), lowered);
+        let raised = (0..200).any(|_| b.observe(60e-6, b.limit()).is_some());
+        assert!(raised && b.limit() == lowered + 4, "{} after {lowered}", b.limit());
+    }
+
+    #[test]
+    fn the_limit_stays_between_the_floor_and_the_sessions_maximum() {
+        // Steps always too slow: down to min_strands and no lower; never-ending cheap steps: up to max_active and
+        // no higher. A session allowing fewer than min_strands keeps its own maximum as the floor. A NaN time
+        // counts as two periods.
+        let params = BudgetParams::default();
+        let mut b = StrandBudget::new(params, 1e-3, 56);
+        assert!(run(&mut b, 5000, 2e-3, 0.0).iter().all(|&n| (24..=56).contains(&n)));
+        assert_eq!(b.limit(), 24);
+        assert!(run(&mut b, 10000, 1e-6, 0.0).iter().all(|&n| (24..=56).contains(&n)));
+        assert_eq!(b.limit(), 56);
+        let mut small = StrandBudget::new(params, 1e-3, 12);
+        for _ in 0..1000 {
+            small.observe(f64::NAN, 12);
+        }
+        assert_eq!(small.limit(), 12);
+        assert!((small.mean() - 2e-3).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_parameters_are_named() {
+        for (bad, field) in [
+            (BudgetParams { target: 1.0, ..Default::default() }, "budget.target"),
+            (BudgetParams { margin: -0.1, ..Default::default() }, "budget.margin"),
+            (BudgetParams { time_constant: 0.0, ..Default::default() }, "budget.time_constant"),
+            (BudgetParams { hold: f64::NAN, ..Default::default() }, "budget.hold"),
+            (BudgetParams { raise_after: 0.05, ..Default::default() }, "budget.raise_after"),
+            (BudgetParams { min_strands: 0, ..Default::default() }, "budget.step and budget.min_strands"),
+        ] {
+            let e = bad.validate().unwrap_err().to_string();
+            assert!(e.contains(field), "{e}");
+        }
+        BudgetParams::default().validate().unwrap();
+    }
+}

@@ -37,6 +37,9 @@ fn main() {
     if let Some(on) = args.iter().find_map(|a| a.strip_prefix("hair=")) {
         params.haptic.hair_contact = on == "on";
     }
+    if args.iter().any(|a| a == "input=device") {
+        params.input = engine::params::InputKind::Device;
+    }
     if let Some(n) = args.iter().find_map(|a| a.strip_prefix("max_active=").and_then(|v| v.parse().ok())) {
         params.max_active = n;
         params.max_chosen = params.max_chosen.min(n);
@@ -52,6 +55,15 @@ fn main() {
     let mut rows: Vec<(u64, f64, StepPhases, usize, u32, f64)> = Vec::new();
     let mut snapshot = engine::snapshot::HapticSnapshot::default();
     let (mut tip, mut peak, mut jump, mut last) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    // trace=FILE: per traced step the force sent (N), the device's and the proxy's position and velocity
+    // (m, m/s), the hair's reaction on the proxy (N) and its damping's trace (N s/m), the passivity
+    // controller's and the clamps' activations so far, contacts and simulated strands.
+    let mut trace = args.iter().find_map(|a| a.strip_prefix("trace=")).map(|f| {
+        let mut w = std::io::BufWriter::new(std::fs::File::create(f).expect("the trace file"));
+        use std::io::Write;
+        writeln!(w, "t,fx,fy,fz,dev_y,dev_z,dev_vy,dev_vz,proxy_y,proxy_z,proxy_vy,proxy_vz,hair_fy,hair_fz,hair_d,passive,clamped,contacts,active").unwrap();
+        w
+    });
     for n in 0..steps {
         if n % every == 0 {
             ls.global_step_live();
@@ -65,6 +77,13 @@ fn main() {
         jump = jump.max((cmd.force.norm() - last).abs());
         last = cmd.force.norm();
         let t1 = Instant::now();
+        if let (Some(w), true) = (trace.as_mut(), n >= settle) {
+            use std::io::Write;
+            let c = ls.haptic.coupling();
+            let h = ls.haptic.hair_reaction();
+            let f = cmd.force;
+            writeln!(w, "{t:.4},{:.5},{:.5},{:.5},{:.6},{:.6},{:.5},{:.5},{:.6},{:.6},{:.5},{:.5},{:.5},{:.5},{:.4},{},{},{},{}", f.x, f.y, f.z, c.device.y, c.device.z, c.device_velocity.y, c.device_velocity.z, c.proxy.y, c.proxy.z, c.proxy_velocity.y, c.proxy_velocity.z, h.force.y, h.force.z, h.damping.trace(), c.passivity_activations, c.clamp_activations, ls.haptic.last_contacts(), ls.haptic.active().len()).unwrap();
+        }
         ls.haptic.stage_snapshot(&ls.lattice);
         if (n + 1) % params.publish_every == 0 {
             ls.haptic.snapshot(&ls.lattice, ls.dt, &mut snapshot);

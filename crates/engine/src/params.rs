@@ -19,12 +19,13 @@ pub enum InputKind {
     Device,
 }
 
-/// How the tool follows a streaming device's samples: interpolated over the mean interval between them
-/// (`haptics::target`) so that a device slower than the loop, or jitter in the packets' arrival, gives no
-/// velocity spikes to the coupling's damper. Interval bounds 0.00025-0.05 s (4 kHz to 20 Hz devices),
-/// running-mean weight 0.2, largest speed 5 m/s (the profiles' hand speed), largest acceleration 1000 m/s^2
-/// (follows a hand at 2 m/s sampled at 1 kHz without lag beyond one interval).
-pub const DEVICE_FOLLOW: TargetParams = TargetParams { min_interval: 0.00025, max_interval: 0.05, smoothing: 0.2, max_speed: 5.0, max_acceleration: 1000.0 };
+/// How the tool follows a streaming device's samples: extrapolated on the device's own clock at the velocity
+/// of its time-stamped samples (`haptics::target`, `TargetParams::stream`), so that a device slower than the
+/// loop, or jitter in the packets' arrival, gives no velocity steps to the coupling's damper. Interval bounds
+/// 0.00025-0.05 s (4 kHz to 20 Hz devices; a gap over 0.05 s restarts at rest), largest speed 5 m/s (the
+/// profiles' hand speed), largest acceleration 1000 m/s^2 (follows a hand at 2 m/s sampled at 1 kHz without
+/// lag beyond one interval); the running-mean weight 0.2 is a pointer's.
+pub const DEVICE_FOLLOW: TargetParams = TargetParams { min_interval: 0.00025, max_interval: 0.05, smoothing: 0.2, max_speed: 5.0, max_acceleration: 1000.0, stream: true };
 
 /// Parameters of a live session. Defaults: the README's `coiffure serve`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,7 +89,7 @@ pub struct SessionParams {
 
 impl Default for SessionParams {
     fn default() -> Self {
-        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 56, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0 }, input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default(), budget: BudgetParams::default() }
+        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 56, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0, stream: false }, input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default(), budget: BudgetParams::default() }
     }
 }
 

@@ -16,8 +16,41 @@
 //!    most at `max_acceleration` (continuous velocity, bounded acceleration). A jump of the target (a slow
 //!    viewer's sparse events, the pressed plane, the first event) is followed as a hand would, and the
 //!    proxy's inertia never turns it into a force pulse.
+//!
+//! A haptic device's stream (`TargetParams::stream`, [`TargetFilter::follow`]) is followed differently: its
+//! samples come every period or so, stamped by the device's own clock, but arrive with the jitter of the
+//! network and of two loops' phases (none in one step, two in the next). A ramp per arrival turned that
+//! jitter into velocity steps of the device point, which the coupling's damper turned into force steps at
+//! the Omni's rate limit (0.3 N a step) all through a stroke. Instead, per haptic step:
+//! 1. a new sample (a later time stamp) sets the anchor: its position and the velocity from the last sample
+//!    at least `min_interval` before it, by their own time stamps (at most `max_speed`; zero after a gap over
+//!    `max_interval`; samples closer together keep the velocity), and the offset between the loop's clock
+//!    and the device's (the least arrival delay seen, rising at most 1 % of the elapsed time so that it
+//!    follows a drifting clock);
+//! 2. the point the device is at now on its own clock is the anchor extrapolated at its velocity (for at
+//!    most [`STREAM_HORIZON`]: a sender that stops stops there), so a late or missing sample changes
+//!    nothing, a late one does not step back, and a sender stalled for a few ms that then sends its samples
+//!    in a burst (device-sim on a loaded machine: 8 at once every 8 ms) is followed smoothly;
+//! 3. the device point moves at that extrapolation's velocity plus a pull onto it with time constant
+//!    [`STREAM_PULL_STEPS`] steps or twice the mean time between arrivals (a running mean with weight
+//!    `smoothing`), whichever is longer, its velocity turning at most at `max_acceleration`.
 
 use nalgebra::Vector3;
+
+/// Least time constant of the pull of a device stream's point onto its extrapolated samples, in haptic
+/// steps. Four: a sample that arrives with a position off the extrapolation by `e` moves the point's velocity
+/// by at most `e / (4 dt)` (a quarter of the dead-beat correction); samples arriving in bursts are pulled in
+/// over twice the time between bursts (the extrapolation's error grows with it).
+pub const STREAM_PULL_STEPS: f64 = 4.0;
+
+/// Longest a device stream's last sample is extrapolated when no newer one arrives, s: 0.02 (a sender
+/// stalled by its scheduler for up to 20 ms is followed smoothly; a hand that stops during such a stall is
+/// overshot by its speed times the stall, 3 mm at 0.15 m/s, and pulled back when the samples return).
+pub const STREAM_HORIZON: f64 = 0.02;
+
+/// Rise of the stream's clock offset between samples, s per s of loop time: 1 % (a sample never arrives
+/// early, so the least delay seen is the offset; the rise lets it follow a device clock slower than ours).
+const OFFSET_RISE: f64 = 0.01;
 
 /// Parameters of the pointer smoothing.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,11 +66,15 @@ pub struct TargetParams {
     /// Largest acceleration of the device point, m/s^2. Default 1: the 50 g proxy then needs at most about
     /// 0.05 N to follow in free air (a 6 cm jump of the target is followed in about 0.5 s).
     pub max_acceleration: f64,
+    /// The readings are a device's stream stamped by its own clock ([`TargetFilter::follow`]: extrapolated
+    /// on that clock at the samples' own velocity), not a pointer's sparse events (interpolated over their
+    /// mean interval). Default false.
+    pub stream: bool,
 }
 
 impl Default for TargetParams {
     fn default() -> Self {
-        Self { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0 }
+        Self { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0, stream: false }
     }
 }
 
@@ -58,13 +95,77 @@ pub struct TargetFilter {
     interval: f64,
     /// Time since the last event, s.
     since: f64,
+    /// A device stream's last sample: its time stamp (s, the device's clock), position (m) and velocity (m/s);
+    /// and the sample its velocity is measured from (time stamp, position).
+    anchor: Option<(f64, Vector3<f64>, Vector3<f64>)>,
+    base: Option<(f64, Vector3<f64>)>,
+    /// The filter's own clock, s (the sum of its steps), and its offset from the device's clock (s).
+    clock: f64,
+    offset: Option<f64>,
 }
 
 impl TargetFilter {
     /// A filter at rest at `position` (m).
     pub fn new(params: TargetParams, position: Vector3<f64>) -> Self {
         let interval = (1.0 / 60.0f64).clamp(params.min_interval, params.max_interval);
-        Self { params, point: position, velocity: Vector3::zeros(), from: position, to: position, progress: 1.0, interval, since: 0.0 }
+        Self { params, point: position, velocity: Vector3::zeros(), from: position, to: position, progress: 1.0, interval, since: 0.0, anchor: None, base: None, clock: 0.0, offset: None }
+    }
+
+    /// One haptic step of `dt` s with the latest reading's position `target` (m) and time stamp `time` (s):
+    /// a device stream ([`TargetParams::stream`]) is extrapolated on its own clock (see the module's
+    /// documentation), a pointer interpolated between its events ([`TargetFilter::step`]). Returns the
+    /// device point (m). Non-finite targets or times are ignored (the point holds its course).
+    pub fn follow(&mut self, target: &Vector3<f64>, time: f64, dt: f64) -> Vector3<f64> {
+        if !self.params.stream {
+            return self.step(target, dt);
+        }
+        if !(dt > 0.0 && dt.is_finite()) {
+            return self.point;
+        }
+        let p = self.params;
+        self.clock += dt;
+        self.since += dt;
+        let fresh = time.is_finite() && target.iter().all(|x| x.is_finite()) && self.anchor.map_or(true, |a| time > a.0);
+        if fresh {
+            let last = self.anchor.map_or(Vector3::zeros(), |a| a.2);
+            let velocity = match (self.anchor, self.base) {
+                (Some((t1, ..)), _) if time - t1 > p.max_interval => Vector3::zeros(),
+                (Some(_), Some((tb, xb))) if time - tb >= p.min_interval => {
+                    let v = (target - xb) / (time - tb);
+                    if v.norm() > p.max_speed { v * (p.max_speed / v.norm()) } else { v }
+                }
+                (Some(_), Some(_)) => last,
+                _ => Vector3::zeros(),
+            };
+            if self.base.map_or(true, |(tb, _)| time - tb >= p.min_interval) {
+                self.base = Some((time, *target));
+            }
+            self.anchor = Some((time, *target, velocity));
+            // The mean time between arrivals, on the loop's clock (the pull's time scale).
+            self.interval += p.smoothing * (self.since.clamp(p.min_interval, p.max_interval) - self.interval);
+            self.since = 0.0;
+            let delay = self.clock - time;
+            self.offset = Some(self.offset.map_or(delay, |o| delay.min(o + OFFSET_RISE * dt)));
+        } else if let Some(o) = self.offset.as_mut() {
+            *o += OFFSET_RISE * dt;
+        }
+        let Some((t0, x0, v0)) = self.anchor else { return self.point };
+        // Where the device is now on its own clock: the anchor extrapolated, for at most STREAM_HORIZON.
+        let age = (self.clock - self.offset.unwrap_or(0.0) - t0).max(0.0);
+        let horizon = STREAM_HORIZON;
+        let (want_x, want_v) = if age < horizon { (x0 + v0 * age, v0) } else { (x0 + v0 * horizon, Vector3::zeros()) };
+        let pull = (STREAM_PULL_STEPS * dt).max(2.0 * self.interval);
+        let mut want = want_v + (want_x - self.point) / pull;
+        if want.norm() > p.max_speed {
+            want *= p.max_speed / want.norm();
+        }
+        let mut dv = want - self.velocity;
+        if dv.norm() > p.max_acceleration * dt {
+            dv *= p.max_acceleration * dt / dv.norm();
+        }
+        self.velocity += dv;
+        self.point += self.velocity * dt;
+        self.point
     }
 
     /// One haptic step of `dt` s with the pointer's latest target (m). Returns the device point (m).
@@ -85,8 +186,8 @@ impl TargetFilter {
         }
         // The ramp (it stops at its event; the follower below smooths a late event's pause) and its velocity.
         let moving = self.progress < 1.0;
-        self.progress = (self.progress + dt / self.interval).min(1.0);
         let ramp = self.from + (self.to - self.from) * self.progress;
+        self.progress = (self.progress + dt / self.interval).min(1.0);
         let ramp_velocity = if moving { (self.to - self.from) / self.interval } else { Vector3::zeros() };
         // The follower: the velocity it wants is the ramp's plus a pull towards it (rate 2 / interval, at most
         // 1 / dt), at most max_speed and sqrt(2 a_max d) with d the distance to the last event (it brakes in
@@ -218,5 +319,94 @@ mod tests {
         let before = f.point;
         f.step(&Vector3::new(1.0, 0.0, 0.0), 1e-3);
         assert!((f.point - before).norm() <= 1.5e-3 + 1e-15);
+    }
+
+    /// A hand's 9 cm stroke along z in 0.6 s (minimum jerk: peak 0.28 m/s, at most 1.4 m/s^2), then at rest,
+    /// sampled every 1 ms by the device's clock and delivered by `arrival(i, t_i)` (loop time, s), read by a
+    /// 1 kHz loop that takes the latest sample delivered and feeds the follower with `params` and a free-air
+    /// coupling (Omni). Returns the largest one-step change of the force (N), the peak force (N) and how far
+    /// the point ends from the hand (m).
+    fn stream_run(params: TargetParams, arrival: impl Fn(usize, f64) -> f64) -> (f64, f64, f64) {
+        let p = DeviceProfile::PHANTOM_OMNI;
+        let hand = |t: f64| {
+            let u = (t / 0.6).clamp(0.0, 1.0);
+            Vector3::new(0.0, 0.0, 0.09 * (10.0 * u.powi(3) - 15.0 * u.powi(4) + 6.0 * u.powi(5)))
+        };
+        let samples: Vec<(f64, f64)> = (0..1000).map(|i| {
+            let t = 0.00037 + i as f64 * 1e-3;
+            (t, arrival(i, t))
+        }).collect();
+        let mut filter = TargetFilter::new(params, hand(0.0));
+        let mut c = Coupling::new(p, CouplingParams::for_profile(&p), hand(0.0));
+        let (mut change, mut peak, mut last) = (0.0f64, 0.0f64, Vector3::zeros());
+        let mut latest = None;
+        for n in 1..900 {
+            let now = n as f64 * 1e-3;
+            for (i, &(_, a)) in samples.iter().enumerate() {
+                if a <= now && latest.map_or(true, |l| i > l) {
+                    latest = Some(i);
+                }
+            }
+            let Some(i) = latest else { continue };
+            let (t, _) = samples[i];
+            let x = filter.follow(&hand(t), t, 1e-3);
+            let f = c.update(&DeviceReading { time: now, position: x, rotation: Matrix3::identity(), buttons: 0 }, 1e-3, &Vector3::zeros()).unwrap();
+            change = change.max((f - last).norm());
+            peak = peak.max(f.norm());
+            last = f;
+        }
+        (change, peak, (filter.point - hand(1.0)).norm())
+    }
+
+    /// A small deterministic generator in [0, 1) (the test's arrival jitter).
+    fn jitter(i: usize) -> f64 {
+        let x = (i as u64).wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((x >> 11) as f64) / ((1u64 << 53) as f64)
+    }
+
+    #[test]
+    fn a_device_stream_with_arrival_jitter_or_bursts_gives_a_smooth_force() {
+        // The server's device path: 1 kHz samples stamped by the device's clock, read by the 1 kHz loop. With
+        // arrival delays of 0.2-1.0 ms (none read in some steps, two in others) the stream follower gives the
+        // hand a force that changes by less than 0.02 N a step in free air (0.006 N measured); the pointer's
+        // ramp per arrival, which the device path used before, gives steps of more than 0.1 N (0.3 N, the
+        // Omni's rate limit, as in the live loop), so the check can fail. With the sender stalled and sending
+        // 8 samples at once every 8 ms (device-sim on a loaded machine) the extrapolation misses by up to
+        // a T^2 (90 um here) at each burst: steps under 0.05 N (0.034 N measured; the ramp, which then lags a
+        // whole 8 ms, 0.022 N). The point ends on the hand (1e-6 m).
+        let device = TargetParams { min_interval: 0.00025, max_interval: 0.05, smoothing: 0.2, max_speed: 5.0, max_acceleration: 1000.0, stream: true };
+        let jittered = |i: usize, t: f64| t + 0.0002 + 0.0008 * jitter(i);
+        let bursts = |_: usize, t: f64| ((t / 0.008).floor() + 1.0) * 0.008 + 0.0001;
+        for (name, arrival) in [("jitter", &jittered as &dyn Fn(usize, f64) -> f64), ("bursts", &bursts)] {
+            let (change, peak, miss) = stream_run(device, arrival);
+            let (ramp_change, ramp_peak, _) = stream_run(TargetParams { stream: false, ..device }, arrival);
+            println!("{name}: stream largest step {change:.4} N, peak {peak:.4} N, ends {miss:.1e} m off; ramp per arrival {ramp_change:.4} N, peak {ramp_peak:.4} N");
+            assert!(change < if name == "jitter" { 0.02 } else { 0.05 }, "{name}: {change} N");
+            assert!(name != "jitter" || ramp_change > 0.1, "{name}: the ramp gave {ramp_change} N");
+            assert!(miss < 1e-6, "{name}: ends {miss} m off");
+        }
+    }
+
+    #[test]
+    fn a_silent_stream_is_extrapolated_for_a_while_then_held_and_bad_samples_ignored() {
+        // Samples at 0.1 m/s along x every 1 ms for 50 ms, then none: the point goes on at the samples' velocity
+        // for STREAM_HORIZON (20 ms) and stops there, 2 mm past the last sample (within 0.1 mm); a NaN sample, a
+        // sample stamped earlier than the last, and a repeated time stamp change nothing.
+        let device = TargetParams { min_interval: 0.00025, max_interval: 0.05, smoothing: 0.2, max_speed: 5.0, max_acceleration: 1000.0, stream: true };
+        let mut f = TargetFilter::new(device, Vector3::zeros());
+        let x = |t: f64| Vector3::new(0.1 * t, 0.0, 0.0);
+        for n in 0..=50 {
+            let t = n as f64 * 1e-3;
+            f.follow(&x(t), t, 1e-3);
+        }
+        let last = x(0.05);
+        for _ in 0..100 {
+            f.follow(&last, 0.05, 1e-3);
+            f.follow(&Vector3::new(f64::NAN, 0.0, 0.0), 0.06, 1e-3);
+            f.follow(&Vector3::new(1.0, 0.0, 0.0), 0.01, 1e-3);
+        }
+        let past = (f.point - last).x;
+        assert!((past - 0.1 * STREAM_HORIZON).abs() < 1e-4, "{past} m past the last sample");
+        assert!(f.velocity.norm() < 1e-9, "held: {} m/s", f.velocity.norm());
     }
 }

@@ -92,14 +92,20 @@ fn a_simulated_device_combs_the_live_hair_and_faults_are_handled() {
     let latency: Vec<f64> = answered.iter().map(|r| r[7] * 1e-6).collect();
     let (p50, p99) = (quantile(latency.clone(), 0.5), quantile(latency.clone(), 0.99));
     let in_hair = answered.iter().filter(|r| r[0] > 0.4 && r[0] < 1.0).map(|r| (r[4] * r[4] + r[5] * r[5] + r[6] * r[6]).sqrt()).fold(0.0, f64::max);
+    // On the way in (steady 0.053 m/s, after the start's kink has died out; the outer teeth may reach the
+    // hair's ends): printed for information.
+    let free_air = answered.iter().filter(|r| r[0] > 0.1 && r[0] < 0.25).map(|r| (r[4] * r[4] + r[5] * r[5] + r[6] * r[6]).sqrt()).fold(0.0, f64::max);
     let largest = answered.iter().map(|r| (r[4] * r[4] + r[5] * r[5] + r[6] * r[6]).sqrt()).fold(0.0, f64::max);
     println!("{summary}");
-    println!("poses {} answered {} ({:.1} %), round trip p50 {:.0} us p99 {:.0} us; largest force in the hair {in_hair:.3} N, anywhere {largest:.3} N", poses.len(), answered.len(), 100.0 * answered.len() as f64 / poses.len() as f64, p50 * 1e6, p99 * 1e6);
+    println!("poses {} answered {} ({:.1} %), round trip p50 {:.0} us p99 {:.0} us; largest force in the hair {in_hair:.3} N, on the way in {free_air:.4} N, anywhere {largest:.3} N", poses.len(), answered.len(), 100.0 * answered.len() as f64 / poses.len() as f64, p50 * 1e6, p99 * 1e6);
     assert!(answered.len() as f64 >= 0.95 * poses.len() as f64, "answered {} of {}", answered.len(), poses.len());
     assert!(answered.iter().all(|r| r[4].is_finite() && r[5].is_finite() && r[6].is_finite()), "finite forces");
     // The force travels as f32 components (device-sim's CSV): the magnitude carries their rounding, ~1e-7 N.
     assert!(largest <= 3.3 * (1.0 + 1e-6), "within the Omni's 3.3 N: {largest} N");
-    assert!(in_hair > 0.05, "the comb in the hair is felt: {in_hair} N");
+    // The hair's resistance: 0.046-0.071 N measured (0.07 N headless with the pointer's smoothing). Before the
+    // device's samples were followed on their own clock (2026-11-28) their arrival jitter made the force buzz
+    // at the Omni's rate limit (0.3 N a step) in and out of the hair, and this check asked for 0.05 N.
+    assert!(in_hair > 0.025, "the comb in the hair is felt: {in_hair} N");
     // Loose bounds: answers are fresh, not queued (a backlog would put the median at seconds). The 2 ms p99
     // figure on an idle machine is in bench/RESULTS.md; timing targets are not asserted in tests on a shared
     // machine (under a parallel build the p99 reached 140 ms while the median stayed at a few ms).

@@ -362,7 +362,7 @@ impl HapticCore {
             InputKind::Device => self.params.device_follow,
         };
         let dev = self.device.get_or_insert_with(|| TargetFilter::new(follow, target));
-        let mut point = dev.step(&target, dt);
+        let mut point = dev.follow(&target, r.time, dt);
         if self.params.input == InputKind::Pointer {
             // The pointer's depth is the viewer's guess (its pressed plane): the device point is kept out of the
             // body as the tool is (body.rs), so that pressing near a bulge of the head does not pull the hand
@@ -478,6 +478,14 @@ impl HapticCore {
     /// Guide indices currently simulated.
     pub fn active(&self) -> &[usize] {
         &self.active
+    }
+    /// The virtual coupling between the device and the tool proxy (its state after the last step).
+    pub fn coupling(&self) -> &Coupling {
+        &self.coupling
+    }
+    /// The hair's reaction on the proxy from the last step (scaled to the real hairs), linearised.
+    pub fn hair_reaction(&self) -> &HairReaction {
+        &self.hair_force
     }
     /// The most strands simulated now ([`Command::LimitStrands`]; `SessionParams::max_active` unless limited).
     pub fn strand_limit(&self) -> usize {

@@ -3,7 +3,7 @@
 # render strands) at haptic rates of 1, 2 and 4 kHz, with `coiffure device-sim` streaming the comb strokes of
 # bench/device-comb.toml (in the back hair from 0.3 s to 5.55 s) at 1 kHz. Prints, per rate, the server's
 # haptic loop line (step p50, p99, p99.9, misses), its strand budget line, and device-sim's round trip distribution, and keeps the
-# device-sim traces in bench/out/. Run on a quiet machine, after `cargo build --release -p coiffure-server`.
+# device-sim traces in bench/out/ (their force quality: python3 bench/device_forces.py bench/out/device-1000.csv). Run on a quiet machine, after `cargo build --release -p coiffure-server`.
 #   bench/device_loop.sh [RATES...]        e.g. bench/device_loop.sh 1000 4000
 #   COIFFURE_BIN=path/to/coiffure SERVE_ARGS="--haptic-priority 0" bench/device_loop.sh
 set -euo pipefail

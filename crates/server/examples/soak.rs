@@ -3,7 +3,8 @@
 //! frames, forces and the tool proxy's health.
 //!
 //! `cargo build --release -p coiffure-server --examples && target/release/examples/soak [SECONDS] [RENDER_STRANDS]`
-//! (defaults 60 s and 100,000). It starts `target/release/coiffure serve` (beside this example) and runs:
+//! (defaults 60 s and 100,000). It starts `target/release/coiffure serve` (beside this example; more of its
+//! options in the environment variable `SOAK_SERVE_ARGS`, e.g. `--no-strand-budget`) and runs:
 //! - the controller: comb strokes with jitter through the back hair at 120 Hz, every tool in turn (10 s each,
 //!   the primary button held half of the time: cuts, blowing, spraying, clipping), a SET_HAIR every 15 s, a
 //!   RESET every 60 s, a NaN pose and a 2 m teleport every 5 s, one burst of 1,000 RESETs at a third of the run;
@@ -14,7 +15,7 @@
 //! own stalls and the server's (`Watch`), lateness behind the schedule, and whether it was on time
 //! (docs/protocol.md, "Frames on time"); `frames_on_time` (every watcher on time and the server's frame thread
 //! never more than 100 ms behind its schedule); the largest force and non-finite ones, non-finite proxies, the runaway count, and the
-//! server's own summary line (haptic loop timing, the writers' pickup delays); and the CPU time other processes'
+//! server's own summary lines (haptic loop timing, the writers' pickup delays; the strand budget); and the CPU time other processes'
 //! real-time threads used meanwhile (a run beside another real-time haptic loop measures the machine).
 
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
@@ -212,6 +213,7 @@ fn main() {
     let mut child = Command::new(&bin)
         .args(["serve", "--port", "0", "--fps", &FPS.to_string(), "--render-strands", &strands.to_string(), "--duration", &format!("{}", seconds + 5.0), "--web"])
         .arg(&web)
+        .args(std::env::var("SOAK_SERVE_ARGS").unwrap_or_default().split_whitespace())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -413,6 +415,7 @@ fn main() {
     reader.join().unwrap();
     err_reader.join().unwrap();
     let summary = lines.lock().unwrap().iter().find(|l| l.contains("haptic loop:")).cloned().unwrap_or_default();
+    let budget = lines.lock().unwrap().iter().find(|l| l.starts_with("strand budget:")).cloned().unwrap_or_default();
     // The server's own count of FRAMEs more than a period behind their schedule (its summary line).
     // The server's frame thread: FRAMEs more than a period late (information), and the latest one's delay behind
     // its schedule, ms, which must be within the on-time bound.
@@ -439,6 +442,7 @@ fn main() {
         "viewers_still_connected_watcher_watcher_slow": slow_kept,
         "churn_connections": churned.load(Ordering::Relaxed),
         "server_summary": summary,
+        "strand_budget": budget,
     });
     println!("{}", serde_json::to_string_pretty(&json).unwrap());
     let _ = std::fs::remove_dir_all(&web);

@@ -30,7 +30,8 @@
 //! 2. the point the device is at now on its own clock is the anchor extrapolated at its velocity (for at
 //!    most [`STREAM_HORIZON`]: a sender that stops stops there), so a late or missing sample changes
 //!    nothing, a late one does not step back, and a sender stalled for a few ms that then sends its samples
-//!    in a burst (device-sim on a loaded machine: 8 at once every 8 ms) is followed smoothly;
+//!    in a burst (device-sim on a loaded machine: 8 at once every 8 ms) is followed smoothly (a moved sample
+//!    with the last one's stamp is stamped on arrival, on the loop's clock);
 //! 3. the device point moves at that extrapolation's velocity plus a pull onto it with time constant
 //!    [`STREAM_PULL_STEPS`] steps or twice the mean time between arrivals (a running mean with weight
 //!    `smoothing`), whichever is longer, its velocity turning at most at `max_acceleration`.
@@ -99,6 +100,8 @@ pub struct TargetFilter {
     /// and the sample its velocity is measured from (time stamp, position).
     anchor: Option<(f64, Vector3<f64>, Vector3<f64>)>,
     base: Option<(f64, Vector3<f64>)>,
+    /// The last sample's own time stamp, s (the anchor's time is the same, or its arrival's).
+    stamp: Option<f64>,
     /// The filter's own clock, s (the sum of its steps), and its offset from the device's clock (s).
     clock: f64,
     offset: Option<f64>,
@@ -108,7 +111,7 @@ impl TargetFilter {
     /// A filter at rest at `position` (m).
     pub fn new(params: TargetParams, position: Vector3<f64>) -> Self {
         let interval = (1.0 / 60.0f64).clamp(params.min_interval, params.max_interval);
-        Self { params, point: position, velocity: Vector3::zeros(), from: position, to: position, progress: 1.0, interval, since: 0.0, anchor: None, base: None, clock: 0.0, offset: None }
+        Self { params, point: position, velocity: Vector3::zeros(), from: position, to: position, progress: 1.0, interval, since: 0.0, anchor: None, base: None, stamp: None, clock: 0.0, offset: None }
     }
 
     /// One haptic step of `dt` s with the latest reading's position `target` (m) and time stamp `time` (s):
@@ -125,8 +128,19 @@ impl TargetFilter {
         let p = self.params;
         self.clock += dt;
         self.since += dt;
-        let fresh = time.is_finite() && target.iter().all(|x| x.is_finite()) && self.anchor.map_or(true, |a| time > a.0);
+        // A sample with the last one's stamp but moved (a client that does not stamp its poses, or stamps them
+        // coarsely) is stamped on arrival, on the loop's clock since the last sample; an earlier stamp is
+        // ignored (the UDP device refuses it before).
+        let valid = time.is_finite() && target.iter().all(|x| x.is_finite());
+        let advanced = self.stamp.map_or(true, |s| time > s);
+        let moved = self.stamp == Some(time) && self.anchor.is_some_and(|a| *target != a.1);
+        let fresh = valid && (advanced || moved);
         if fresh {
+            self.stamp = Some(time);
+            let time = match self.anchor {
+                Some((t0, ..)) if !advanced || time <= t0 => t0 + self.since,
+                _ => time,
+            };
             let last = self.anchor.map_or(Vector3::zeros(), |a| a.2);
             let velocity = match (self.anchor, self.base) {
                 (Some((t1, ..)), _) if time - t1 > p.max_interval => Vector3::zeros(),
@@ -408,5 +422,21 @@ mod tests {
         let past = (f.point - last).x;
         assert!((past - 0.1 * STREAM_HORIZON).abs() < 1e-4, "{past} m past the last sample");
         assert!(f.velocity.norm() < 1e-9, "held: {} m/s", f.velocity.norm());
+    }
+
+    #[test]
+    fn a_stream_whose_stamps_do_not_advance_is_stamped_on_arrival() {
+        // A client that stamps every pose 0 (allowed: stamps must not decrease) moving at 0.1 m/s along x: the
+        // point follows it (ends within 0.1 mm of the last pose, moving at 0.1 m/s within 1 %), not frozen on
+        // the first pose.
+        let device = TargetParams { min_interval: 0.00025, max_interval: 0.05, smoothing: 0.2, max_speed: 5.0, max_acceleration: 1000.0, stream: true };
+        let mut f = TargetFilter::new(device, Vector3::zeros());
+        let mut x = Vector3::zeros();
+        for n in 0..200 {
+            x = Vector3::new(0.1 * n as f64 * 1e-3, 0.0, 0.0);
+            f.follow(&x, 0.0, 1e-3);
+        }
+        assert!((f.point - x).norm() < 1e-4, "{} m from the last pose", (f.point - x).norm());
+        assert!((f.velocity.x - 0.1).abs() < 1e-3, "{} m/s", f.velocity.x);
     }
 }

@@ -103,12 +103,20 @@ pub struct StrandBudget {
     mean: Option<f64>,
     /// Time since the last change, s.
     since_change: f64,
+    /// What it did so far ([`StrandBudget::report`]).
+    report: BudgetReport,
 }
 
 impl StrandBudget {
     /// A budget for a loop of `period` s allowing at most `max_active` strands, starting there.
     pub fn new(params: BudgetParams, period: f64, max_active: usize) -> Self {
-        Self { params, period, max: max_active, limit: max_active, mean: None, since_change: 0.0 }
+        let report = BudgetReport { enabled: true, lowest: max_active, last: max_active, ..BudgetReport::default() };
+        Self { params, period, max: max_active, limit: max_active, mean: None, since_change: 0.0, report }
+    }
+
+    /// What the budget did over the steps it observed.
+    pub fn report(&self) -> BudgetReport {
+        self.report
     }
 
     /// The current limit on simulated strands.
@@ -124,31 +132,45 @@ impl StrandBudget {
     /// Takes a step that took `seconds` of wall time with `simulated` strands simulated; returns the command
     /// that changes the limit, to apply before the next step, if it changes.
     pub fn observe(&mut self, seconds: f64, simulated: usize) -> Option<Command> {
-        let p = &self.params;
         let t = if seconds.is_finite() { seconds.clamp(0.0, 2.0 * self.period) } else { 2.0 * self.period };
-        let a = (self.period / p.time_constant).min(1.0);
+        let a = (self.period / self.params.time_constant).min(1.0);
         let mean = self.mean.map_or(t, |m| m + a * (t - m));
         self.mean = Some(mean);
         self.since_change += self.period;
+        let next = self.next_limit(mean, simulated);
+        if let Some(n) = next {
+            self.limit = n;
+            self.since_change = 0.0;
+        }
+        let r = &mut self.report;
+        r.steps += 1;
+        r.changes += next.is_some() as u64;
+        r.lowest = r.lowest.min(self.limit);
+        r.last = self.limit;
+        r.limited_steps += (self.limit < self.max) as u64;
+        next.map(|n| Command::LimitStrands(n as u32))
+    }
+
+    /// The limit after a step with the running mean `mean` (s) and `simulated` strands, if it changes (stages 2
+    /// to 4 of the module's documentation).
+    fn next_limit(&self, mean: f64, simulated: usize) -> Option<usize> {
+        let p = &self.params;
         if self.since_change < p.hold {
             return None;
         }
         let floor = p.min_strands.min(self.max);
         let target = p.target * self.period;
-        let next = if mean > target && self.limit > floor {
-            self.limit.saturating_sub(p.step).max(floor)
-        } else if self.since_change >= p.raise_after && self.limit < self.max && simulated >= self.limit && simulated > 0 && mean * (self.limit + p.step) as f64 / simulated as f64 <= target * (1.0 - p.margin) {
-            (self.limit + p.step).min(self.max)
-        } else {
-            return None;
-        };
-        self.limit = next;
-        self.since_change = 0.0;
-        Some(Command::LimitStrands(next as u32))
+        if mean > target && self.limit > floor {
+            return Some(self.limit.saturating_sub(p.step).max(floor));
+        }
+        // The mean expected with `step` more strands, scaled from the strands simulated now.
+        let binds = simulated > 0 && simulated >= self.limit;
+        let room = || mean * (self.limit + p.step) as f64 / simulated as f64 <= target * (1.0 - p.margin);
+        (self.since_change >= p.raise_after && self.limit < self.max && binds && room()).then(|| (self.limit + p.step).min(self.max))
     }
 }
 
-/// What the strand budget did over a live session (`SessionReport::budget`).
+/// What the strand budget did over a live session (`SessionReport::budget`, [`StrandBudget::report`]).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct BudgetReport {
     /// Whether the session ran a budget ([`BudgetParams::enabled`]).
@@ -163,18 +185,6 @@ pub struct BudgetReport {
     pub limited_steps: u64,
     /// Haptic steps in all.
     pub steps: u64,
-}
-
-impl StrandBudget {
-    /// Counts one step under the current limit into `report` (and a change, if `changed`).
-    pub fn tally(&self, report: &mut BudgetReport, changed: bool) {
-        report.enabled = true;
-        report.steps += 1;
-        report.changes += changed as u64;
-        report.lowest = if report.steps == 1 { self.limit } else { report.lowest.min(self.limit) };
-        report.last = self.limit;
-        report.limited_steps += (self.limit < self.max) as u64;
-    }
 }
 
 #[cfg(test)]

@@ -172,12 +172,7 @@ impl Session {
         let epoch_h = reset_epoch.clone();
         let publish_every = params.publish_every;
         let budget_report = Arc::new(std::sync::Mutex::new(BudgetReport { lowest: params.max_active, last: params.max_active, ..BudgetReport::default() }));
-        let mut budget = params.budget.enabled.then(|| BudgetRun {
-            budget: StrandBudget::new(params.budget, dt, params.max_active),
-            report: BudgetReport::default(),
-            change: None,
-            shared: budget_report.clone(),
-        });
+        let mut budget = params.budget.enabled.then(|| BudgetRun { budget: StrandBudget::new(params.budget, dt, params.max_active), change: None, shared: budget_report.clone() });
         let step = move |reading: Option<DeviceReading>, _t: f64, dt: f64| -> DeviceCommand {
             let started = Instant::now();
             let mut cmds = Vec::new();
@@ -214,7 +209,6 @@ impl Session {
             }
             if let Some(b) = budget.as_mut() {
                 b.change = b.budget.observe(started.elapsed().as_secs_f64(), core.active().len());
-                b.budget.tally(&mut b.report, b.change.is_some());
             }
             cmd
         };
@@ -272,11 +266,10 @@ struct GlobalRun {
     inputs: Vec<ToolInput>,
 }
 
-/// The haptic thread's strand budget, its change to apply before the next step, and its tally, handed over
-/// when the loop ends (on drop; no lock on the haptic path).
+/// The haptic thread's strand budget and its change to apply before the next step; its report is handed
+/// over when the loop ends (on drop; no lock on the haptic path).
 struct BudgetRun {
     budget: StrandBudget,
-    report: BudgetReport,
     change: Option<Command>,
     shared: Arc<std::sync::Mutex<BudgetReport>>,
 }
@@ -284,7 +277,7 @@ struct BudgetRun {
 impl Drop for BudgetRun {
     fn drop(&mut self) {
         if let Ok(mut g) = self.shared.lock() {
-            *g = self.report;
+            *g = self.budget.report();
         }
     }
 }

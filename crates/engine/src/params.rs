@@ -51,7 +51,7 @@ pub struct SessionParams {
     /// Device limits. Default: a Phantom Omni (3.3 N, 300 N/s), also for the mouse, whose force is shown.
     pub profile: DeviceProfile,
     /// How the device point follows a pointer's target (the mouse reports at 60-125 Hz): interpolated at the
-    /// haptic rate between events (`haptics::target::TargetParams`: event-interval bounds 0.004-0.05 s,
+    /// haptic rate between events. Default `haptics::target::TargetParams::default()` (event-interval bounds 0.004-0.05 s,
     /// running-mean weight 0.2, largest speed 1.5 m/s, largest acceleration 1 m/s^2: a jump of the mouse
     /// target, e.g. when the button presses the tool into the hair, never throws the proxy).
     pub pointer: TargetParams,
@@ -89,7 +89,7 @@ pub struct SessionParams {
 
 impl Default for SessionParams {
     fn default() -> Self {
-        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 56, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams { min_interval: 0.004, max_interval: 0.05, smoothing: 0.2, max_speed: 1.5, max_acceleration: 1.0, stream: false }, input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default(), budget: BudgetParams::default() }
+        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 56, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams::default(), input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default(), budget: BudgetParams::default() }
     }
 }
 

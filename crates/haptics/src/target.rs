@@ -96,13 +96,21 @@ pub struct TargetFilter {
     interval: f64,
     /// Time since the last event, s.
     since: f64,
-    /// A device stream's last sample: its time stamp (s, the device's clock), position (m) and velocity (m/s);
-    /// and the sample its velocity is measured from (time stamp, position).
+    /// A device stream's samples and clocks (unused for a pointer).
+    stream: Stream,
+}
+
+/// What [`TargetFilter::follow`] keeps of a device stream.
+#[derive(Debug, Clone, Default)]
+struct Stream {
+    /// The last sample: its time stamp (s, the device's clock, or its arrival's, see `stamp`), position (m) and
+    /// velocity (m/s).
     anchor: Option<(f64, Vector3<f64>, Vector3<f64>)>,
+    /// The sample the velocity is measured from: time stamp (s) and position (m).
     base: Option<(f64, Vector3<f64>)>,
-    /// The last sample's own time stamp, s (the anchor's time is the same, or its arrival's).
+    /// The last sample's own time stamp, s.
     stamp: Option<f64>,
-    /// The filter's own clock, s (the sum of its steps), and its offset from the device's clock (s).
+    /// The filter's own clock, s (the sum of its steps), and its offset from the device's clock, s.
     clock: f64,
     offset: Option<f64>,
 }
@@ -111,7 +119,7 @@ impl TargetFilter {
     /// A filter at rest at `position` (m).
     pub fn new(params: TargetParams, position: Vector3<f64>) -> Self {
         let interval = (1.0 / 60.0f64).clamp(params.min_interval, params.max_interval);
-        Self { params, point: position, velocity: Vector3::zeros(), from: position, to: position, progress: 1.0, interval, since: 0.0, anchor: None, base: None, stamp: None, clock: 0.0, offset: None }
+        Self { params, point: position, velocity: Vector3::zeros(), from: position, to: position, progress: 1.0, interval, since: 0.0, stream: Stream::default() }
     }
 
     /// One haptic step of `dt` s with the latest reading's position `target` (m) and time stamp `time` (s):
@@ -125,57 +133,70 @@ impl TargetFilter {
         if !(dt > 0.0 && dt.is_finite()) {
             return self.point;
         }
-        let p = self.params;
-        self.clock += dt;
+        self.stream.clock += dt;
         self.since += dt;
-        // A sample with the last one's stamp but moved (a client that does not stamp its poses, or stamps them
-        // coarsely) is stamped on arrival, on the loop's clock since the last sample; an earlier stamp is
-        // ignored (the UDP device refuses it before).
         let valid = time.is_finite() && target.iter().all(|x| x.is_finite());
-        let advanced = self.stamp.map_or(true, |s| time > s);
-        let moved = self.stamp == Some(time) && self.anchor.is_some_and(|a| *target != a.1);
-        let fresh = valid && (advanced || moved);
-        if fresh {
-            self.stamp = Some(time);
-            let time = match self.anchor {
-                Some((t0, ..)) if !advanced || time <= t0 => t0 + self.since,
-                _ => time,
-            };
-            let last = self.anchor.map_or(Vector3::zeros(), |a| a.2);
-            let velocity = match (self.anchor, self.base) {
-                (Some((t1, ..)), _) if time - t1 > p.max_interval => Vector3::zeros(),
-                (Some(_), Some((tb, xb))) if time - tb >= p.min_interval => {
-                    let v = (target - xb) / (time - tb);
-                    if v.norm() > p.max_speed { v * (p.max_speed / v.norm()) } else { v }
-                }
-                (Some(_), Some(_)) => last,
-                _ => Vector3::zeros(),
-            };
-            if self.base.map_or(true, |(tb, _)| time - tb >= p.min_interval) {
-                self.base = Some((time, *target));
-            }
-            self.anchor = Some((time, *target, velocity));
-            // The mean time between arrivals, on the loop's clock (the pull's time scale).
-            self.interval += p.smoothing * (self.since.clamp(p.min_interval, p.max_interval) - self.interval);
-            self.since = 0.0;
-            let delay = self.clock - time;
-            self.offset = Some(self.offset.map_or(delay, |o| delay.min(o + OFFSET_RISE * dt)));
-        } else if let Some(o) = self.offset.as_mut() {
+        let st = &self.stream;
+        let advanced = st.stamp.map_or(true, |s| time > s);
+        let moved = st.stamp == Some(time) && st.anchor.is_some_and(|a| *target != a.1);
+        if valid && (advanced || moved) {
+            self.take_sample(target, time, advanced, dt);
+        } else if let Some(o) = self.stream.offset.as_mut() {
             *o += OFFSET_RISE * dt;
         }
-        let Some((t0, x0, v0)) = self.anchor else { return self.point };
+        let st = &self.stream;
+        let Some((t0, x0, v0)) = st.anchor else { return self.point };
         // Where the device is now on its own clock: the anchor extrapolated, for at most STREAM_HORIZON.
-        let age = (self.clock - self.offset.unwrap_or(0.0) - t0).max(0.0);
-        let horizon = STREAM_HORIZON;
-        let (want_x, want_v) = if age < horizon { (x0 + v0 * age, v0) } else { (x0 + v0 * horizon, Vector3::zeros()) };
+        let age = (st.clock - st.offset.unwrap_or(0.0) - t0).max(0.0);
+        let (want_x, want_v) = if age < STREAM_HORIZON { (x0 + v0 * age, v0) } else { (x0 + v0 * STREAM_HORIZON, Vector3::zeros()) };
         let pull = (STREAM_PULL_STEPS * dt).max(2.0 * self.interval);
-        let mut want = want_v + (want_x - self.point) / pull;
-        if want.norm() > p.max_speed {
-            want *= p.max_speed / want.norm();
+        self.drive(want_v + (want_x - self.point) / pull, self.params.max_speed, dt)
+    }
+
+    /// Takes a stream's new sample (position `target`, m, stamped `time`, s; `advanced`: later than the last
+    /// stamp): its velocity, the anchor, the mean time between arrivals and the clocks' offset. A sample with
+    /// the last one's stamp but moved (a client that does not stamp its poses, or stamps them coarsely) is
+    /// stamped on arrival, on the loop's clock since the last sample; an earlier stamp never comes here (the
+    /// UDP device refuses it before).
+    fn take_sample(&mut self, target: &Vector3<f64>, time: f64, advanced: bool, dt: f64) {
+        let p = self.params;
+        let st = &mut self.stream;
+        st.stamp = Some(time);
+        let time = match st.anchor {
+            Some((t0, ..)) if !advanced || time <= t0 => t0 + self.since,
+            _ => time,
+        };
+        let velocity = match (st.anchor, st.base) {
+            (Some((t1, ..)), _) if time - t1 > p.max_interval => Vector3::zeros(),
+            (Some(_), Some((tb, xb))) if time - tb >= p.min_interval => {
+                let v = (target - xb) / (time - tb);
+                if v.norm() > p.max_speed { v * (p.max_speed / v.norm()) } else { v }
+            }
+            // Samples closer together than min_interval keep the velocity.
+            (Some((.., v)), Some(_)) => v,
+            _ => Vector3::zeros(),
+        };
+        if st.base.map_or(true, |(tb, _)| time - tb >= p.min_interval) {
+            st.base = Some((time, *target));
+        }
+        st.anchor = Some((time, *target, velocity));
+        let delay = st.clock - time;
+        st.offset = Some(st.offset.map_or(delay, |o| delay.min(o + OFFSET_RISE * dt)));
+        // The mean time between arrivals, on the loop's clock (the pull's time scale).
+        self.interval += p.smoothing * (self.since.clamp(p.min_interval, p.max_interval) - self.interval);
+        self.since = 0.0;
+    }
+
+    /// Moves the point for `dt` s towards the velocity `want` (m/s), at most `cap` (m/s), its velocity turning
+    /// at most at `max_acceleration`; returns the point (m).
+    fn drive(&mut self, mut want: Vector3<f64>, cap: f64, dt: f64) -> Vector3<f64> {
+        if want.norm() > cap {
+            want *= cap / want.norm();
         }
         let mut dv = want - self.velocity;
-        if dv.norm() > p.max_acceleration * dt {
-            dv *= p.max_acceleration * dt / dv.norm();
+        let turn = self.params.max_acceleration * dt;
+        if dv.norm() > turn {
+            dv *= turn / dv.norm();
         }
         self.velocity += dv;
         self.point += self.velocity * dt;
@@ -209,19 +230,8 @@ impl TargetFilter {
         // acceleration: the coupling sees neither a step nor a jerk it could turn into a force pulse).
         let p = &self.params;
         let rate = (2.0 / self.interval).min(1.0 / dt);
-        let mut want = ramp_velocity + (ramp - self.point) * rate;
         let cap = p.max_speed.min((2.0 * p.max_acceleration * (self.to - self.point).norm()).sqrt());
-        if want.norm() > cap {
-            want *= cap / want.norm();
-        }
-        let mut dv = want - self.velocity;
-        if dv.norm() > p.max_acceleration * dt {
-            dv *= p.max_acceleration * dt / dv.norm();
-        }
-        let v = self.velocity + dv;
-        self.velocity = v;
-        self.point += v * dt;
-        self.point
+        self.drive(ramp_velocity + (ramp - self.point) * rate, cap, dt)
     }
 }
 
@@ -335,6 +345,11 @@ mod tests {
         assert!((f.point - before).norm() <= 1.5e-3 + 1e-15);
     }
 
+    /// A 1 kHz device's stream as the live session follows it (the engine's `DEVICE_FOLLOW`).
+    fn device_stream() -> TargetParams {
+        TargetParams { min_interval: 0.00025, max_interval: 0.05, smoothing: 0.2, max_speed: 5.0, max_acceleration: 1000.0, stream: true }
+    }
+
     /// A hand's 9 cm stroke along z in 0.6 s (minimum jerk: peak 0.28 m/s, at most 1.4 m/s^2), then at rest,
     /// sampled every 1 ms by the device's clock and delivered by `arrival(i, t_i)` (loop time, s), read by a
     /// 1 kHz loop that takes the latest sample delivered and feeds the follower with `params` and a free-air
@@ -388,7 +403,7 @@ mod tests {
         // 8 samples at once every 8 ms (device-sim on a loaded machine) the extrapolation misses by up to
         // a T^2 (90 um here) at each burst: steps under 0.05 N (0.034 N measured; the ramp, which then lags a
         // whole 8 ms, 0.022 N). The point ends on the hand (1e-6 m).
-        let device = TargetParams { min_interval: 0.00025, max_interval: 0.05, smoothing: 0.2, max_speed: 5.0, max_acceleration: 1000.0, stream: true };
+        let device = device_stream();
         let jittered = |i: usize, t: f64| t + 0.0002 + 0.0008 * jitter(i);
         let bursts = |_: usize, t: f64| ((t / 0.008).floor() + 1.0) * 0.008 + 0.0001;
         for (name, arrival) in [("jitter", &jittered as &dyn Fn(usize, f64) -> f64), ("bursts", &bursts)] {
@@ -406,7 +421,7 @@ mod tests {
         // Samples at 0.1 m/s along x every 1 ms for 50 ms, then none: the point goes on at the samples' velocity
         // for STREAM_HORIZON (20 ms) and stops there, 2 mm past the last sample (within 0.1 mm); a NaN sample, a
         // sample stamped earlier than the last, and a repeated time stamp change nothing.
-        let device = TargetParams { min_interval: 0.00025, max_interval: 0.05, smoothing: 0.2, max_speed: 5.0, max_acceleration: 1000.0, stream: true };
+        let device = device_stream();
         let mut f = TargetFilter::new(device, Vector3::zeros());
         let x = |t: f64| Vector3::new(0.1 * t, 0.0, 0.0);
         for n in 0..=50 {
@@ -429,7 +444,7 @@ mod tests {
         // A client that stamps every pose 0 (allowed: stamps must not decrease) moving at 0.1 m/s along x: the
         // point follows it (ends within 0.1 mm of the last pose, moving at 0.1 m/s within 1 %), not frozen on
         // the first pose.
-        let device = TargetParams { min_interval: 0.00025, max_interval: 0.05, smoothing: 0.2, max_speed: 5.0, max_acceleration: 1000.0, stream: true };
+        let device = device_stream();
         let mut f = TargetFilter::new(device, Vector3::zeros());
         let mut x = Vector3::zeros();
         for n in 0..200 {

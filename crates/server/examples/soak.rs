@@ -414,8 +414,11 @@ fn main() {
     let _ = child.wait();
     reader.join().unwrap();
     err_reader.join().unwrap();
-    let summary = lines.lock().unwrap().iter().find(|l| l.contains("haptic loop:")).cloned().unwrap_or_default();
-    let budget = lines.lock().unwrap().iter().find(|l| l.starts_with("strand budget:")).cloned().unwrap_or_default();
+    let (summary, budget) = {
+        let lines = lines.lock().unwrap();
+        let find = |pat: &str| lines.iter().find(|l| l.contains(pat)).cloned().unwrap_or_default();
+        (find("haptic loop:"), find("strand budget:"))
+    };
     // The server's own count of FRAMEs more than a period behind their schedule (its summary line).
     // The server's frame thread: FRAMEs more than a period late (information), and the latest one's delay behind
     // its schedule, ms, which must be within the on-time bound.

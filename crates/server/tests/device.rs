@@ -92,12 +92,9 @@ fn a_simulated_device_combs_the_live_hair_and_faults_are_handled() {
     let latency: Vec<f64> = answered.iter().map(|r| r[7] * 1e-6).collect();
     let (p50, p99) = (quantile(latency.clone(), 0.5), quantile(latency.clone(), 0.99));
     let in_hair = answered.iter().filter(|r| r[0] > 0.4 && r[0] < 1.0).map(|r| (r[4] * r[4] + r[5] * r[5] + r[6] * r[6]).sqrt()).fold(0.0, f64::max);
-    // On the way in (steady 0.053 m/s, after the start's kink has died out; the outer teeth may reach the
-    // hair's ends): printed for information.
-    let free_air = answered.iter().filter(|r| r[0] > 0.1 && r[0] < 0.25).map(|r| (r[4] * r[4] + r[5] * r[5] + r[6] * r[6]).sqrt()).fold(0.0, f64::max);
     let largest = answered.iter().map(|r| (r[4] * r[4] + r[5] * r[5] + r[6] * r[6]).sqrt()).fold(0.0, f64::max);
     println!("{summary}");
-    println!("poses {} answered {} ({:.1} %), round trip p50 {:.0} us p99 {:.0} us; largest force in the hair {in_hair:.3} N, on the way in {free_air:.4} N, anywhere {largest:.3} N", poses.len(), answered.len(), 100.0 * answered.len() as f64 / poses.len() as f64, p50 * 1e6, p99 * 1e6);
+    println!("poses {} answered {} ({:.1} %), round trip p50 {:.0} us p99 {:.0} us; largest force in the hair {in_hair:.3} N, anywhere {largest:.3} N", poses.len(), answered.len(), 100.0 * answered.len() as f64 / poses.len() as f64, p50 * 1e6, p99 * 1e6);
     assert!(answered.len() as f64 >= 0.95 * poses.len() as f64, "answered {} of {}", answered.len(), poses.len());
     assert!(answered.iter().all(|r| r[4].is_finite() && r[5].is_finite() && r[6].is_finite()), "finite forces");
     // The force travels as f32 components (device-sim's CSV): the magnitude carries their rounding, ~1e-7 N.

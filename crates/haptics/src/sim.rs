@@ -138,15 +138,16 @@ impl SimRow {
 /// The CSV header of [`to_csv`].
 pub const CSV_HEADER: &str = "t,x,y,z,fx,fy,fz,latency_us,flags";
 
-/// Rows as CSV (`t,x,y,z,fx,fy,fz,latency_us,flags`: s, m device frame, N, microseconds; `nan` where no
-/// answer came).
+/// Rows as CSV (`t,x,y,z,fx,fy,fz,latency_us,flags`: s, m device frame, N, microseconds; `NaN` where no
+/// answer came). The time and forces are exact (shortest decimals reading back to the same f64).
 pub fn to_csv(rows: &[SimRow]) -> String {
     let mut s = String::with_capacity(64 * rows.len() + 64);
     s.push_str(CSV_HEADER);
     s.push('\n');
     for r in rows {
         let (p, f) = (r.position, r.force);
-        s.push_str(&format!("{:.6},{:.7},{:.7},{:.7},{:.6},{:.6},{:.6},{:.1},{}\n", r.t, p.x, p.y, p.z, f.x, f.y, f.z, r.latency * 1e6, r.flags));
+        // Time and forces exactly (shortest round-trip decimals): a record's replay is compared with them bit for bit.
+        s.push_str(&format!("{},{:.7},{:.7},{:.7},{:e},{:e},{:e},{:.1},{}\n", r.t, p.x, p.y, p.z, f.x, f.y, f.z, r.latency * 1e6, r.flags));
     }
     s
 }
@@ -253,12 +254,18 @@ pub fn run(server: SocketAddr, path: &dyn Fn(f64) -> DeviceReading, p: &SimParam
         } else {
             Sent::Pose
         };
-        let (seq, sent) = if kind == Sent::Duplicate {
+        let sent = if kind == Sent::Duplicate {
             let (s, r) = last_packet.expect("checked");
-            client.send_raw(&encode_pose(s, &r)).map_err(|e| format!("cannot send to {server}: {e}"))?;
-            (s, r)
+            client.send_raw(&encode_pose(s, &r)).map(|()| (s, r))
         } else {
-            (client.send(&r).map_err(|e| format!("cannot send to {server}: {e}"))?, r)
+            client.send(&r).map(|s| (s, r))
+        };
+        let (seq, sent) = match sent {
+            Ok(x) => x,
+            // The server's port is closed (it stopped or died; the ICMP of an earlier pose comes back here): this
+            // pose is lost, as a device's would be, and the stream goes on.
+            Err(e) if e.kind() == std::io::ErrorKind::ConnectionRefused => continue,
+            Err(e) => return Err(format!("cannot send to {server}: {e}")),
         };
         sent_at.push(Instant::now());
         rows.push(SimRow { t, seq, kind, position: sent.position, force: Vector3::from_element(f64::NAN), latency: f64::NAN, flags: 0 });

@@ -91,8 +91,8 @@ fn read(path: &Path) -> ReadRecord {
 #[test]
 fn a_server_killed_mid_session_leaves_a_record_that_replays_to_the_forces_the_device_felt() {
     // The server records while device-sim combs the back hair; 3 s after the stream started it is killed with
-    // SIGKILL (no clean exit, no end chunk). The file is there, read up to its last whole chunk with at least 2 s
-    // of steps; replayed headless on the scene and settings the record names, every step's force is the recorded
+    // SIGKILL (no clean exit, no end chunk). The file is there, read up to its last whole chunk with at least the
+    // first 2 s of the stream; replayed headless on the scene and settings the record names, every step's force is the recorded
     // one and every pose the device sent in that span was answered with the replayed force of the step that
     // read it, bit for bit. At most a second of the session before the kill is missing from the record.
     let _one = ONE_SERVER.lock().unwrap_or_else(|e| e.into_inner());
@@ -112,7 +112,9 @@ fn a_server_killed_mid_session_leaves_a_record_that_replays_to_the_forces_the_de
     let Ending::Cut(cut) = &r.ending else { panic!("a killed server's record has no end chunk: {:?}", r.ending) };
     let c = check(&r.record, &felt(&csv));
     eprintln!("killed after {killed:.2} s; record: {} steps ({:.2} s), cut at byte {} of {}: {}; {c:?}", r.record.steps.len(), r.record.seconds(), cut.offset, cut.file_bytes, cut.why);
-    assert!(r.record.seconds() >= 2.0, "{} s of steps", r.record.seconds());
+    // At least the first 2 s of the device's stream are in the record (in steps, fewer when a busy machine made the
+    // loop skip periods: those are not run, so not recorded).
+    assert!(c.last_read >= 2.0 && r.record.seconds() >= 1.5, "{} s of steps, the last read at {} s", r.record.seconds(), c.last_read);
     assert_eq!(c.replay_differs, 0, "replayed forces differ from the recorded ones");
     assert!(c.answered >= 1500, "{c:?}");
     assert_eq!(c.equal, c.answered, "forces felt equal to the replayed ones, bit for bit");

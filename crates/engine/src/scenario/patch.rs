@@ -3,8 +3,9 @@
 //! Pipeline of [`Scenario::run`]:
 //! 1. build the patch: roots on a rectangle, small random tilts so that teeth meet hair as in a real tress;
 //!    each strand stands for `represents` real fibres (from the tress's mass);
-//! 2. wetness: the strands' material and the friction coefficients (tool-hair and hair-hair) from
-//!    [`tools::wetness::WetnessModel`] at `[patch] wetness`, the same law as the live session's; the combing
+//! 2. wetness and treatment: the strands' material and the friction coefficients (tool-hair and hair-hair) from
+//!    [`tools::wetness::WetnessModel`] at `[patch] wetness` and [`tools::treatment::Treatment`] at
+//!    `[patch] treatment`, the same law as the live session's; the combing
 //!    ease lowers both frictions by [`crate::params::HapticParams::combing_friction`], the live session's law;
 //!    the comb drags through the wisps against the fibres it parts ([`tools::entanglement`]);
 //! 3. settle the patch under gravity in the [`tools::interaction::LocalInteraction`] (hair-hair contacts on, the
@@ -28,6 +29,7 @@ use strand::constraint::ConstraintOptions;
 use strand::{HairType, ModelKind, RootFrame, Strand, StrandError, StrandModel};
 use tools::interaction::{Entanglement, ForceModel, HairContact, LocalInteraction};
 use tools::shape::ToolShape;
+use tools::treatment::{Contact, Treatment};
 use tools::wetness::{check_wetness, WetnessModel};
 
 
@@ -97,6 +99,10 @@ pub struct PatchSpec {
     /// (default 0). Sets the strands' material and the friction through `tools::wetness::WetnessModel`.
     #[serde(default)]
     pub wetness: f64,
+    /// Surface treatment of the hair: "virgin" (default), "conditioned", "bleached" or "bleached-twice"; scales
+    /// the tool-hair and hair-hair friction, dry and wet (`tools::treatment::Treatment`, docs/treatment.md).
+    #[serde(default)]
+    pub treatment: Treatment,
     /// Contact and friction between the simulated strands, each a wisp of `represents` fibres
     /// (`tools::hair_contact`; default true).
     #[serde(default = "default_true")]
@@ -225,7 +231,9 @@ pub struct Summary {
     pub represents: f64,
     /// Wetness of the tress (dimensionless, 0..1).
     pub wetness: f64,
-    /// Tool-hair friction coefficient used (after wetness and combing ease).
+    /// Surface treatment of the hair.
+    pub treatment: Treatment,
+    /// Tool-hair friction coefficient used (after wetness, treatment and combing ease).
     pub tool_friction: f64,
     /// Hair-hair friction coefficient used (0 without hair contact).
     pub hair_friction: f64,
@@ -390,9 +398,10 @@ impl Scenario {
             None => p.represents,
         };
         let tress_mass = dry_mass * k;
-        // Frictions: wetness, then combing ease (the live session's laws).
+        // Frictions: wetness and treatment, then combing ease (the live session's laws).
         let ease = HapticParams::default();
-        let tool_friction = ease.combing_friction(wet_model.friction(self.tool.friction.unwrap_or(hair.friction_coefficient()), p.wetness).map_err(wet_error)?, self.tool.combing_ease);
+        let tool_dry = self.tool.friction.unwrap_or(hair.friction_coefficient());
+        let tool_friction = ease.combing_friction(p.treatment.friction(&wet_model, Contact::Tool, tool_dry, p.wetness).map_err(wet_error)?, self.tool.combing_ease);
         let model = match self.tool.force_model.as_str() {
             "paper" => ForceModel::Paper { gain: self.tool.gain },
             _ => ForceModel::Constraint { friction: tool_friction, options: ConstraintOptions::default() },
@@ -403,7 +412,7 @@ impl Scenario {
         if p.hair_contact {
             let d = HairContact::default();
             let dry = p.hair_friction.unwrap_or(d.friction);
-            hair_friction = ease.combing_friction(wet_model.friction(dry, p.wetness).map_err(wet_error)?, self.tool.combing_ease);
+            hair_friction = ease.combing_friction(p.treatment.friction(&wet_model, Contact::Fibre, dry, p.wetness).map_err(wet_error)?, self.tool.combing_ease);
             let hc = HairContact { fibres: k.max(1.0), packing: p.packing.unwrap_or(d.packing), friction: hair_friction, ..d };
             hair_contact_distance = hc.distance(hair.major_diameter / 2.0);
             it.hair_contact = Some(hc);
@@ -447,6 +456,7 @@ impl Scenario {
             tress_mass,
             represents: k,
             wetness: p.wetness,
+            treatment: p.treatment,
             tool_friction,
             hair_friction,
             hair_contact_distance,
@@ -498,6 +508,29 @@ mod tests {
         assert!(a.1.contact_steps > 0, "the comb met the hair");
         assert!(a.1.peak_force > 0.0);
         assert_eq!(a.1.steps, 250);
+    }
+
+    #[test]
+    fn the_treatment_key_sets_both_frictions_by_the_one_law() {
+        // `[patch] treatment` goes through `Treatment::friction` for the tool (the hair type's coefficient) and
+        // for hair on hair (HairContact's 0.25), dry and wet; virgin is the default and the untreated law; a bad
+        // name is refused naming the key's value.
+        use super::super::run::{run, ScenarioFile, ScenarioSummary};
+        let model = WetnessModel::default();
+        let mu = HairType::GC3.friction_coefficient();
+        for (name, t) in [("virgin", Treatment::Virgin), ("conditioned", Treatment::Conditioned), ("bleached", Treatment::Bleached), ("bleached-twice", Treatment::BleachedTwice)] {
+            for w in [0.0, 1.0] {
+                let text = SCENARIO.replace("segments = 8", &format!("segments = 8\nwetness = {w}\ntreatment = \"{name}\""));
+                let ScenarioSummary::Patch(s) = run(&ScenarioFile::from_toml(&text).unwrap()).unwrap().summary else { panic!("not a patch summary") };
+                assert_eq!(s.treatment, t);
+                assert_eq!(s.tool_friction, t.friction(&model, Contact::Tool, mu, w).unwrap(), "{name} {w}");
+                assert_eq!(s.hair_friction, t.friction(&model, Contact::Fibre, 0.25, w).unwrap(), "{name} {w}");
+            }
+        }
+        let (s, _) = parse(SCENARIO);
+        assert_eq!(s.patch.treatment, Treatment::Virgin);
+        let e = ScenarioFile::from_toml(&SCENARIO.replace("segments = 8", "segments = 8\ntreatment = \"permed\"")).unwrap_err().to_string();
+        assert!(e.contains("permed") && e.contains("bleached-twice"), "{e}");
     }
 
     #[test]

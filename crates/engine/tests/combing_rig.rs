@@ -92,9 +92,12 @@ fn the_combing_figures_are_the_integral_of_the_force_trace_over_a_family_of_tres
 fn repeated_strokes_return_out_of_the_hair_and_are_figured_each() {
     // Three strokes down a 15 cm tress of each of three presets (straight, wavy, curly), dry and wet: every
     // stroke starts at the first pose; the return (stroke 0 in the trace) leaves the tress sideways and rises
-    // beside it without a contact until it slides back in at the start height; the per-stroke arrays have
-    // three entries whose work adds up to the whole; each stroke combs the whole tress (its work within a
-    // factor 2 of the first's: the comb found the tress again).
+    // beside it without a contact (while the teeth are 3.5 cm or more from the tress's axis) until it slides
+    // back in at the start height; the per-stroke arrays have
+    // three entries whose work adds up to the whole; each stroke combs the tress again (its work within a
+    // factor 4 of the first's: a comb that missed the tress would feel nothing; the first stroke of wavy hair
+    // may differ by 2x, its wisps sticking and letting go before the tress is combed).
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
     for hair in ["H1", "caucasian", "african"] {
         for w in [0.0, 1.0] {
             let o = run_text(&scenario(hair, 0.15, w, 0.25, 3));
@@ -106,22 +109,26 @@ fn repeated_strokes_return_out_of_the_hair_and_are_figured_each() {
             assert_eq!(s.combing.combing_peak_n, p.combing_peak_n.iter().copied().fold(0.0, f64::max));
             for k in 1..3 {
                 let r = p.combing_work_j[k] / p.combing_work_j[0];
-                assert!((0.5..2.0).contains(&r), "{hair} w {w}: stroke {} work {r:.2} x the first's: {p:?}", k + 1);
+                (lo, hi) = (lo.min(r), hi.max(r));
+                assert!((0.25..4.0).contains(&r), "{hair} w {w}: stroke {} work {r:.2} x the first's: {p:?}", k + 1);
             }
             // The return: stroke 0 rows between the strokes; out and up without contact, above the stroke's end.
             let f = &o.force;
             let stroke_of: Vec<u32> = o.force.t.iter().map(|&t| o.profile.t.binary_search_by(|x| x.total_cmp(&t)).map(|i| o.profile.stroke[i]).unwrap_or(0)).collect();
             let returning: Vec<usize> = (0..f.len()).filter(|&i| stroke_of[i] == 0).collect();
             assert!(!returning.is_empty());
-            let out_and_up: Vec<usize> = returning.iter().copied().filter(|&i| f.tool_y[i] < -0.03).collect();
+            // Out: the teeth's tips (2.5 cm ahead of the comb's origin) 3.5 cm or more from the tress's axis.
+            let out_and_up: Vec<usize> = returning.iter().copied().filter(|&i| f.tool_y[i] < -0.06).collect();
             assert!(out_and_up.len() > returning.len() / 2, "the return is mostly out of the tress");
             assert!(out_and_up.iter().all(|&i| f.contacts[i] == 0), "{hair} w {w}: a contact while the comb is out of the tress");
             for n in 1..=3u32 {
                 let r = o.profile.stroke_rows(n);
                 assert!((o.profile.position_m[r.start] - 0.01).abs() < 1e-3, "stroke {n} starts 1 cm below the roots: {}", o.profile.position_m[r.start]);
+                assert!(r.clone().any(|i| o.force.contacts[o.force.t.partition_point(|&t| t < o.profile.t[i])] > 0), "stroke {n} touches the hair");
             }
         }
     }
+    println!("later strokes' work over the first's: {lo:.2} to {hi:.2}");
 }
 
 #[test]

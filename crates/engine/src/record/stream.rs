@@ -415,23 +415,26 @@ mod tests {
         (rec, order)
     }
 
-    /// Hands `order` to the senders at about `per_ms` haptic steps a millisecond; the results of the haptic sends.
-    fn feed(order: Vec<Result<GlobalRecord, StepRecord>>, steps: &mut StepSender, globals: &mut GlobalSender, per_ms: usize) -> Vec<bool> {
-        let mut sent = vec![];
+    /// Hands `order` to the senders at about `per_ms` haptic steps a millisecond; the results of the haptic sends
+    /// (and the longest one took, s).
+    fn feed(order: Vec<Result<GlobalRecord, StepRecord>>, steps: &mut StepSender, globals: &mut GlobalSender, per_ms: usize) -> (Vec<bool>, f64) {
+        let (mut sent, mut longest) = (vec![], 0.0f64);
         for item in order {
             match item {
                 Ok(g) => {
                     globals.send(g);
                 }
                 Err(s) => {
+                    let t = Instant::now();
                     sent.push(steps.send(s));
+                    longest = longest.max(t.elapsed().as_secs_f64());
                     if sent.len() % per_ms == 0 {
                         std::thread::sleep(Duration::from_millis(1));
                     }
                 }
             }
         }
-        sent
+        (sent, longest)
     }
 
     /// The ends of the chunks of a record file, found by walking their lengths (not through the reader).
@@ -456,7 +459,7 @@ mod tests {
         let mem = Mem::new(usize::MAX, Duration::ZERO);
         let params = RecordParams { flush_interval: 0.02, queue_seconds: 10.0 };
         let (w, mut steps, mut globals) = RecordWriter::start(Box::new(mem.clone()), None, 1000.0, 100.0, params).unwrap();
-        let sent = feed(order, &mut steps, &mut globals, 5);
+        let (sent, _) = feed(order, &mut steps, &mut globals, 5);
         assert!(sent.iter().all(|&s| s), "no step dropped");
         drop((steps, globals));
         let report = w.finish();
@@ -502,7 +505,7 @@ mod tests {
         let params = RecordParams { flush_interval: 0.01, queue_seconds: 10.0 };
         let (w, mut steps, mut globals) = RecordWriter::start(Box::new(mem.clone()), None, 1000.0, 100.0, params).unwrap();
         let status = w.status();
-        let sent = feed(order, &mut steps, &mut globals, 2);
+        let (sent, _) = feed(order, &mut steps, &mut globals, 2);
         drop((steps, globals));
         let report = w.finish();
         let why = status.stopped().expect("recording stopped").to_string();
@@ -524,18 +527,20 @@ mod tests {
 
     #[test]
     fn a_writer_held_up_stops_recording_without_blocking_and_says_so() {
-        // Each write takes 300 ms (a stalled disk) and the queue holds 0.1 s of steps: the haptic sender finds it
-        // full and does not wait; recording stops there; the steps handed over before are written, with an end
-        // chunk saying the writer fell behind; the later ones are counted.
+        // Each write takes 1 s (a stalled disk) and the queue holds 0.1 s of steps: the haptic sender finds it full
+        // and does not wait (no send takes half the stall; one that waited for the writer would take a whole one);
+        // recording stops there; the steps handed over before are written, with an end chunk saying the writer
+        // fell behind; the later ones are counted.
         let (rec, order) = session(2_000);
-        let mem = Mem::new(usize::MAX, Duration::from_millis(300));
+        let mem = Mem::new(usize::MAX, Duration::from_secs(1));
         let params = RecordParams { flush_interval: 0.02, queue_seconds: 0.1 };
         let (w, mut steps, mut globals) = RecordWriter::start(Box::new(mem.clone()), None, 1000.0, 100.0, params).unwrap();
-        let sent = feed(order, &mut steps, &mut globals, 1);
+        let (sent, longest) = feed(order, &mut steps, &mut globals, 1);
         drop((steps, globals));
         let report = w.finish();
         let accepted = sent.iter().filter(|&&s| s).count();
-        eprintln!("{accepted} steps accepted; {report:?}");
+        eprintln!("{accepted} steps accepted, the longest send {:.1} us; {report:?}", 1e6 * longest);
+        assert!(longest < 0.5, "a send waited {longest} s");
         assert!(accepted < 2_000 && sent.iter().skip_while(|&&s| s).all(|&s| !s));
         let got = Record::read(&mem.bytes()).unwrap();
         let Ending::Stopped(why) = &got.ending else { panic!("{:?}", got.ending) };

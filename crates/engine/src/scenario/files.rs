@@ -146,7 +146,7 @@ fn write_force(out: &Path, o: &ScenarioOutput) -> Result<std::path::PathBuf, Sce
 /// `profile.csv` (a combing rig's recording, [`super::combing::CombingProfile::to_csv`]); returns its path.
 fn write_profile(out: &Path, o: &ScenarioOutput) -> Result<std::path::PathBuf, ScenarioError> {
     let p = out.join("profile.csv");
-    std::fs::write(&p, o.profile.to_csv()).map_err(|e| io_err(&p, format!("cannot write: {e}")))?;
+    write(&p, o.profile.to_csv().as_bytes())?;
     Ok(p)
 }
 

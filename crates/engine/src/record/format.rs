@@ -66,6 +66,7 @@ fn put_step(b: &mut Vec<u8>, s: &StepRecord) {
                 b.push(4);
                 b.extend_from_slice(&n.to_le_bytes());
             }
+            Command::SetTreatment(t) => b.extend_from_slice(&[5, t.id()]),
         }
     }
 }
@@ -378,6 +379,10 @@ fn read_step(r: &mut Reader) -> Result<StepRecord, RecordError> {
             2 => Command::Reset,
             3 => Command::SetHead { position: Vector3::new(r.f64()?, r.f64()?, r.f64()?), rotation: Vector3::new(r.f64()?, r.f64()?, r.f64()?) },
             4 => Command::LimitStrands(r.u32()?),
+            5 => {
+                let id = r.u8()?;
+                Command::SetTreatment(tools::treatment::Treatment::from_id(id).ok_or(RecordError::Bad { offset: at + 1, what: format!("treatment id {id}") })?)
+            }
             k => return Err(RecordError::Bad { offset: at, what: format!("command kind {k}") }),
         });
     }

@@ -26,7 +26,7 @@
 //! - a haptic step: u8 has-reading; if 1: f64 time (s), 3 f64 position (m), 9 f64 rotation (column-major), u32
 //!   buttons; u64 lattice version; 3 f64 force (N); u8 number of commands, each: u8 kind (0 tool: u8 id; 1 hair:
 //!   u8 type, f64 curliness, f64 ease; 2 reset; 3 head: 3 f64 position (m), 3 f64 rotation vector (rad); 4
-//!   strand limit: u32).
+//!   strand limit: u32; 5 treatment: u8 id).
 //!
 //! Older versions (`CFREC1`, `CFREC2`: one block written at a clean exit) are refused with an error naming
 //! their version: a record replays bit for bit only on the code that wrote it, and those were written by

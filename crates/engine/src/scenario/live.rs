@@ -60,6 +60,9 @@ pub struct LiveSpec {
     /// Surface treatment of the hair: "virgin" (default), "conditioned", "bleached" or "bleached-twice"
     /// (`HapticParams::treatment`, the tress scenarios' `[patch] treatment`).
     pub treatment: tools::treatment::Treatment,
+    /// The tool drags through the simulated strands against the fibres it parts (`HapticParams::entanglement`,
+    /// the tress scenarios' combing law, docs/combing.md). Default: the session's default.
+    pub entanglement: bool,
     /// The simulated strands touch each other (`HapticParams::hair_contact`, the live session's own switch).
     /// Default: the session's default.
     pub hair_contact: bool,
@@ -121,7 +124,7 @@ pub struct HeadWaypoint {
 
 impl Default for LiveSpec {
     fn default() -> Self {
-        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), curliness: 0.0, combing_ease: 0.0, wetness: 0.0, treatment: tools::treatment::Treatment::Virgin, hair_contact: crate::params::HapticParams::default().hair_contact, head: Vec::new(), hairstyle: None, fit: LiveFit::default() }
+        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), curliness: 0.0, combing_ease: 0.0, wetness: 0.0, treatment: tools::treatment::Treatment::Virgin, entanglement: crate::params::HapticParams::default().entanglement, hair_contact: crate::params::HapticParams::default().hair_contact, head: Vec::new(), hairstyle: None, fit: LiveFit::default() }
     }
 }
 
@@ -305,6 +308,7 @@ impl LiveScenario {
         let mut params = SessionParams { profile, ..SessionParams::default() };
         params.haptic.hair_contact = self.live.hair_contact;
         params.haptic.treatment = self.live.treatment;
+        params.haptic.entanglement = self.live.entanglement;
         let sim = |e: crate::error::SessionError| ScenarioError::Invalid(format!("live session: {e}"));
         let mut ls = Lockstep::new(scene.clone(), params, params.haptic_rate_hz).map_err(sim)?;
         ls.global.set_wetness(self.live.wetness);
@@ -627,6 +631,14 @@ mod tests {
         assert!(m.stroke_force_share >= 0.6 && m.stroke_steps > in_hair / 2, "share of the {} stroke steps above 5 mN {}", m.stroke_steps, m.stroke_force_share);
         assert!(m.max_force_change_n <= 0.1, "largest one-step change {} N", m.max_force_change_n);
         m
+    }
+
+    #[test]
+    fn live_comb_stroke_meets_the_acceptance_on_african_hair() {
+        // Issue 29: the same acceptance stroke (live-comb.toml) through tightly curled African hair.
+        let mut s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-comb.toml")).unwrap();
+        s.live.hair_type = "african".into();
+        meets_the_comb_acceptance(&s, 500);
     }
 
     #[test]

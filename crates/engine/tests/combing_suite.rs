@@ -94,21 +94,14 @@ impl Run {
     }
 }
 
-/// Mean force magnitude over the steps with the comb's position (its spine's height below the roots at `root_z`)
-/// in each fifth of the tress length `length`, N, roots first: the combing curve by comb position. (A helper of
-/// this test until the scenario output computes it.)
+/// Mean force by comb position (N) over each fifth of the tress length `length` (m), roots first: the combing
+/// curve, by the combing instrument's one implementation (`engine::scenario::fifths`), the comb's position being
+/// its height below the roots at `root_z` (m).
 fn fifths(out: &ScenarioOutput, root_z: f64, length: f64) -> [f64; 5] {
     let f = &out.force;
-    let (mut sum, mut n) = ([0.0; 5], [0usize; 5]);
-    for i in 0..f.len() {
-        let d = root_z - f.tool_z[i];
-        if (0.0..length).contains(&d) {
-            let k = ((d / length * 5.0) as usize).min(4);
-            sum[k] += f.force(i).norm();
-            n[k] += 1;
-        }
-    }
-    std::array::from_fn(|k| if n[k] > 0 { sum[k] / n[k] as f64 } else { 0.0 })
+    let position: Vec<f64> = f.tool_z.iter().map(|z| root_z - z).collect();
+    let force: Vec<f64> = (0..f.len()).map(|i| f.force(i).norm()).collect();
+    engine::scenario::fifths(&position, &force, length).mean_force_n
 }
 
 /// Runs `cases` on two threads (the CI machine's cores), in order.

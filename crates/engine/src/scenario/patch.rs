@@ -12,9 +12,14 @@
 //!    tool held at its path's start);
 //! 4. every step move the tool along its path (coming up to speed over `[tool] ease_in`), step the interaction and record the force and torque on the
 //!    tool, scaled by the number of real hairs each simulated strand stands for;
-//! 5. summarise, with the stroke's quality figures ([`super::output::StrokeMetrics`]).
+//! 5. summarise, with the stroke's quality figures ([`super::output::StrokeMetrics`]) and a combing rig's
+//!    ([`super::combing`]: the force by the comb's position from the roots, the combing work, the work in each
+//!    fifth of the tress length), for each stroke (`[tool] strokes`, [`super::strokes::StrokeCycle`]) and
+//!    for all together.
 
+use super::combing::{CombingFigures, CombingProfile, PerStroke};
 use super::output::{ForceStats, ForceTrace, StrokeMetrics};
+use super::strokes::StrokeCycle;
 use super::{default_dt, ScenarioError};
 use crate::params::HapticParams;
 use crate::path::{ToolPath, Waypoint};
@@ -179,6 +184,14 @@ pub struct ToolSpec {
     pub path: Vec<Waypoint>,
     /// Or a CSV file `t,x,y,z[,rx,ry,rz]` relative to the scenario.
     pub path_file: Option<String>,
+    /// Strokes: the path is played this many times, the tool returning to its start out of the hair between
+    /// them ([`StrokeCycle`]; default 1, at most [`StrokeCycle::MAX_STROKES`]).
+    #[serde(default = "default_strokes")]
+    pub strokes: u32,
+}
+
+fn default_strokes() -> u32 {
+    1
 }
 
 fn default_ease_in() -> f64 {
@@ -216,10 +229,12 @@ pub struct TraceRow {
     pub contacts: usize,
     /// Tool position, m.
     pub tool: Vector3<f64>,
+    /// The stroke the tool is in (from 1; 0 while it returns between strokes).
+    pub stroke: u32,
 }
 
 /// Summary of a run.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Summary {
     /// Largest force magnitude, N.
     pub peak_force: f64,
@@ -245,8 +260,16 @@ pub struct Summary {
     pub hair_friction: f64,
     /// Hair-hair contact distance between two strands' centrelines, m (0 without hair contact).
     pub hair_contact_distance: f64,
-    /// The stroke's quality figures (peak, median, 90th percentile, continuity, largest step change).
+    /// The stroke's quality figures (peak, median, 90th percentile, continuity, largest step change), from the
+    /// first to the last step with contact (all strokes).
     pub stroke: StrokeMetrics,
+    /// The combing rig's figures of all the strokes together (work, peak, mean, fifths; serialised flat).
+    #[serde(flatten)]
+    pub combing: CombingFigures,
+    /// Strokes played.
+    pub strokes: u32,
+    /// The combing rig's figures of each stroke.
+    pub per_stroke: PerStroke,
     /// Steps in which some strand's velocities were scaled down by the safety net.
     pub clamped_steps: u64,
     /// Wall time of the run, s (set by [`super::run_patch`]; 0 from [`Scenario::run`]).
@@ -331,6 +354,9 @@ impl Scenario {
                 return bad(format!("tool.friction must be >= 0, got {mu}"));
             }
         }
+        if !(1..=StrokeCycle::MAX_STROKES).contains(&self.tool.strokes) {
+            return bad(format!("tool.strokes must be 1..={}, got {}", StrokeCycle::MAX_STROKES, self.tool.strokes));
+        }
         Ok(hair)
     }
 
@@ -358,10 +384,33 @@ impl Scenario {
             .collect()
     }
 
+    /// The tool's path played `[tool] strokes` times, with the returns between strokes.
+    pub fn stroke_cycle(&self, shape: &ToolShape, path: &ToolPath) -> Result<StrokeCycle, ScenarioError> {
+        let p = &self.patch;
+        StrokeCycle::new(path.clone(), self.tool.strokes, [p.root[0], p.root[1]], StrokeCycle::clearance(shape, p.extent)).map_err(ScenarioError::Invalid)
+    }
+
+    /// The comb's position from the roots along the tress (m) when the tool is at `tool`: the strands hang
+    /// down (-z) from the roots' height.
+    pub fn position_along(&self, tool: &Vector3<f64>) -> f64 {
+        self.patch.root[2] - tool.z
+    }
+
+    /// A combing rig's recording of `rows` (a run's trace): the steps of each stroke, the comb's position from
+    /// the roots and the force's magnitude.
+    pub fn profile(&self, rows: &[TraceRow]) -> CombingProfile {
+        let mut out = CombingProfile::default();
+        for r in rows.iter().filter(|r| r.stroke > 0) {
+            out.push(r.stroke, r.t, self.position_along(&r.tool), r.force.norm());
+        }
+        out
+    }
+
     /// Runs the scenario with the tool's shape and path (loaded by the caller). Deterministic.
     pub fn run(&self, shape: ToolShape, path: &ToolPath) -> Result<(Vec<TraceRow>, Summary), ScenarioError> {
         let hair = self.validate()?;
         let strands = self.build_patch()?;
+        let cycle = self.stroke_cycle(&shape, path)?;
         let p = &self.patch;
         let wet_model = WetnessModel::default();
         let wet_error = |e: tools::wetness::WetnessError| ScenarioError::Invalid(format!("patch: {e}"));
@@ -403,25 +452,26 @@ impl Scenario {
             it.step(self.dt, path.pose(0.0)).map_err(|e| ScenarioError::Simulation { time: -self.settle + n as f64 * self.dt, source: e })?;
         }
         let ease = self.tool.ease_in;
-        let duration = self.duration.unwrap_or(path.end_time() + 0.5 * ease + 0.05);
+        let duration = self.duration.unwrap_or(cycle.end_time() + 0.5 * ease + 0.05);
         let steps = (duration / self.dt).round() as usize;
         let mut rows = Vec::with_capacity(steps);
         let mut work = 0.0;
         let mut last = path.pose(0.0).position;
         for n in 1..=steps {
             let t = n as f64 * self.dt;
-            let pose = path.pose(eased_time(t, ease));
+            let (pose, stroke) = cycle.pose(eased_time(t, ease));
             let r = it.step(self.dt, pose).map_err(|e| ScenarioError::Simulation { time: t, source: e })?;
             let force = r.force * k;
             work -= force.dot(&(pose.position - last));
             last = pose.position;
-            rows.push(TraceRow { t, force, torque: r.torque * k, contacts: r.contacts.len(), tool: pose.position });
+            rows.push(TraceRow { t, force, torque: r.torque * k, contacts: r.contacts.len(), tool: pose.position, stroke });
         }
         let mut trace = ForceTrace::default();
         for r in &rows {
             trace.push(r.t, &r.force, &r.torque, r.contacts as u32, &r.tool);
         }
         let stats = ForceStats::of(rows.iter().map(|r| (r.force.norm(), r.contacts > 0)), f64::INFINITY);
+        let strokes = self.profile(&rows).strokes(p.length);
         let summary = Summary {
             peak_force: stats.peak,
             mean_force: stats.mean_in_contact,
@@ -436,6 +486,9 @@ impl Scenario {
             hair_friction,
             hair_contact_distance,
             stroke: StrokeMetrics::of(&trace),
+            combing: CombingFigures::total(&strokes),
+            strokes: self.tool.strokes,
+            per_stroke: PerStroke::of(&strokes),
             clamped_steps: it.strands.iter().map(|s| s.clamped_steps).sum(),
             wall_time_s: 0.0,
         };

@@ -34,6 +34,11 @@ impl HapticCore {
                 }
             }
         }
+        // A nozzle's choice of the local strands follows its jet while it blows (`HapticCore::reach`): choose
+        // again when it starts or stops.
+        if pressed != self.was_pressed && matches!(self.tool, Tool::Dryer | Tool::Sprayer) {
+            self.last_select = None;
+        }
         self.was_pressed = pressed;
         if self.tool == Tool::Clip {
             if pressed && !self.clipped {

@@ -423,6 +423,9 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
 (window as unknown as { coiffureDebug: unknown }).coiffureDebug = {
   /** Stops (true) or resumes (false) drawing; the session, the pointer and the messages go on. */
   holdFrames(on: boolean): void { framesHeld = on; },
+  /** Lets the tool's button go where the tool is (the mouse's release would lift it to the lifted plane): a
+   * nozzle stops blowing and stays there. */
+  releaseButton(): void { device.pressed = false; sendPose(); },
   project(x: number, y: number, z: number): [number, number] {
     const v = new THREE.Vector3(x, y, z).project(view.camera);
     const r = canvas.getBoundingClientRect();

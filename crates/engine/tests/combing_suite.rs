@@ -71,7 +71,7 @@ impl Case {
     fn run(&self) -> Run {
         let out = run(&ScenarioFile::from_toml(&self.toml()).unwrap()).unwrap_or_else(|e| panic!("{}: {e}", self.label()));
         let summary = match &out.summary {
-            ScenarioSummary::Patch(s) => *s,
+            ScenarioSummary::Patch(s) => s.clone(),
             other => panic!("not a patch summary: {other:?}"),
         };
         let fifths = fifths(&out, 0.3, self.length);

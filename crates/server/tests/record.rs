@@ -114,7 +114,7 @@ fn a_server_killed_mid_session_leaves_a_record_that_replays_to_the_forces_the_de
     eprintln!("killed after {killed:.2} s; record: {} steps ({:.2} s), cut at byte {} of {}: {}; {c:?}", r.record.steps.len(), r.record.seconds(), cut.offset, cut.file_bytes, cut.why);
     // At least the first 2 s of the device's stream are in the record (in steps, fewer when a busy machine made the
     // loop skip periods: those are not run, so not recorded).
-    assert!(c.last_read >= 2.0 && r.record.steps.len() >= 500, "{} s of steps, the last read at {} s", r.record.seconds(), c.last_read);
+    assert!(c.last_read >= 2.0, "{} s of steps, the last read at {} s", r.record.seconds(), c.last_read);
     assert_eq!(c.replay_differs, 0, "replayed forces differ from the recorded ones");
     assert!(c.answered >= 1500, "{c:?}");
     assert_eq!(c.equal, c.answered, "forces felt equal to the replayed ones, bit for bit");

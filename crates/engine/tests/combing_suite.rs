@@ -1,7 +1,7 @@
 //! Issue 29's validation of the combing law over generated families of tresses, not the shipped examples:
 //! every hair preset x dry and wet x tress mass 2-6 g x length 15-30 cm x comb speed 0.1-0.5 m/s (a sample of
-//! the family, [`family`]), each held to the continuity of its force, no one-step jump and no clamped
-//! strand-step; and the measured anchors of the cosmetic-science record (docs/combing.md gives every figure
+//! the family, [`family`]), each held to no clamped strand-step, and (but caucasian hair, [`held`]) to the
+//! continuity of its force and no one-step jump; and the measured anchors of the cosmetic-science record (docs/combing.md gives every figure
 //! beside its source). Each test prints its table and the worst case per criterion.
 
 use engine::scenario::{run, ScenarioFile, ScenarioOutput, ScenarioSummary, Summary};
@@ -146,16 +146,13 @@ fn family() -> Vec<Case> {
     cases
 }
 
-/// The family's presets and wetness whose every case is held to the criteria. Not yet: caucasian (wavy wisps
-/// of a light, short tress swing out of the comb's teeth: continuity 41-51 %; wet wisps of 26 cm and more are
-/// unstable in the strand layer at 1 ms even without a tool) and African hair wet (a 39 % one-step change at
-/// 2 g and 0.5 m/s; wet wisps of 30 cm unstable as caucasian's). Printed all the same (docs/combing.md).
+/// The family's cases held to the continuity criteria (force above 2 % of the peak in 70 % of the steps, no
+/// one-step jump above 30 %). Not yet: caucasian hair (the wavy wisps of a light, short tress swing out of the
+/// comb's teeth: continuity 43-49 % at 2 g and 15 cm, 66 % wet at 4.7 g and 26 cm). Printed all the same
+/// (docs/combing.md). Every case of the family, held or not, is held to no clamped strand-step (the strand layer
+/// stable at the shipped 1 ms step).
 fn held(c: &Case) -> bool {
-    match c.hair {
-        "caucasian" => false,
-        "african" => c.wetness == 0.0,
-        _ => true,
-    }
+    c.hair != "caucasian"
 }
 
 #[test]
@@ -177,12 +174,14 @@ fn every_tress_of_the_family_combs_continuously() {
         let clamp = worst(&|r| r.summary.clamped_steps as f64);
         println!("{} {name} cases. Worst continuity: {:.1} % ({}); worst one-step change: {:.1} % of the peak ({}); most clamped strand-steps: {} ({})", sub.len(), 100.0 * cont.summary.stroke.continuity, cont.case.label(), 100.0 * step.summary.stroke.max_step_change_rel, step.case.label(), clamp.summary.clamped_steps, clamp.case.label());
     }
+    for r in &runs {
+        assert_eq!(r.summary.clamped_steps, 0, "{}: clamped strand-steps (the strand layer is unstable)", r.case.label());
+    }
     for r in runs.iter().filter(|r| held(&r.case)) {
         let m = &r.summary.stroke;
         assert!(m.steps > 100 && m.peak_n > 0.0, "{}: the comb did not comb ({m:?})", r.case.label());
         assert!(m.continuity >= 0.7, "{}: force above 2 % of the peak in {:.1} % of the steps", r.case.label(), 100.0 * m.continuity);
         assert!(m.max_step_change_rel <= 0.3, "{}: one-step change {:.1} % of the peak", r.case.label(), 100.0 * m.max_step_change_rel);
-        assert_eq!(r.summary.clamped_steps, 0, "{}: clamped strand-steps", r.case.label());
     }
 }
 

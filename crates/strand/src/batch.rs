@@ -462,6 +462,9 @@ fn batch_mismatch(segments: usize, quadrature_points: usize, strand: &Strand) ->
     if strand.integrator != Integrator::LinearlyImplicitEuler {
         return Some("batched strands use the linearly implicit Euler integrator".into());
     }
+    if !strand.constraint_loads.is_empty() {
+        return Some("a strand with the last step's constraint loads takes their geometric stiffness in its own step".into());
+    }
     if strand.model.segments != segments || strand.dynamics.quadrature_nodes().len() != quadrature_points {
         return Some(format!(
             "the batch is for {segments} segments and {quadrature_points} Gauss points, the strand has {} and {}",

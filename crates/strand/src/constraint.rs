@@ -406,6 +406,12 @@ impl Strand {
         let pins: Vec<usize> = (0..n).filter(|&c| matches!(constraints[c].kind, ConstraintKind::Pin { .. })).collect();
         let saved = (!pins.is_empty()).then(|| self.state.clone());
         self.commit_step(h, v)?;
+        // The loads the constraints applied, for the next step's geometric stiffness.
+        for (c, p) in constraints.iter().zip(&rows.impulses) {
+            if p.x != 0.0 || p.y != 0.0 || p.z != 0.0 {
+                self.constraint_loads.push((c.s, p / h));
+            }
+        }
         let v_max = opts.max_correction_speed;
         for _ in 0..2 {
             if pins.is_empty() {

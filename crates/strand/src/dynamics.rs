@@ -194,6 +194,7 @@ fn eliminate<const D: usize>(
     sums: &SegmentSums,
     scale: f64,
     rig: &Vector3<f64>,
+    geometric: &[f64],
     b: &[f64],
 ) -> Option<(Twists, Matrix3<f64>, Vector3<f64>)> {
     let s = motion.fixed_columns::<D>(0);
@@ -207,7 +208,7 @@ fn eliminate<const D: usize>(
         for j in 0..D {
             dm[(j, k)] = sums.m_own[(j, k)] * scale + s.column(j).dot(&ia_s.column(k));
         }
-        dm[(k, k)] += rig[k];
+        dm[(k, k)] += rig[k] + geometric[k];
         c[k] = -s_pa[k] - b[k];
     }
     let dinv = spd_inverse(&dm)?;
@@ -259,6 +260,9 @@ pub struct Dynamics {
     /// All generalized forces at the evaluated state (elastic, damping, gravity, drag, point forces and
     /// minus the velocity-product terms), conjugate to q, so that `qdot . forces` is a power in W.
     pub forces: DVector<f64>,
+    /// Diagonal geometric stiffness of the last step's constraint loads, per coordinate (N m^3, as the elastic
+    /// `K`): see [`Dynamics::geometric_stiffness`]. Zero without loads.
+    pub geometric: DVector<f64>,
     /// Kinetic energy, J.
     pub kinetic_energy: f64,
     /// Gravitational potential energy `-sum m g . r` (world origin as reference), J.
@@ -299,6 +303,7 @@ impl Dynamics {
             articulated: vec![(Twists::zeros(), Matrix3::zeros(), Vector3::zeros()); n],
             mass: DMatrix::zeros(dofs, dofs),
             forces: DVector::zeros(dofs),
+            geometric: DVector::zeros(dofs),
             kinetic_energy: 0.0,
             gravity_energy: 0.0,
             elastic_energy: 0.0,
@@ -469,6 +474,38 @@ impl Dynamics {
         }
     }
 
+    /// The diagonal geometric stiffness of point loads `loads` (arc length from the root, m; force on the strand,
+    /// N) held fixed in space, at the state of the last [`Dynamics::sweep`] with sums, into
+    /// [`Dynamics::geometric`]: for each coordinate the magnitude of the second derivative of the loads'
+    /// potential `-sum f . x` along that coordinate, the part of the strand beyond the coordinate's segment
+    /// turning rigidly with the segment's end, `|sum f . (w x (v + w x x))|` for the coordinate's twist
+    /// `(w, v)` (N m^3 per (rad/m)^2). The linearly implicit step adds `h^2` times it to its matrix, as it
+    /// does the elastic `K` (the load's stiffness taken implicitly, on the diagonal and positive: Andrews,
+    /// Teichmann and Kry, "Geometric stiffness for real-time constrained multibody dynamics", Computer Graphics
+    /// Forum 36(2), 2017). Without it, a contact's or tool's load on a curled strand whose twist is soft (wet
+    /// hair: shear modulus x 0.1) is an explicit stiffness far above the elastic one on a coordinate of little
+    /// inertia, and the step diverges.
+    pub fn geometric_stiffness(&mut self, model: &StrandModel, state: &StrandState, loads: &[(f64, Vector3<f64>)]) {
+        self.geometric.fill(0.0);
+        if loads.is_empty() || self.frames.len() != model.segments + 1 {
+            return;
+        }
+        let d = model.dofs_per_segment();
+        for (s, f) in loads {
+            let x = crate::kinematics::frame_at(model, &state.q, &self.frames, *s).position - state.root.position;
+            let (seg, _) = crate::kinematics::locate(model, *s);
+            for i in 0..=seg.min(model.segments - 1) {
+                for k in 0..d {
+                    let col = self.motion[i].column(k);
+                    let w = Vector3::new(col[0], col[1], col[2]);
+                    let v = Vector3::new(col[3], col[4], col[5]);
+                    self.geometric[i * d + k] -= f.dot(&w.cross(&(v + w.cross(&x))));
+                }
+            }
+        }
+        self.geometric.apply(|g| *g = g.abs());
+    }
+
     /// Jacobian `dr(s)/dq` (3 x 2N or 3 x 3N, m per (rad/m)) of the centreline point at arc length `s` and its
     /// position (world, m), at the state of the last [`Dynamics::sweep`] with sums: from that sweep's frames and
     /// motion subspaces, so only the point's own segment is evaluated. Equal to [`crate::kinematics::jacobian`].
@@ -518,18 +555,24 @@ impl Dynamics {
     /// `U = scale F_own + I^A S`, `D = scale M_own + S^T I^A S + stiffness K_Q`, `c = -S^T p^A - b_Q`,
     /// `I^A_Q = scale I_own + I^A_Q+1 - U D^-1 U^T`, `p^A_Q = p^A_Q+1 + U D^-1 c`; then from the root (`V = 0`),
     /// `x_Q = -D^-1 (U^T V + c)` and `V += S_Q x_Q`.
-    pub(crate) fn solve_articulated(&mut self, model: &StrandModel, scale: f64, stiffness: f64, b: &mut DVector<f64>) -> bool {
+    ///
+    /// `geometric_scale` (s^2) multiplies [`Dynamics::geometric`], added to the diagonal of `K`'s term.
+    pub(crate) fn solve_articulated(&mut self, model: &StrandModel, scale: f64, stiffness: f64, geometric_scale: f64, b: &mut DVector<f64>) -> bool {
         let d = model.dofs_per_segment();
         let n = model.segments;
         let rig = model.rigidities() * (model.segment_length() * stiffness);
         let mut ia = Matrix6::zeros();
         let mut pa = Vector6::zeros();
+        let mut geo = [0.0; 3];
         for i in (0..n).rev() {
             let bi = &b.as_slice()[i * d..(i + 1) * d];
+            for k in 0..d {
+                geo[k] = geometric_scale * self.geometric[i * d + k];
+            }
             let step = if d == 2 {
-                eliminate::<2>(&mut ia, &mut pa, &self.motion[i], &self.sums[i], scale, &rig, bi)
+                eliminate::<2>(&mut ia, &mut pa, &self.motion[i], &self.sums[i], scale, &rig, &geo, bi)
             } else {
-                eliminate::<3>(&mut ia, &mut pa, &self.motion[i], &self.sums[i], scale, &rig, bi)
+                eliminate::<3>(&mut ia, &mut pa, &self.motion[i], &self.sums[i], scale, &rig, &geo, bi)
             };
             let Some(step) = step else { return false };
             self.articulated[i] = step;
@@ -722,8 +765,8 @@ mod tests {
             assert!((fast.elastic_energy - old.elastic_energy).abs() <= 1e-12 * old.elastic_energy);
             let b = DVector::from_fn(m.dofs(), |i, _| 1e-6 * (i as f64 * 0.9).sin());
             let (mut xf, mut xo) = (b.clone(), b.clone());
-            assert!(fast.solve_articulated(&m, 1.01, 2e-6, &mut xf));
-            assert!(old.solve_articulated(&m, 1.01, 2e-6, &mut xo));
+            assert!(fast.solve_articulated(&m, 1.01, 2e-6, 0.0, &mut xf));
+            assert!(old.solve_articulated(&m, 1.01, 2e-6, 0.0, &mut xo));
             assert!(close(&xf, &xo), "{kind:?}: solve {} vs {}", xf, xo);
             fast.evaluate(&m, &st, &pf, true);
             old.sweep_reference(&m, &st, &pf, true);
@@ -757,12 +800,12 @@ mod tests {
             dy.sweep(&m, &st, &[], true);
             let n = m.dofs();
             let mut b1 = DVector::from_fn(n, |i, _| (i as f64 * 0.9).sin());
-            assert!(dy.solve_articulated(&m, 1.3, 2e-6, &mut b1));
+            assert!(dy.solve_articulated(&m, 1.3, 2e-6, 0.0, &mut b1));
             let b2 = DVector::from_fn(n, |i, _| (i as f64 * 0.4).cos() * 1e-3);
             let mut fresh = b2.clone();
-            assert!(dy.solve_articulated(&m, 1.3, 2e-6, &mut fresh));
+            assert!(dy.solve_articulated(&m, 1.3, 2e-6, 0.0, &mut fresh));
             let mut b1 = DVector::from_fn(n, |i, _| (i as f64 * 0.9).sin());
-            assert!(dy.solve_articulated(&m, 1.3, 2e-6, &mut b1));
+            assert!(dy.solve_articulated(&m, 1.3, 2e-6, 0.0, &mut b1));
             let mut again = b2.clone();
             assert!(dy.resolve_articulated1(&m, again.as_mut_slice()));
             assert!((&again - &fresh).norm() <= 1e-12 * fresh.norm(), "{kind:?}");
@@ -783,7 +826,7 @@ mod tests {
             let n = m.dofs();
             let d = m.dofs_per_segment();
             let mut b = DVector::from_fn(n, |i, _| (i as f64 * 0.9).sin());
-            assert!(dy.solve_articulated(&m, scale, stiffness, &mut b));
+            assert!(dy.solve_articulated(&m, scale, stiffness, 0.0, &mut b));
             let rig = m.rigidities() * (m.segment_length() * stiffness);
             let mut a = &dy.mass * scale;
             for j in 0..n {

@@ -53,6 +53,10 @@ pub struct Strand {
     pub dynamics: Dynamics,
     /// Number of steps whose velocities were scaled down by the safety net (see [`MAX_STEP_ROTATION`]).
     pub clamped_steps: u64,
+    /// The forces the point constraints applied in the last step: (arc length from the root, m; force on the
+    /// strand, N). The next linearly implicit step takes their geometric stiffness implicitly
+    /// ([`Dynamics::geometric_stiffness`]). Empty after a step without constraints.
+    pub constraint_loads: Vec<(f64, nalgebra::Vector3<f64>)>,
     /// Workspace: the step's system matrix, factorized in place.
     system: DMatrix<f64>,
     /// Workspace: right-hand side, then solution, of the step's linear system.
@@ -69,7 +73,7 @@ impl Strand {
         let state = StrandState::at_rest(&model, root);
         let dynamics = Dynamics::new(&model);
         let n = model.dofs();
-        Ok(Self { model, state, integrator: Integrator::default(), dynamics, clamped_steps: 0, system: DMatrix::zeros(n, n), rhs: DVector::zeros(n), prepared: None })
+        Ok(Self { model, state, integrator: Integrator::default(), dynamics, clamped_steps: 0, constraint_loads: Vec::new(), system: DMatrix::zeros(n, n), rhs: DVector::zeros(n), prepared: None })
     }
 
     /// Whether a step begun by [`Strand::prepare_step`] (or [`crate::batch::StrandBatch::prepare`]) waits for
@@ -129,16 +133,18 @@ impl Strand {
         }
         self.state.q = q_new;
         self.state.qdot = qdot_new;
+        self.constraint_loads.clear();
         self.state.root.advance(h);
         self.state.time += h;
         Ok(())
     }
 
-    /// Solves `A x = b` in place with the linearly implicit step's matrix `A = M (1 + h c) + (h tau + h^2) K` at
-    /// the state of the last sweep (O(N)); false if `A` is not positive definite.
+    /// Solves `A x = b` in place with the linearly implicit step's matrix `A = M (1 + h c) + (h tau + h^2) K +
+    /// h^2 K_g` at the state of the last sweep (O(N); `K_g` the diagonal geometric stiffness of the last step's
+    /// constraint loads, [`Dynamics::geometric`]); false if `A` is not positive definite.
     pub(crate) fn solve_step_matrix(&mut self, h: f64, b: &mut DVector<f64>) -> bool {
         let c = self.model.air_drag / self.model.linear_density();
-        self.dynamics.solve_articulated(&self.model, 1.0 + h * c, h * self.model.damping + h * h, b)
+        self.dynamics.solve_articulated(&self.model, 1.0 + h * c, h * self.model.damping + h * h, h * h, b)
     }
 
     /// Builds the step's matrix `M (1 + a c) + (a tau + b) K` (with `c = nu / rho A`) into the workspace and
@@ -159,10 +165,12 @@ impl Strand {
         }
     }
 
-    /// `qdot+ = qdot + A^-1 (h F - h^2 K qdot)` with `A = M (1 + h c) + (h tau + h^2) K`, solved in O(N) by the
-    /// articulated-body recursion of [`Dynamics::solve_articulated`] (the dense mass matrix is not assembled).
+    /// `qdot+ = qdot + A^-1 (h F - h^2 (K + K_g) qdot)` with `A = M (1 + h c) + (h tau + h^2) K + h^2 K_g`, solved
+    /// in O(N) by the articulated-body recursion of [`Dynamics::solve_articulated`] (the dense mass matrix is not
+    /// assembled); `K_g` the diagonal geometric stiffness of the last step's constraint loads.
     pub(crate) fn linearly_implicit_velocity(&mut self, h: f64, external: &[PointForce]) -> Result<DVector<f64>> {
         self.dynamics.sweep(&self.model, &self.state, external, true);
+        self.dynamics.geometric_stiffness(&self.model, &self.state, &self.constraint_loads);
         self.linearly_implicit_rhs(h);
         let mut rhs = std::mem::replace(&mut self.rhs, DVector::zeros(0));
         let ok = self.solve_step_matrix(h, &mut rhs);
@@ -173,13 +181,13 @@ impl Strand {
         Ok(&self.state.qdot + &self.rhs)
     }
 
-    /// The right-hand side `h F - h^2 K qdot` of the linearly implicit step for the velocity change, into
-    /// the workspace (the forces must have been evaluated at the current state).
+    /// The right-hand side `h F - h^2 (K + K_g) qdot` of the linearly implicit step for the velocity change, into
+    /// the workspace (the forces and `K_g` must have been evaluated at the current state).
     fn linearly_implicit_rhs(&mut self, h: f64) {
         let d = self.model.dofs_per_segment();
         let rig = self.model.rigidities() * self.model.segment_length();
         for j in 0..self.rhs.len() {
-            self.rhs[j] = h * self.dynamics.forces[j] - h * h * rig[j % d] * self.state.qdot[j];
+            self.rhs[j] = h * self.dynamics.forces[j] - h * h * (rig[j % d] + self.dynamics.geometric[j]) * self.state.qdot[j];
         }
     }
 

@@ -74,7 +74,9 @@ mod tests {
         let report = session.stop();
         eprintln!("live: {:?}, global steps {}", report.haptic, report.global_steps);
         let rec = report.record.expect("recorded");
-        assert!(rec.steps.len() >= 1800, "{} steps", rec.steps.len());
+        // (The last physics period's record is completed by the next hand-over: the record holds the periods
+        // before it.)
+        assert!(rec.steps.len() >= 1799, "{} steps", rec.steps.len());
         assert_eq!(rec.global_resets.len(), 1, "one lattice reset recorded");
         // The viewer's three commands (and whatever the strand budget decided on this machine, replayed too).
         assert_eq!(rec.steps.iter().flat_map(|s| &s.commands).filter(|c| !matches!(c, Command::LimitStrands(_))).count(), 3);

@@ -45,9 +45,14 @@ fn global_input() -> impl Strategy<Value = ToolInput> {
     (tool(), any::<bool>(), v3(), m3(), any::<bool>(), any::<u64>(), head).prop_map(|(tool, present, position, rotation, pressed, cuts, head)| ToolInput { tool, present, position, rotation, pressed, cuts, head })
 }
 
+fn reading() -> impl Strategy<Value = Option<DeviceReading>> {
+    prop::option::of((x(), v3(), m3(), any::<u32>()).prop_map(|(time, position, rotation, buttons)| DeviceReading { time, position, rotation, buttons }))
+}
+
 fn step() -> impl Strategy<Value = StepRecord> {
-    let reading = prop::option::of((x(), v3(), m3(), any::<u32>()).prop_map(|(time, position, rotation, buttons)| DeviceReading { time, position, rotation, buttons }));
-    (reading, any::<u64>(), prop::collection::vec(command(), 0..4), v3()).prop_map(|(reading, lattice_version, commands, force)| StepRecord { reading, lattice_version, commands, force })
+    // Several device steps per physics step (0 further readings: one).
+    let more = prop::collection::vec(reading(), 0..5);
+    (reading(), more, any::<u64>(), prop::collection::vec(command(), 0..4), v3()).prop_map(|(reading, more_readings, lattice_version, commands, force)| StepRecord { reading, more_readings, lattice_version, commands, force })
 }
 
 fn record() -> impl Strategy<Value = Record> {

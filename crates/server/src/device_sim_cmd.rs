@@ -71,7 +71,7 @@ pub fn run(args: &DeviceSimArgs) -> anyhow::Result<()> {
     let text = std::fs::read_to_string(&args.path).with_context(|| format!("cannot read {}", args.path.display()))?;
     let scenario: LiveScenario = toml::from_str(&text).with_context(|| format!("{}: not a live scenario with a [tool] path", args.path.display()))?;
     scenario.validate().map_err(|e| anyhow!("{}: {e}", args.path.display()))?;
-    let profile = DeviceProfile::by_name(&args.device_profile).ok_or_else(|| anyhow!("--device-profile {:?}: expected phantom-omni, phantom-desktop or omega3", args.device_profile))?;
+    let profile = DeviceProfile::by_name(&args.device_profile).ok_or_else(|| anyhow!("--device-profile {:?}: expected phantom-omni, phantom-desktop, omega3 or phantom-premium-6dof", args.device_profile))?;
     let workspace = match &args.device_workspace {
         Some(w) => Workspace::parse(w, &profile).map_err(|e| anyhow!("--device-workspace: {e}"))?,
         None => Workspace::for_profile(&profile),

@@ -41,14 +41,24 @@ impl Record {
         }
         b.extend_from_slice(&(self.steps.len() as u64).to_le_bytes());
         for s in &self.steps {
-            match &s.reading {
+            let reading = |b: &mut Vec<u8>, r: &Option<DeviceReading>| match r {
                 None => b.push(0),
                 Some(r) => {
                     b.push(1);
-                    f(&mut b, r.time);
-                    r.position.iter().for_each(|&x| f(&mut b, x));
-                    r.rotation.iter().for_each(|&x| f(&mut b, x));
+                    f(b, r.time);
+                    r.position.iter().for_each(|&x| f(b, x));
+                    r.rotation.iter().for_each(|&x| f(b, x));
                     b.extend_from_slice(&r.buttons.to_le_bytes());
+                }
+            };
+            if s.more_readings.is_empty() {
+                reading(&mut b, &s.reading);
+            } else {
+                // Several device steps: flag 2, their count, each reading.
+                b.push(2);
+                b.push((1 + s.more_readings.len()).min(255) as u8);
+                for r in std::iter::once(&s.reading).chain(&s.more_readings).take(255) {
+                    reading(&mut b, r);
                 }
             }
             b.extend_from_slice(&s.lattice_version.to_le_bytes());
@@ -130,19 +140,18 @@ impl Record {
         let n = r.u64()? as usize;
         let mut steps = Vec::with_capacity(n.min(r.0.remaining() / MIN_STEP_BYTES));
         for _ in 0..n {
-            let reading = match r.u8()? {
-                0 => None,
-                1 => {
-                    let time = r.f64()?;
-                    let position = Vector3::new(r.f64()?, r.f64()?, r.f64()?);
-                    let mut m = [0.0; 9];
-                    for x in &mut m {
-                        *x = r.f64()?;
+            let (reading, more_readings) = match r.u8()? {
+                2 => {
+                    let at = r.at();
+                    let n = r.u8()?;
+                    if n < 2 {
+                        return Err(RecordError::Bad { offset: at, what: format!("{n} device steps after flag 2 (at least 2)") });
                     }
-                    let buttons = u32::from_le_bytes(r.take(4)?.try_into().unwrap());
-                    Some(DeviceReading { time, position, rotation: Matrix3::from_column_slice(&m), buttons })
+                    let first = r.reading()?;
+                    let more = (1..n).map(|_| r.reading()).collect::<Result<Vec<_>, _>>()?;
+                    (first, more)
                 }
-                k => return Err(RecordError::Bad { offset: r.at() - 1, what: format!("reading flag {k} (0 or 1)") }),
+                k => (r.reading_after(k)?, Vec::new()),
             };
             let lattice_version = r.u64()?;
             let force = Vector3::new(r.f64()?, r.f64()?, r.f64()?);
@@ -162,7 +171,7 @@ impl Record {
                     k => return Err(RecordError::Bad { offset: at, what: format!("command kind {k}") }),
                 });
             }
-            steps.push(StepRecord { reading, lattice_version, commands, force });
+            steps.push(StepRecord { reading, more_readings, lattice_version, commands, force });
         }
         if r.at() != bytes.len() {
             return Err(RecordError::Bad { offset: r.at(), what: format!("{} trailing bytes", bytes.len() - r.at()) });
@@ -196,6 +205,30 @@ impl<'a> Reader<'a> {
     fn u64(&mut self) -> Result<u64, RecordError> {
         self.0.u64("a u64").map_err(Self::err)
     }
+    /// A device reading: u8 has-reading (0 or 1), then if 1 the reading.
+    fn reading(&mut self) -> Result<Option<DeviceReading>, RecordError> {
+        let k = self.u8()?;
+        self.reading_after(k)
+    }
+
+    /// The rest of a device reading after its has-reading flag `k` (0: none; 1: the reading follows).
+    fn reading_after(&mut self, k: u8) -> Result<Option<DeviceReading>, RecordError> {
+        match k {
+            0 => Ok(None),
+            1 => {
+                let time = self.f64()?;
+                let position = Vector3::new(self.f64()?, self.f64()?, self.f64()?);
+                let mut m = [0.0; 9];
+                for x in &mut m {
+                    *x = self.f64()?;
+                }
+                let buttons = self.u32()?;
+                Ok(Some(DeviceReading { time, position, rotation: Matrix3::from_column_slice(&m), buttons }))
+            }
+            k => Err(RecordError::Bad { offset: self.at() - 1, what: format!("reading flag {k} (0, 1 or 2)") }),
+        }
+    }
+
     fn f64(&mut self) -> Result<f64, RecordError> {
         self.0.f64("an f64").map_err(Self::err)
     }
@@ -208,7 +241,7 @@ mod tests {
     #[test]
     fn damaged_records_are_refused_with_the_offset() {
         let mut r = Record::new(1000.0);
-        r.steps.push(crate::record::StepRecord { reading: None, lattice_version: 3, commands: vec![Command::Reset], force: Vector3::new(1.0, 2.0, 3.0) });
+        r.steps.push(crate::record::StepRecord { reading: None, more_readings: Vec::new(), lattice_version: 3, commands: vec![Command::Reset], force: Vector3::new(1.0, 2.0, 3.0) });
         let b = r.to_bytes();
         assert_eq!(Record::from_bytes(&b).unwrap(), r);
         for n in 0..b.len() {
@@ -222,7 +255,7 @@ mod tests {
         r.global_inputs.push(ToolInput { tool: Tool::Scissors, present: true, pressed: true, cuts: 3, ..ToolInput::default() });
         // A moved head (flag bit 2 and the pose) and a head command round-trip exactly.
         r.global_inputs.push(ToolInput { head: nalgebra::Isometry3::new(Vector3::new(0.01, 0.0, 0.02), Vector3::new(0.0, 0.1, 0.5)), ..ToolInput::default() });
-        r.steps.push(crate::record::StepRecord { reading: None, lattice_version: 4, commands: vec![Command::SetHead { position: Vector3::new(0.01, 0.0, 0.02), rotation: Vector3::new(0.0, 0.1, 0.5) }], force: Vector3::zeros() });
+        r.steps.push(crate::record::StepRecord { reading: None, more_readings: Vec::new(), lattice_version: 4, commands: vec![Command::SetHead { position: Vector3::new(0.01, 0.0, 0.02), rotation: Vector3::new(0.0, 0.1, 0.5) }], force: Vector3::zeros() });
         let b = r.to_bytes();
         assert_eq!(Record::from_bytes(&b).unwrap(), r);
         let mut bad = b.clone();

@@ -6,7 +6,9 @@
 //! resets then each u64 global version, u64 number of steps, then per step: u8 has-reading; if 1: f64 time,
 //! 3 f64 position (m), 9 f64 rotation (column-major), u32 buttons; u64 lattice version; 3 f64 force (N);
 //! u8 number of commands, each: u8 kind (0 tool: u8 id; 1 hair: u8 type, f64 curliness, f64 ease; 2 reset;
-//! 3 head: 3 f64 position (m), 3 f64 rotation vector (rad); 4 strand limit: u32).
+//! 3 head: 3 f64 position (m), 3 f64 rotation vector (rad); 4 strand limit: u32). A step with several device
+//! steps (`SessionParams::device_steps`) writes has-reading 2, then u8 count of device steps and each one's
+//! reading as above (u8 has-reading 0 or 1, and if 1 the reading).
 //!
 //! Version 2 (magic `CFREC2\0\0`, written now) adds the tool input of every global step right after the
 //! resets: u64 number of global steps, then per step: u8 tool id, u8 flags (bit 0 present, bit 1 primary
@@ -23,14 +25,25 @@ use nalgebra::Vector3;
 /// One haptic step as recorded.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StepRecord {
-    /// The device reading the step received (None: no input yet).
+    /// The device reading the step received (None: no input yet); with several device steps per physics
+    /// step (`SessionParams::device_steps`), the reading of the period's first device step.
     pub reading: Option<DeviceReading>,
+    /// The readings of the period's further device steps, in order (empty at one device step per physics
+    /// step).
+    pub more_readings: Vec<Option<DeviceReading>>,
     /// Version of the lattice snapshot the step read.
     pub lattice_version: u64,
     /// Viewer commands applied just before the step.
     pub commands: Vec<Command>,
-    /// Force sent to the device, N.
+    /// Force sent to the device, N (by the period's last device step).
     pub force: Vector3<f64>,
+}
+
+impl StepRecord {
+    /// Every device step's reading of the period, in order.
+    pub fn readings(&self) -> Vec<Option<DeviceReading>> {
+        std::iter::once(self.reading).chain(self.more_readings.iter().copied()).collect()
+    }
 }
 
 /// A recorded session.

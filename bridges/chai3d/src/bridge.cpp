@@ -185,7 +185,7 @@ int run(Device& device, const Options& o, volatile bool& stop, Stats& stats) {
         if (n > 0) periods.push_back(std::chrono::duration<double>(now - last_send).count());
         last_send = now;
         if (log)
-            std::fprintf(log, "%.6f,%.7f,%.7f,%.7f,%.6f,%.6f,%.6f,%.4f,%.1f\n", t, pose.position[0], pose.position[1], pose.position[2], applied[0], applied[1], applied[2], ramp,
+            std::fprintf(log, "%.6f,%.7f,%.7f,%.7f,%.6f,%.6f,%.6f,%.6f,%.1f\n", t, pose.position[0], pose.position[1], pose.position[2], applied[0], applied[1], applied[2], ramp,
                          latency * 1e6);
     }
     device.set_force({0, 0, 0});

@@ -2,7 +2,8 @@
 // omega and delta, Novint Falcon, ...).
 #include "device.h"
 
-#include <chai3d.h>
+// The device layer only (the bridge draws nothing): builds against a whole CHAI3D or its device sources.
+#include "devices/CHapticDeviceHandler.h"
 
 namespace coiffure {
 namespace {

@@ -246,11 +246,15 @@ pub struct HapticParams {
     /// 0.086 N without; docs/physics.md).
     /// Default 0.03.
     pub hold_distance: f64,
+    /// Surface treatment of the hair (`tools::treatment::Treatment`: virgin, conditioned, bleached, bleached
+    /// twice): scales the tool's and the fibres' friction, dry and wet, by the one friction law
+    /// (`Treatment::friction`), as `[patch] treatment` does in the tress scenarios. Default virgin.
+    pub treatment: tools::treatment::Treatment,
 }
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03 }
+        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03, treatment: tools::treatment::Treatment::Virgin }
     }
 }
 

@@ -62,6 +62,16 @@ impl ToolPath {
     pub fn end_time(&self) -> f64 {
         self.waypoints[self.waypoints.len() - 1].t
     }
+
+    /// The waypoints, in increasing time.
+    pub fn waypoints(&self) -> &[Waypoint] {
+        &self.waypoints
+    }
+
+    /// Length of the path through its waypoints' positions, m.
+    pub fn length(&self) -> f64 {
+        self.waypoints.windows(2).map(|w| (Vector3::from(w[1].position) - Vector3::from(w[0].position)).norm()).sum()
+    }
 }
 
 #[cfg(test)]

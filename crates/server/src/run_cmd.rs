@@ -59,7 +59,7 @@ pub fn replay(args: &ReplayArgs) -> Result<()> {
     let params = engine::session::SessionParams { hairs_per_render_strand: args.hairs_per_render_strand, ..Default::default() };
     params.validate().context("--hairs-per-render-strand")?;
     let (force, summary) = engine::scenario::live::replay_record(scene, params, &rec)?;
-    let o = ScenarioOutput { kind: "replay", wall_time_s: summary.wall_time_s, force, global_rows: vec![], summary: ScenarioSummary::Live(summary), hair: None };
+    let o = ScenarioOutput { kind: "replay", wall_time_s: summary.wall_time_s, force, global_rows: vec![], profile: Default::default(), summary: ScenarioSummary::Live(summary), hair: None };
     let stem = args.record.file_stem().and_then(|s| s.to_str()).unwrap_or("replay").to_string();
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from(&stem));
     let head = format!(

@@ -5,7 +5,7 @@
 //! ([`bvh`]) and closest-point tests between capsule axes and pieces ([`geometry`], [`contact`]); contact
 //! between the strands themselves goes through a sweep and prune ([`hair_contact`]); a tooth passing through a
 //! wisp drags against the fibres it parts ([`entanglement`]).
-//! Wetness and what it does to the fibre ([`wetness`]); the hair dryer ([`dryer`]) and the water
+//! Wetness and what it does to the fibre ([`wetness`]); the hair's surface treatment ([`treatment`]); the hair dryer ([`dryer`]) and the water
 //! sprayer ([`sprayer`]), cones of influence that blow and change wetness.
 //! Physics only: no threads, no I/O beyond parsing a shape's text. SI units (m, s, N).
 
@@ -20,4 +20,5 @@ pub mod segments4;
 pub mod shape;
 pub mod sprayer;
 pub mod sweep;
+pub mod treatment;
 pub mod wetness;

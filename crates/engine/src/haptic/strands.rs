@@ -10,6 +10,7 @@ use strand::{HairType, Strand};
 use strand::constraint::ConstraintOptions;
 use crate::snapshot::LatticeSnapshot;
 use tools::interaction::{Entanglement, ForceModel, HairContact, Hold, LocalInteraction};
+use tools::treatment::Contact;
 
 /// `it` with the scene's body (head, neck, shoulders; the live head frame is the world frame) for its strands
 /// to rest on.
@@ -46,10 +47,12 @@ impl HapticCore {
         }).collect()
     }
 
-    /// The tool's contact law on dry hair of type `h` at combing ease `ease` ([`HapticParams::combing_friction`]),
-    /// with the constraints' compliance of [`contact_options`] for its fibre.
+    /// The tool's contact law on dry hair of type `h` with the surface treatment `HapticParams::treatment` at
+    /// combing ease `ease` ([`HapticParams::combing_friction`]), with the constraints' compliance of
+    /// [`contact_options`] for its fibre.
     pub(crate) fn force_model(params: &HapticParams, h: &HairType, ease: f64) -> ForceModel {
-        ForceModel::Constraint { friction: params.combing_friction(h.friction_coefficient(), ease), options: contact_options(h.bending_stiffness) }
+        let mu = h.friction_coefficient() * params.treatment.friction_factor(Contact::Tool, 0.0);
+        ForceModel::Constraint { friction: params.combing_friction(mu, ease), options: contact_options(h.bending_stiffness) }
     }
 
     /// Hair-hair contact between the local strands (`tools::hair_contact`; None when
@@ -94,12 +97,13 @@ impl HapticCore {
     }
 
     /// Fibre-on-fibre friction coefficient at wetness `wetness` (in [0, 1]), dimensionless: `HairContact`'s
-    /// dry value raised by the wetness model's one friction law and lowered by the combing ease (the one
-    /// combing-ease law). The hair-hair contacts take it, and so do the strands' contacts with the body
+    /// dry value raised by the wetness and the treatment (`HapticParams::treatment`; the one friction law,
+    /// `tools::treatment::Treatment::friction`) and lowered by the combing ease (the one combing-ease law). The
+    /// hair-hair contacts take it, and so do the strands' contacts with the body
     /// (`LocalInteraction::body_friction`): a strand lies on the scalp under the hair beneath it.
     pub(crate) fn fibre_friction(&self, wetness: f64) -> f64 {
         let d = HairContact::default().friction;
-        let wet = self.wet_model.friction(d, wetness.clamp(0.0, 1.0)).unwrap_or(d);
+        let wet = self.params.haptic.treatment.friction(&self.wet_model, Contact::Fibre, d, wetness.clamp(0.0, 1.0)).unwrap_or(d);
         self.params.haptic.combing_friction(wet, self.combing_ease)
     }
 

@@ -49,7 +49,8 @@ impl HapticCore {
         if let Ok(m) = self.wet_model.wet(&dry, h.friction_coefficient(), section.area(), mean) {
             // Wet fibres are softer: their contacts' largest stiffness follows (`contact_options`).
             let options = super::strands::contact_options(m.material().young_modulus * section.i_soft());
-            self.interaction.model = ForceModel::Constraint { friction: self.params.haptic.combing_friction(m.friction, self.combing_ease), options };
+            let friction = m.friction * self.params.haptic.treatment.friction_factor(tools::treatment::Contact::Tool, mean);
+            self.interaction.model = ForceModel::Constraint { friction: self.params.haptic.combing_friction(friction, self.combing_ease), options };
         }
         self.interaction.hair_contact = self.hair_contact(mean);
         self.interaction.body_friction = self.fibre_friction(mean);

@@ -80,13 +80,13 @@ pub fn run_in(file: &ScenarioFile, dir: &Path) -> Result<ScenarioOutput, Scenari
 }
 
 /// Writes what `coiffure run SCENARIO --out DIR` writes for `output`, a run of `file` named `name`:
-/// `summary.json` always; `force.csv` (patch, live); `wetness.csv`, `hairstyle.hair`, `pieces.hair`
+/// `summary.json` always; `force.csv` (patch, live); `profile.csv` (patch: the combing rig's recording); `wetness.csv`, `hairstyle.hair`, `pieces.hair`
 /// (global); and `summary.txt`, whose text is returned (the CLI prints it).
 pub fn write_output(file: &ScenarioFile, output: &ScenarioOutput, name: &str, out: &Path) -> Result<String, ScenarioError> {
     std::fs::create_dir_all(out).map_err(|e| io_err(out, format!("cannot create: {e}")))?;
     write_json(out, output)?;
     let text = match file {
-        ScenarioFile::Patch(s) => patch_text(s, output, name, &write_force(out, output)?),
+        ScenarioFile::Patch(s) => patch_text(s, output, name, &write_force(out, output)?, &write_profile(out, output)?),
         ScenarioFile::Global(s) => write_global(s, output, name, out)?,
         ScenarioFile::Live(s) => {
             let trace = write_force(out, output)?;
@@ -138,12 +138,36 @@ fn write_force(out: &Path, o: &ScenarioOutput) -> Result<std::path::PathBuf, Sce
     Ok(p)
 }
 
-fn patch_text(s: &Scenario, o: &ScenarioOutput, name: &str, trace: &Path) -> String {
+/// `profile.csv` (a combing rig's recording, [`super::combing::CombingProfile::to_csv`]); returns its path.
+fn write_profile(out: &Path, o: &ScenarioOutput) -> Result<std::path::PathBuf, ScenarioError> {
+    let p = out.join("profile.csv");
+    std::fs::write(&p, o.profile.to_csv()).map_err(|e| io_err(&p, format!("cannot write: {e}")))?;
+    Ok(p)
+}
+
+/// The combing rig's lines of a patch run's `summary.txt`: all strokes, then each stroke if there are several.
+fn combing_text(summary: &super::patch::Summary) -> String {
+    let line = |label: &str, work: f64, peak: f64, mean: f64, fifths: &[f64; 5]| {
+        let f: Vec<String> = fifths.iter().map(|x| format!("{x:.3e}")).collect();
+        format!("{label:<16}work {work:.4e} J, peak {peak:.4e} N, mean {mean:.4e} N; work by fifth from the roots {} J\n", f.join(" "))
+    };
+    let c = &summary.combing;
+    let mut text = line("combing", c.combing_work_j, c.combing_peak_n, c.combing_mean_n, &c.work_fifths_j);
+    let p = &summary.per_stroke;
+    if summary.strokes > 1 {
+        for i in 0..p.combing_work_j.len() {
+            text += &line(&format!("  stroke {}", i + 1), p.combing_work_j[i], p.combing_peak_n[i], p.combing_mean_n[i], &p.work_fifths_j[i]);
+        }
+    }
+    text
+}
+
+fn patch_text(s: &Scenario, o: &ScenarioOutput, name: &str, trace: &Path, profile: &Path) -> String {
     let ScenarioSummary::Patch(summary) = &o.summary else { unreachable!("a patch run gives a patch summary") };
     format!(
         "scenario        {name}\nhair type       {} ({} strands x {} segments, {:?} model), each standing for {:.1} hairs; tress {:.3} g\n\
          tool            {} ({} force model)\nsteps           {} at {} s ({} with contact, {} clamped by the safety net)\n\
-         peak force      {:.4e} N\nmean force      {:.4e} N (over steps with contact)\nwork            {:.4e} J\nwall time       {:.2} s\ntrace           {}\n",
+         peak force      {:.4e} N\nmean force      {:.4e} N (over steps with contact)\nwork            {:.4e} J\n{}wall time       {:.2} s\ntrace           {}\nprofile         {}\n",
         s.patch.hair_type,
         s.patch.strands,
         s.patch.segments,
@@ -159,8 +183,10 @@ fn patch_text(s: &Scenario, o: &ScenarioOutput, name: &str, trace: &Path) -> Str
         summary.peak_force,
         summary.mean_force,
         summary.work,
+        combing_text(summary),
         o.wall_time_s,
-        trace.display()
+        trace.display(),
+        profile.display()
     )
 }
 

@@ -61,6 +61,9 @@ pub struct LiveSpec {
     pub combing_ease: f64,
     /// Initial wetness of every guide, in [0, 1]. Default 0.
     pub wetness: f64,
+    /// Surface treatment of the hair: "virgin" (default), "conditioned", "bleached" or "bleached-twice"
+    /// (`HapticParams::treatment`, the tress scenarios' `[patch] treatment`).
+    pub treatment: tools::treatment::Treatment,
     /// The simulated strands touch each other (`HapticParams::hair_contact`, the live session's own switch).
     /// Default: the session's default.
     pub hair_contact: bool,
@@ -122,7 +125,7 @@ pub struct HeadWaypoint {
 
 impl Default for LiveSpec {
     fn default() -> Self {
-        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), device_rate: SessionParams::default().device_rate_hz, curliness: 0.0, combing_ease: 0.0, wetness: 0.0, hair_contact: crate::params::HapticParams::default().hair_contact, head: Vec::new(), hairstyle: None, fit: LiveFit::default() }
+        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), device_rate: SessionParams::default().device_rate_hz, curliness: 0.0, combing_ease: 0.0, wetness: 0.0, treatment: tools::treatment::Treatment::Virgin, hair_contact: crate::params::HapticParams::default().hair_contact, head: Vec::new(), hairstyle: None, fit: LiveFit::default() }
     }
 }
 
@@ -306,6 +309,7 @@ impl LiveScenario {
         let (profile, tool, hair) = self.validate()?;
         let mut params = SessionParams { profile, device_rate_hz: self.live.device_rate, ..SessionParams::default() };
         params.haptic.hair_contact = self.live.hair_contact;
+        params.haptic.treatment = self.live.treatment;
         params.validate().map_err(|e| ScenarioError::Invalid(format!("live.device_rate: {e}")))?;
         let sim = |e: crate::error::SessionError| ScenarioError::Invalid(format!("live session: {e}"));
         let mut ls = Lockstep::new(scene.clone(), params, params.haptic_rate_hz).map_err(sim)?;

@@ -9,20 +9,24 @@
 //! ([`run_in`]) and writes the outputs ([`write_output`]), for the CLI and the Python binding alike.
 
 pub mod actions;
+pub mod combing;
 pub mod files;
 pub mod global;
 pub mod live;
 pub mod output;
 pub mod patch;
 pub mod run;
+pub mod strokes;
 
 pub use actions::{Action, ConeAction, ConePose, CutAction};
+pub use combing::{fifths, CombingFigures, CombingProfile, Fifths, PerStroke};
 pub use files::{load_tool, read_path_csv, run_in, summary_json, write_output, write_replay};
 pub use global::{GlobalOutput, GlobalRow, GlobalScenario, GlobalSummary, HairstyleSpec};
 pub use live::{LiveScenario, LiveSpec, LiveTool, LiveWaypoint};
 pub use output::{ForceStats, ForceTrace, LiveSummary};
 pub use patch::{PatchSpec, Scenario, Summary, ToolSpec, TraceRow};
 pub use run::{run, run_patch, ScenarioFile, ScenarioOutput, ScenarioSummary};
+pub use strokes::StrokeCycle;
 
 use strand::StrandError;
 

@@ -3,17 +3,23 @@
 //! Pipeline of [`Scenario::run`]:
 //! 1. build the patch: roots on a rectangle, small random tilts so that teeth meet hair as in a real tress;
 //!    each strand stands for `represents` real fibres (from the tress's mass);
-//! 2. wetness: the strands' material and the friction coefficients (tool-hair and hair-hair) from
-//!    [`tools::wetness::WetnessModel`] at `[patch] wetness`, the same law as the live session's; the combing
+//! 2. wetness and treatment: the strands' material and the friction coefficients (tool-hair and hair-hair) from
+//!    [`tools::wetness::WetnessModel`] at `[patch] wetness` and [`tools::treatment::Treatment`] at
+//!    `[patch] treatment`, the same law as the live session's; the combing
 //!    ease lowers both frictions by [`crate::params::HapticParams::combing_friction`], the live session's law;
 //!    the comb drags through the wisps against the fibres it parts ([`tools::entanglement`]);
 //! 3. settle the patch under gravity in the [`tools::interaction::LocalInteraction`] (hair-hair contacts on, the
 //!    tool held at its path's start);
 //! 4. every step move the tool along its path, step the interaction and record the force and torque on the
 //!    tool, scaled by the number of real hairs each simulated strand stands for;
-//! 5. summarise, with the stroke's quality figures ([`super::output::StrokeMetrics`]).
+//! 5. summarise, with the stroke's quality figures ([`super::output::StrokeMetrics`]) and a combing rig's
+//!    ([`super::combing`]: the force by the comb's position from the roots, the combing work, the work in each
+//!    fifth of the tress length), for each stroke (`[tool] strokes`, [`super::strokes::StrokeCycle`]) and
+//!    for all together.
 
+use super::combing::{CombingFigures, CombingProfile, PerStroke};
 use super::output::{ForceStats, ForceTrace, StrokeMetrics};
+use super::strokes::StrokeCycle;
 use super::{default_dt, ScenarioError};
 use crate::params::HapticParams;
 use crate::path::{ToolPath, Waypoint};
@@ -23,6 +29,7 @@ use strand::constraint::ConstraintOptions;
 use strand::{HairType, ModelKind, RootFrame, Strand, StrandError, StrandModel};
 use tools::interaction::{Entanglement, ForceModel, HairContact, LocalInteraction};
 use tools::shape::ToolShape;
+use tools::treatment::{Contact, Treatment};
 use tools::wetness::{check_wetness, WetnessModel};
 
 
@@ -92,6 +99,10 @@ pub struct PatchSpec {
     /// (default 0). Sets the strands' material and the friction through `tools::wetness::WetnessModel`.
     #[serde(default)]
     pub wetness: f64,
+    /// Surface treatment of the hair: "virgin" (default), "conditioned", "bleached" or "bleached-twice"; scales
+    /// the tool-hair and hair-hair friction, dry and wet (`tools::treatment::Treatment`, docs/treatment.md).
+    #[serde(default)]
+    pub treatment: Treatment,
     /// Contact and friction between the simulated strands, each a wisp of `represents` fibres
     /// (`tools::hair_contact`; default true).
     #[serde(default = "default_true")]
@@ -167,6 +178,14 @@ pub struct ToolSpec {
     pub path: Vec<Waypoint>,
     /// Or a CSV file `t,x,y,z[,rx,ry,rz]` relative to the scenario.
     pub path_file: Option<String>,
+    /// Strokes: the path is played this many times, the tool returning to its start out of the hair between
+    /// them ([`StrokeCycle`]; default 1, at most [`StrokeCycle::MAX_STROKES`]).
+    #[serde(default = "default_strokes")]
+    pub strokes: u32,
+}
+
+fn default_strokes() -> u32 {
+    1
 }
 
 fn default_force_model() -> String {
@@ -189,10 +208,12 @@ pub struct TraceRow {
     pub contacts: usize,
     /// Tool position, m.
     pub tool: Vector3<f64>,
+    /// The stroke the tool is in (from 1; 0 while it returns between strokes).
+    pub stroke: u32,
 }
 
 /// Summary of a run.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Summary {
     /// Largest force magnitude, N.
     pub peak_force: f64,
@@ -210,14 +231,24 @@ pub struct Summary {
     pub represents: f64,
     /// Wetness of the tress (dimensionless, 0..1).
     pub wetness: f64,
-    /// Tool-hair friction coefficient used (after wetness and combing ease).
+    /// Surface treatment of the hair.
+    pub treatment: Treatment,
+    /// Tool-hair friction coefficient used (after wetness, treatment and combing ease).
     pub tool_friction: f64,
     /// Hair-hair friction coefficient used (0 without hair contact).
     pub hair_friction: f64,
     /// Hair-hair contact distance between two strands' centrelines, m (0 without hair contact).
     pub hair_contact_distance: f64,
-    /// The stroke's quality figures (peak, median, 90th percentile, continuity, largest step change).
+    /// The stroke's quality figures (peak, median, 90th percentile, continuity, largest step change), from the
+    /// first to the last step with contact (all strokes).
     pub stroke: StrokeMetrics,
+    /// The combing rig's figures of all the strokes together (work, peak, mean, fifths; serialised flat).
+    #[serde(flatten)]
+    pub combing: CombingFigures,
+    /// Strokes played.
+    pub strokes: u32,
+    /// The combing rig's figures of each stroke.
+    pub per_stroke: PerStroke,
     /// Steps in which some strand's velocities were scaled down by the safety net.
     pub clamped_steps: u64,
     /// Wall time of the run, s (set by [`super::run_patch`]; 0 from [`Scenario::run`]).
@@ -299,6 +330,9 @@ impl Scenario {
                 return bad(format!("tool.friction must be >= 0, got {mu}"));
             }
         }
+        if !(1..=StrokeCycle::MAX_STROKES).contains(&self.tool.strokes) {
+            return bad(format!("tool.strokes must be 1..={}, got {}", StrokeCycle::MAX_STROKES, self.tool.strokes));
+        }
         Ok(hair)
     }
 
@@ -326,10 +360,33 @@ impl Scenario {
             .collect()
     }
 
+    /// The tool's path played `[tool] strokes` times, with the returns between strokes.
+    pub fn stroke_cycle(&self, shape: &ToolShape, path: &ToolPath) -> Result<StrokeCycle, ScenarioError> {
+        let p = &self.patch;
+        StrokeCycle::new(path.clone(), self.tool.strokes, [p.root[0], p.root[1]], StrokeCycle::clearance(shape, p.extent)).map_err(ScenarioError::Invalid)
+    }
+
+    /// The comb's position from the roots along the tress (m) when the tool is at `tool`: the strands hang
+    /// down (-z) from the roots' height.
+    pub fn position_along(&self, tool: &Vector3<f64>) -> f64 {
+        self.patch.root[2] - tool.z
+    }
+
+    /// A combing rig's recording of `rows` (a run's trace): the steps of each stroke, the comb's position from
+    /// the roots and the force's magnitude.
+    pub fn profile(&self, rows: &[TraceRow]) -> CombingProfile {
+        let mut out = CombingProfile::default();
+        for r in rows.iter().filter(|r| r.stroke > 0) {
+            out.push(r.stroke, r.t, self.position_along(&r.tool), r.force.norm());
+        }
+        out
+    }
+
     /// Runs the scenario with the tool's shape and path (loaded by the caller). Deterministic.
     pub fn run(&self, shape: ToolShape, path: &ToolPath) -> Result<(Vec<TraceRow>, Summary), ScenarioError> {
         let hair = self.validate()?;
         let strands = self.build_patch()?;
+        let cycle = self.stroke_cycle(&shape, path)?;
         let p = &self.patch;
         let wet_model = WetnessModel::default();
         let wet_error = |e: tools::wetness::WetnessError| ScenarioError::Invalid(format!("patch: {e}"));
@@ -341,9 +398,10 @@ impl Scenario {
             None => p.represents,
         };
         let tress_mass = dry_mass * k;
-        // Frictions: wetness, then combing ease (the live session's laws).
+        // Frictions: wetness and treatment, then combing ease (the live session's laws).
         let ease = HapticParams::default();
-        let tool_friction = ease.combing_friction(wet_model.friction(self.tool.friction.unwrap_or(hair.friction_coefficient()), p.wetness).map_err(wet_error)?, self.tool.combing_ease);
+        let tool_dry = self.tool.friction.unwrap_or(hair.friction_coefficient());
+        let tool_friction = ease.combing_friction(p.treatment.friction(&wet_model, Contact::Tool, tool_dry, p.wetness).map_err(wet_error)?, self.tool.combing_ease);
         let model = match self.tool.force_model.as_str() {
             "paper" => ForceModel::Paper { gain: self.tool.gain },
             _ => ForceModel::Constraint { friction: tool_friction, options: ConstraintOptions::default() },
@@ -354,7 +412,7 @@ impl Scenario {
         if p.hair_contact {
             let d = HairContact::default();
             let dry = p.hair_friction.unwrap_or(d.friction);
-            hair_friction = ease.combing_friction(wet_model.friction(dry, p.wetness).map_err(wet_error)?, self.tool.combing_ease);
+            hair_friction = ease.combing_friction(p.treatment.friction(&wet_model, Contact::Fibre, dry, p.wetness).map_err(wet_error)?, self.tool.combing_ease);
             let hc = HairContact { fibres: k.max(1.0), packing: p.packing.unwrap_or(d.packing), friction: hair_friction, ..d };
             hair_contact_distance = hc.distance(hair.major_diameter / 2.0);
             it.hair_contact = Some(hc);
@@ -369,25 +427,26 @@ impl Scenario {
         for n in 0..settle_steps {
             it.step(self.dt, path.pose(0.0)).map_err(|e| ScenarioError::Simulation { time: -self.settle + n as f64 * self.dt, source: e })?;
         }
-        let duration = self.duration.unwrap_or(path.end_time() + 0.05);
+        let duration = self.duration.unwrap_or(cycle.end_time() + 0.05);
         let steps = (duration / self.dt).round() as usize;
         let mut rows = Vec::with_capacity(steps);
         let mut work = 0.0;
         let mut last = path.pose(0.0).position;
         for n in 1..=steps {
             let t = n as f64 * self.dt;
-            let pose = path.pose(t);
+            let (pose, stroke) = cycle.pose(t);
             let r = it.step(self.dt, pose).map_err(|e| ScenarioError::Simulation { time: t, source: e })?;
             let force = r.force * k;
             work -= force.dot(&(pose.position - last));
             last = pose.position;
-            rows.push(TraceRow { t, force, torque: r.torque * k, contacts: r.contacts.len(), tool: pose.position });
+            rows.push(TraceRow { t, force, torque: r.torque * k, contacts: r.contacts.len(), tool: pose.position, stroke });
         }
         let mut trace = ForceTrace::default();
         for r in &rows {
             trace.push(r.t, &r.force, &r.torque, r.contacts as u32, &r.tool);
         }
         let stats = ForceStats::of(rows.iter().map(|r| (r.force.norm(), r.contacts > 0)), f64::INFINITY);
+        let strokes = self.profile(&rows).strokes(p.length);
         let summary = Summary {
             peak_force: stats.peak,
             mean_force: stats.mean_in_contact,
@@ -397,10 +456,14 @@ impl Scenario {
             tress_mass,
             represents: k,
             wetness: p.wetness,
+            treatment: p.treatment,
             tool_friction,
             hair_friction,
             hair_contact_distance,
             stroke: StrokeMetrics::of(&trace),
+            combing: CombingFigures::total(&strokes),
+            strokes: self.tool.strokes,
+            per_stroke: PerStroke::of(&strokes),
             clamped_steps: it.strands.iter().map(|s| s.clamped_steps).sum(),
             wall_time_s: 0.0,
         };
@@ -445,6 +508,29 @@ mod tests {
         assert!(a.1.contact_steps > 0, "the comb met the hair");
         assert!(a.1.peak_force > 0.0);
         assert_eq!(a.1.steps, 250);
+    }
+
+    #[test]
+    fn the_treatment_key_sets_both_frictions_by_the_one_law() {
+        // `[patch] treatment` goes through `Treatment::friction` for the tool (the hair type's coefficient) and
+        // for hair on hair (HairContact's 0.25), dry and wet; virgin is the default and the untreated law; a bad
+        // name is refused naming the key's value.
+        use super::super::run::{run, ScenarioFile, ScenarioSummary};
+        let model = WetnessModel::default();
+        let mu = HairType::GC3.friction_coefficient();
+        for (name, t) in [("virgin", Treatment::Virgin), ("conditioned", Treatment::Conditioned), ("bleached", Treatment::Bleached), ("bleached-twice", Treatment::BleachedTwice)] {
+            for w in [0.0, 1.0] {
+                let text = SCENARIO.replace("segments = 8", &format!("segments = 8\nwetness = {w}\ntreatment = \"{name}\""));
+                let ScenarioSummary::Patch(s) = run(&ScenarioFile::from_toml(&text).unwrap()).unwrap().summary else { panic!("not a patch summary") };
+                assert_eq!(s.treatment, t);
+                assert_eq!(s.tool_friction, t.friction(&model, Contact::Tool, mu, w).unwrap(), "{name} {w}");
+                assert_eq!(s.hair_friction, t.friction(&model, Contact::Fibre, 0.25, w).unwrap(), "{name} {w}");
+            }
+        }
+        let (s, _) = parse(SCENARIO);
+        assert_eq!(s.patch.treatment, Treatment::Virgin);
+        let e = ScenarioFile::from_toml(&SCENARIO.replace("segments = 8", "segments = 8\ntreatment = \"permed\"")).unwrap_err().to_string();
+        assert!(e.contains("permed") && e.contains("bleached-twice"), "{e}");
     }
 
     #[test]

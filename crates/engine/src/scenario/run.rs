@@ -3,6 +3,7 @@
 
 use super::global::{GlobalRow, GlobalScenario, GlobalSummary};
 use super::live::LiveScenario;
+use super::combing::CombingProfile;
 use super::output::{ForceTrace, LiveSummary};
 use super::patch::{Scenario, Summary};
 use super::ScenarioError;
@@ -76,6 +77,9 @@ pub struct ScenarioOutput {
     pub force: ForceTrace,
     /// The global scenario's rows (every `global_dt`; empty for the other kinds).
     pub global_rows: Vec<GlobalRow>,
+    /// A combing rig's recording: the force by the comb's position from the roots, stroke by stroke (patch
+    /// scenarios; empty for the other kinds).
+    pub profile: CombingProfile,
     /// The summary.
     pub summary: ScenarioSummary,
     /// The global scenario's final hairstyle and cut pieces (not serialised).
@@ -103,7 +107,7 @@ pub fn run(file: &ScenarioFile) -> Result<ScenarioOutput, ScenarioError> {
             let mut summary = out.summary;
             let wall = t0.elapsed().as_secs_f64();
             summary.wall_time_s = wall;
-            Ok(ScenarioOutput { kind: "global", force: ForceTrace::default(), global_rows: out.rows, summary: ScenarioSummary::Global(summary), hair: Some((out.hairstyle, out.pieces)), wall_time_s: wall })
+            Ok(ScenarioOutput { kind: "global", force: ForceTrace::default(), global_rows: out.rows, profile: CombingProfile::default(), summary: ScenarioSummary::Global(summary), hair: Some((out.hairstyle, out.pieces)), wall_time_s: wall })
         }
         ScenarioFile::Live(s) => run_live_on(s, std::sync::Arc::new(s.scene_in(std::path::Path::new("."))?)),
     }
@@ -113,7 +117,7 @@ pub fn run(file: &ScenarioFile) -> Result<ScenarioOutput, ScenarioError> {
 pub fn run_live_on(s: &LiveScenario, scene: std::sync::Arc<crate::scene::Scene>) -> Result<ScenarioOutput, ScenarioError> {
     let (force, summary) = s.run_on(scene)?;
     let wall = summary.wall_time_s;
-    Ok(ScenarioOutput { kind: "live", force, global_rows: Vec::new(), summary: ScenarioSummary::Live(summary), hair: None, wall_time_s: wall })
+    Ok(ScenarioOutput { kind: "live", force, global_rows: Vec::new(), profile: CombingProfile::default(), summary: ScenarioSummary::Live(summary), hair: None, wall_time_s: wall })
 }
 
 /// Runs a patch scenario with its tool `shape` and `path` (loaded by the caller).
@@ -126,5 +130,6 @@ pub fn run_patch(s: &Scenario, shape: ToolShape, path: &ToolPath) -> Result<Scen
     for r in &rows {
         force.push(r.t, &r.force, &r.torque, r.contacts as u32, &r.tool);
     }
-    Ok(ScenarioOutput { kind: "patch", force, global_rows: Vec::new(), summary: ScenarioSummary::Patch(summary), hair: None, wall_time_s: wall })
+    let profile = s.profile(&rows);
+    Ok(ScenarioOutput { kind: "patch", force, global_rows: Vec::new(), profile, summary: ScenarioSummary::Patch(summary), hair: None, wall_time_s: wall })
 }

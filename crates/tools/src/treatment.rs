@@ -1,0 +1,192 @@
+//! The surface treatment of the hair (virgin, conditioned, bleached once or twice) as a physical input: what
+//! each does to the fibre's surface, as friction coefficients of fibre on fibre and of a tool on the fibre, dry
+//! and wet. Sources, and where a figure is missing and how it was set: `docs/treatment.md`.
+//!
+//! The model's coefficients keep their own homes (the tool's: `strand::HairType::friction_coefficient`; fibre on
+//! fibre: `crate::hair_contact::HairContact::friction`; the rise with wetness: `crate::wetness::WetnessModel`).
+//! A treatment multiplies them by its coefficient over the virgin fibre's at the same wetness
+//! ([`Treatment::friction_factor`]): virgin hair is exactly the model without a treatment (factor 1, bit-equal).
+//! [`Treatment::friction`] is the one friction law with wetness and treatment, for the tress scenarios and the
+//! live session alike.
+
+use crate::wetness::{check_wetness, WetnessError, WetnessModel};
+
+/// Which pair of surfaces slides: two fibres, or a tool (comb, brush) on a fibre.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Contact {
+    /// Fibre on fibre (hair-hair contact, the wisps' friction, the body contact of a strand lying on hair).
+    Fibre,
+    /// A tool's surface on a fibre (the comb's teeth, the brush's bristles).
+    Tool,
+}
+
+/// Friction coefficients of one treatment's fibre surface (dimensionless): fibre on fibre and a tool on the
+/// fibre, in equilibrium with ambient air (dry, wetness 0) and soaked (wetness 1). Sources in `docs/treatment.md`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceFriction {
+    /// Fibre on fibre, dry.
+    pub fibre_dry: f64,
+    /// Fibre on fibre, wet.
+    pub fibre_wet: f64,
+    /// Tool on fibre, dry.
+    pub tool_dry: f64,
+    /// Tool on fibre, wet.
+    pub tool_wet: f64,
+}
+
+/// A hair surface treatment. Default [`Treatment::Virgin`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Treatment {
+    /// Untreated hair: the cuticle with its covalently bound lipid layer (18-MEA).
+    #[default]
+    Virgin,
+    /// Virgin hair after a rinse-off conditioner (cationic surfactant and fatty alcohol deposited on the cuticle).
+    Conditioned,
+    /// Bleached once (alkaline hydrogen peroxide): the lipid layer partly removed, a hydrophilic cuticle.
+    Bleached,
+    /// Bleached twice.
+    BleachedTwice,
+}
+
+/// Wet rise of the friction of a virgin fibre's surface (wet over dry, dimensionless), the single-fibre
+/// figure the treatments' wet coefficients are built on: friction is higher in water (Nikogeorgos et al. 2010);
+/// 1.5, the low end of the single-fibre wet/dry ratios of 1.5-2 quoted in `docs/wetness.md` (see
+/// `docs/treatment.md` for why no better figure is used).
+const VIRGIN_WET_RISE: f64 = 1.5;
+
+impl Treatment {
+    /// Every treatment, in the order of the viewer's selector.
+    pub const ALL: [Treatment; 4] = [Treatment::Virgin, Treatment::Conditioned, Treatment::Bleached, Treatment::BleachedTwice];
+
+    /// The name used in scenario files and the viewer: "virgin", "conditioned", "bleached", "bleached-twice".
+    pub fn name(self) -> &'static str {
+        match self {
+            Treatment::Virgin => "virgin",
+            Treatment::Conditioned => "conditioned",
+            Treatment::Bleached => "bleached",
+            Treatment::BleachedTwice => "bleached-twice",
+        }
+    }
+
+    /// The treatment named `name` (as [`Treatment::name`]), or an error listing the names.
+    pub fn by_name(name: &str) -> Result<Self, String> {
+        Self::ALL.into_iter().find(|t| t.name() == name).ok_or_else(|| {
+            format!("unknown treatment {name:?} (one of {})", Self::ALL.map(|t| format!("{:?}", t.name())).join(", "))
+        })
+    }
+
+    /// The treatment's surface friction (see `docs/treatment.md` for each figure's source):
+    /// - virgin: fibre on fibre 0.13 dry (Fair and Gupta 1988, twist method, brown and blond virgin hair
+    ///   0.130 and 0.132), tool on fibre 0.2 dry (`strand::HairType::friction_coefficient`'s reference);
+    ///   wet, both times 1.5 ([`VIRGIN_WET_RISE`]);
+    /// - conditioned: dry a third lower than virgin (0.087 and 0.133), wet no higher than dry (the conditioner
+    ///   film lubricates in water);
+    /// - bleached: fibre on fibre 0.195 dry (Fair and Gupta: 0.196 and 0.194), 1.5 times virgin's, the same
+    ///   factor on the tool and wet;
+    /// - bleached twice: one more bleach's increment, 0.26 (2 times virgin's; no fibre measurement found).
+    pub fn surface(self) -> SurfaceFriction {
+        let virgin = SurfaceFriction { fibre_dry: 0.13, fibre_wet: 0.13 * VIRGIN_WET_RISE, tool_dry: 0.2, tool_wet: 0.2 * VIRGIN_WET_RISE };
+        let scaled = |dry: f64, wet: f64| SurfaceFriction { fibre_dry: virgin.fibre_dry * dry, fibre_wet: virgin.fibre_wet * wet, tool_dry: virgin.tool_dry * dry, tool_wet: virgin.tool_wet * wet };
+        match self {
+            Treatment::Virgin => virgin,
+            // Dry: two thirds of virgin's; wet: the conditioned surface's dry coefficient (no rise in water).
+            Treatment::Conditioned => scaled(2.0 / 3.0, 2.0 / 3.0 / VIRGIN_WET_RISE),
+            Treatment::Bleached => scaled(1.5, 1.5),
+            Treatment::BleachedTwice => scaled(2.0, 2.0),
+        }
+    }
+
+    /// This treatment's coefficient of `contact` over the virgin fibre's at wetness `w` (in [0, 1], clamped;
+    /// NaN counts as 0), dimensionless: the dry and the wet ratios interpolated linearly in `w`. Exactly 1 for
+    /// virgin hair.
+    pub fn friction_factor(self, contact: Contact, w: f64) -> f64 {
+        if self == Treatment::Virgin {
+            return 1.0;
+        }
+        let w = if w.is_finite() { w.clamp(0.0, 1.0) } else { 0.0 };
+        let (t, v) = (self.surface(), Treatment::Virgin.surface());
+        let (dry, wet) = match contact {
+            Contact::Fibre => (t.fibre_dry / v.fibre_dry, t.fibre_wet / v.fibre_wet),
+            Contact::Tool => (t.tool_dry / v.tool_dry, t.tool_wet / v.tool_wet),
+        };
+        dry + w * (wet - dry)
+    }
+
+    /// The one friction law with wetness and treatment: the Coulomb coefficient of `contact` at wetness `w` for
+    /// a contact whose dry coefficient on virgin hair is `dry` (dimensionless): the wetness model's
+    /// `model.friction(dry, w)` times [`Treatment::friction_factor`]. Bad wetness is named.
+    pub fn friction(self, model: &WetnessModel, contact: Contact, dry: f64, w: f64) -> Result<f64, WetnessError> {
+        let w = check_wetness("wetness", w)?;
+        Ok(model.friction(dry, w)? * self.friction_factor(contact, w))
+    }
+}
+
+impl std::fmt::Display for Treatment {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn virgin_is_exactly_the_untreated_model() {
+        let m = WetnessModel::default();
+        for w in [0.0, 0.3, 1.0] {
+            for c in [Contact::Fibre, Contact::Tool] {
+                assert_eq!(Treatment::Virgin.friction_factor(c, w), 1.0);
+                assert_eq!(Treatment::Virgin.friction(&m, c, 0.25, w).unwrap(), m.friction(0.25, w).unwrap());
+            }
+        }
+    }
+
+    #[test]
+    fn the_treatments_take_their_sources_figures() {
+        // Fair and Gupta 1988 (twist method): virgin 0.13, bleached once 0.195 fibre on fibre, dry.
+        let v = Treatment::Virgin.surface();
+        let b = Treatment::Bleached.surface();
+        assert!((v.fibre_dry - 0.13).abs() < 1e-12 && (b.fibre_dry - 0.195).abs() < 1e-12);
+        assert!((Treatment::BleachedTwice.surface().fibre_dry - 0.26).abs() < 1e-12);
+        // Conditioned: a third lower dry; wet no higher than its own dry coefficient.
+        let c = Treatment::Conditioned.surface();
+        assert!((c.fibre_dry / v.fibre_dry - 2.0 / 3.0).abs() < 1e-12);
+        assert!((c.fibre_wet - c.fibre_dry).abs() < 1e-12 && (c.tool_wet - c.tool_dry).abs() < 1e-12);
+        // Wet is rougher than dry for every surface but the conditioned one.
+        for t in [Treatment::Virgin, Treatment::Bleached, Treatment::BleachedTwice] {
+            let s = t.surface();
+            assert!(s.fibre_wet > s.fibre_dry && s.tool_wet > s.tool_dry, "{t}");
+        }
+        // The factors: dry at 0, wet at 1, linear between.
+        let f = |t: Treatment, w| t.friction_factor(Contact::Fibre, w);
+        assert!((f(Treatment::Bleached, 0.0) - 1.5).abs() < 1e-12 && (f(Treatment::Bleached, 1.0) - 1.5).abs() < 1e-12);
+        assert!((f(Treatment::Conditioned, 0.0) - 2.0 / 3.0).abs() < 1e-12);
+        assert!((f(Treatment::Conditioned, 1.0) - 4.0 / 9.0).abs() < 1e-12);
+        assert!((f(Treatment::Conditioned, 0.5) - 0.5 * (2.0 / 3.0 + 4.0 / 9.0)).abs() < 1e-12);
+        // Ordering: conditioned < virgin < bleached < bleached twice, dry and wet, both contacts.
+        for w in [0.0, 1.0] {
+            for c in [Contact::Fibre, Contact::Tool] {
+                let order: Vec<f64> = [Treatment::Conditioned, Treatment::Virgin, Treatment::Bleached, Treatment::BleachedTwice].iter().map(|t| t.friction_factor(c, w)).collect();
+                assert!(order.windows(2).all(|p| p[0] < p[1]), "{order:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn names_round_trip_and_bad_ones_are_named() {
+        for t in Treatment::ALL {
+            assert_eq!(Treatment::by_name(t.name()).unwrap(), t);
+            let toml_text = format!("t = {:?}", t.name());
+            #[derive(serde::Deserialize)]
+            struct Wrap {
+                t: Treatment,
+            }
+            assert_eq!(toml::from_str::<Wrap>(&toml_text).unwrap().t, t);
+        }
+        let e = Treatment::by_name("permed").unwrap_err();
+        assert!(e.contains("permed") && e.contains("bleached-twice"), "{e}");
+        assert!(Treatment::Bleached.friction(&WetnessModel::default(), Contact::Tool, 0.2, f64::NAN).is_err());
+    }
+}

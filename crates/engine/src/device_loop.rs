@@ -13,6 +13,7 @@
 
 use crate::haptic::{DeviceSide, ProxyState, Published};
 use haptics::coupling::HairReaction;
+use haptics::local_model::FedModel;
 use haptics::device::{DeviceCommand, DeviceReading, HapticDevice};
 use haptics::haptic_loop::{Histogram, HapticLoop, LoopStats};
 use nalgebra::Vector3;
@@ -92,7 +93,7 @@ impl DeviceLoop {
     /// has published). `priority`: the device loop's real-time priority (`HapticLoop::spawn_with_priority`);
     /// the physics thread asks for the same.
     #[allow(clippy::too_many_arguments)]
-    pub fn spawn<P, R>(device: Box<dyn HapticDevice>, mut side: DeviceSide, first: Published, dt: f64, device_steps: usize, priority: Option<i32>, mut physics: P, on_refused: R) -> Result<Self, String>
+    pub fn spawn<P, R>(mut device: Box<dyn HapticDevice>, mut side: DeviceSide, first: Published, dt: f64, device_steps: usize, priority: Option<i32>, mut physics: P, on_refused: R) -> Result<Self, String>
     where
         P: FnMut(&Handover) -> Published + Send + 'static,
         R: Fn(String) + Send + Clone + 'static,
@@ -148,7 +149,8 @@ impl DeviceLoop {
             })
             .map_err(|e| format!("cannot start the physics thread: {e}"))?;
 
-        // Device loop.
+        // Device loop. A device that forwards the model (the UDP device's version-2 answers) gets each new one.
+        let mut feed = device.model_feed();
         let waker = physics_thread.thread().clone();
         let (waits_d, stalls_d) = (waits.clone(), stalls.clone());
         let h = dt / device_steps as f64;
@@ -174,6 +176,9 @@ impl DeviceLoop {
                     }
                 }
                 published = *pub_out.read();
+                if let Some(f) = feed.as_mut() {
+                    f.publish(FedModel { number: published.step, valid_for: dt, hair: published.model, coupling: side.coupling.params });
+                }
                 hand_in.write(Handover { period: k, proxy: side.proxy_state(), readings, count, force });
                 handed.store(k, Ordering::Release);
                 waker.unpark();

@@ -30,6 +30,11 @@ pub trait HapticDevice: Send {
     fn read(&mut self, time: f64) -> Option<DeviceReading>;
     /// Sends a force and torque to the device.
     fn write(&mut self, command: &DeviceCommand);
+    /// A feed through which the device loop gives the device each new local force model, for a device that
+    /// forwards it (the UDP device's version-2 answers); None (the default) for the others.
+    fn model_feed(&mut self) -> Option<crate::local_model::ModelFeed> {
+        None
+    }
 }
 
 /// A boxed device is a device (the live session holds the mouse's or a UDP device behind one type).
@@ -39,6 +44,9 @@ impl<T: HapticDevice + ?Sized> HapticDevice for Box<T> {
     }
     fn write(&mut self, command: &DeviceCommand) {
         (**self).write(command)
+    }
+    fn model_feed(&mut self) -> Option<crate::local_model::ModelFeed> {
+        (**self).model_feed()
     }
 }
 

@@ -63,6 +63,11 @@ pub struct DeviceSimArgs {
     /// Send nothing from START for LENGTH s: `START:LENGTH` (repeatable).
     #[arg(long)]
     pub pause: Vec<String>,
+    /// Speak protocol version 2 (CFP2 poses, answers with the local force model) and render the model at
+    /// `--rate` with the device's own coupling, as a device program would (docs/protocol.md); the trace's
+    /// hx,hy,hz columns are the force the hand felt.
+    #[arg(long)]
+    pub render: bool,
 }
 
 /// Runs `coiffure device-sim`.
@@ -96,6 +101,7 @@ pub fn run(args: &DeviceSimArgs) -> anyhow::Result<()> {
         profile,
         workspace,
         faults: Faults { loss: args.loss, seed: args.seed, nan_at: args.nan_at.clone(), teleport_at: args.teleport_at.clone(), duplicate_at: args.duplicate_at.clone(), pause },
+        render: args.render,
     };
     let rows = sim::run(server, &|t| scenario.reading(t), &params).map_err(|e| anyhow!(e))?;
     if let Some(out) = &args.out {

@@ -310,7 +310,7 @@ impl LiveScenario {
         let mut params = SessionParams { profile, device_rate_hz: self.live.device_rate, ..SessionParams::default() };
         params.haptic.hair_contact = self.live.hair_contact;
         params.haptic.treatment = self.live.treatment;
-        params.validate().map_err(|e| ScenarioError::Invalid(format!("live.device_rate: {e}")))?;
+        params.validate().map_err(|e| ScenarioError::Invalid(format!("live session (live.device_rate and the rest): {e}")))?;
         let sim = |e: crate::error::SessionError| ScenarioError::Invalid(format!("live session: {e}"));
         let mut ls = Lockstep::new(scene.clone(), params, params.haptic_rate_hz).map_err(sim)?;
         ls.global.set_wetness(self.live.wetness);

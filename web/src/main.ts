@@ -44,6 +44,8 @@ interface Status {
   fit: P.FitMsg | null; // how the last loaded hairstyle was placed on the head (FIT)
   device: P.DeviceMsg | null; // the haptic device's stream (DEVICE; null without `serve --device`)
   runaways: number; // runaway-guard resets of the tool proxy since the session started (FRAME; should stay 0)
+  treatment: string; // the session's surface treatment as its FRAME reports it (P.TREATMENTS; '' before one)
+  toolFriction: number; // the tool-hair friction coefficient the session uses (FRAME; NaN before one)
   toolPosition: [number, number, number]; // the tool proxy of the last FRAME (m, world)
   headPosition: [number, number, number]; // the head pose of the last FRAME (m; head frame to world)
   headQuaternion: [number, number, number, number]; // x, y, z, w
@@ -61,6 +63,7 @@ interface Status {
 const canvas = document.getElementById('view') as HTMLCanvasElement;
 const statusEl = document.getElementById('status') as HTMLSpanElement;
 const healthEl = document.getElementById('health') as HTMLSpanElement;
+const treatmentEl = document.getElementById('treatment') as HTMLSelectElement;
 const view = new View(canvas);
 const plot = new ForcePlot(document.getElementById('plot') as HTMLCanvasElement);
 const device = new MouseDevice(view.camera, canvas);
@@ -68,7 +71,7 @@ const device = new MouseDevice(view.camera, canvas);
 const status: Status = {
   webgl2: view.renderer.getContext() instanceof WebGL2RenderingContext,
   connected: false, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
-  runaways: 0, lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], frameTimes: [], strands: 0,
+  runaways: 0, treatment: '', toolFriction: NaN, lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], frameTimes: [], strands: 0,
   gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairColour: DEFAULT_HAIR_COLOUR,
   get hairDrawCalls() { return view.hairDrawCalls; },
   get hairSegmentsPerCall() { return view.hairSegmentsPerCall; },
@@ -253,6 +256,15 @@ function onFrame(f: P.FrameMsg): void {
   status.lastForce = fm;
   status.peakForce = Math.max(status.peakForce, fm);
   status.contacts = f.contacts;
+  if (f.treatment >= 0) {
+    const name = P.TREATMENTS[f.treatment] ?? `treatment ${f.treatment}`;
+    if (name !== status.treatment || f.toolFriction !== status.toolFriction) {
+      status.treatment = name;
+      status.toolFriction = f.toolFriction;
+      treatmentEl.title = `surface treatment: ${name}, tool friction ${f.toolFriction.toFixed(3)} (docs/treatment.md)`;
+      if (document.activeElement !== treatmentEl) treatmentEl.value = String(f.treatment);
+    }
+  }
   if (f.runaways !== status.runaways) {
     status.runaways = f.runaways;
     healthEl.textContent = f.runaways > 0 ? `proxy resets: ${f.runaways}` : '';
@@ -323,6 +335,7 @@ function sendHair(): void {
   status.send(P.encodeSetHair(Number(presetEl.value) || 0, c, Number(easeEl.value)));
 }
 [presetEl, curlEl, easeEl].forEach((e) => e.addEventListener('change', sendHair));
+treatmentEl.addEventListener('change', () => status.send(P.encodeSetTreatment(Number(treatmentEl.value) || 0)));
 curlEl.addEventListener('input', () => { if (view.hair) view.hair.material.uniforms.curliness.value = Number(curlEl.value); });
 document.getElementById('reset')!.addEventListener('click', () => {
   status.send(P.encodeEmpty(P.Client.RESET));

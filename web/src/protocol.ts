@@ -12,7 +12,11 @@ export const Client = {
   SAVE: 0x07,
   PING: 0x08,
   HEAD: 0x09,
+  SET_TREATMENT: 0x0A,
 } as const;
+
+/** The hair's surface treatments by wire id (SET_TREATMENT, FRAME; `tools::treatment::Treatment::ALL`). */
+export const TREATMENTS = ['virgin', 'conditioned', 'bleached', 'bleached-twice'] as const;
 
 export const Server = {
   SCENE: 0x81,
@@ -154,6 +158,9 @@ export interface FrameMsg {
   headQuaternion: [number, number, number, number]; // x, y, z, w
   // --- proxy health (issue 16) ---
   runaways: number; // steps in which the runaway guard put the tool proxy back on the device (0 from older servers)
+  // --- the hair's surface (issue 29) ---
+  treatment: number; // the session's surface treatment (index into TREATMENTS; -1 from older servers)
+  toolFriction: number; // the tool-hair friction coefficient in use (NaN from older servers)
 }
 
 export interface ErrorMsg { code: number; message: string }
@@ -246,7 +253,11 @@ export function decodeFrame(buf: ArrayBuffer): FrameMsg {
   const headQuaternion: [number, number, number, number] = [f32(), f32(), f32(), f32()];
   // --- proxy health (issue 16): older servers end at the head pose ---
   const runaways = o + 4 <= buf.byteLength ? u32() : 0;
-  return { seq, time, tool, youControl, contacts, toolPosition, toolQuaternion, devicePosition, force, latticeVersion, nodes, active, samples, displacement, wetness, keptVersion, chainCounts, chainPoints, headPosition, headQuaternion, runaways };
+  // --- the hair's surface (issue 29): older servers end at the runaways ---
+  const surface = o + 5 <= buf.byteLength;
+  const treatment = surface ? new DataView(buf).getUint8(o++) : -1;
+  const toolFriction = surface ? f32() : NaN;
+  return { seq, time, tool, youControl, contacts, toolPosition, toolQuaternion, devicePosition, force, latticeVersion, nodes, active, samples, displacement, wetness, keptVersion, chainCounts, chainPoints, headPosition, headQuaternion, runaways, treatment, toolFriction };
 }
 
 // --- STRANDS (issue 5: scissors) ---
@@ -300,6 +311,13 @@ export function encodeSetHair(type: number, curliness: number, ease: number): Ar
   v.setUint8(2, type);
   v.setFloat32(3, curliness, true);
   v.setFloat32(7, ease, true);
+  return b;
+}
+
+/** SET_TREATMENT: the hair's surface treatment (index into TREATMENTS). */
+export function encodeSetTreatment(treatment: number): ArrayBuffer {
+  const [b, v] = header(Client.SET_TREATMENT, 1);
+  v.setUint8(2, treatment);
   return b;
 }
 

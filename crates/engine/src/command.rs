@@ -17,6 +17,9 @@ pub enum Command {
         /// Combing ease in [0, 1]: scales the friction coefficient by (1 - 0.8 ease).
         combing_ease: f64,
     },
+    /// The hair's surface treatment (`tools::treatment::Treatment`: the friction of the tool and of fibre on
+    /// fibre, dry and wet), as `HapticParams::treatment` and a tress scenario's `[patch] treatment`.
+    SetTreatment(tools::treatment::Treatment),
     /// Put every strand, the lattice, the cuts and the wetness back to the start.
     Reset,
     /// Move the head (the paper's Spaceball): the head frame's pose in the world, its origin at `position`

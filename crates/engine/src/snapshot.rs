@@ -54,4 +54,9 @@ pub struct HapticSnapshot {
     /// Steps in which the runaway guard put the tool proxy back on the device (`HapticCore::runaways`,
     /// `HapticParams::max_proxy_lag`), since the session started.
     pub runaways: u64,
+    /// The hair's surface treatment (`HapticParams::treatment`, set by [`crate::command::Command::SetTreatment`]).
+    pub treatment: tools::treatment::Treatment,
+    /// The tool-hair friction coefficient in use (the hair type's, with the treatment, the wetness of the
+    /// simulated strands and the combing ease; 0 for the paper's force model).
+    pub tool_friction: f64,
 }

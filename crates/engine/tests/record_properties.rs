@@ -36,6 +36,7 @@ fn command() -> impl Strategy<Value = Command> {
         Just(Command::Reset),
         (v3(), v3()).prop_map(|(position, rotation)| Command::SetHead { position, rotation }),
         any::<u32>().prop_map(Command::LimitStrands),
+        prop::sample::select(tools::treatment::Treatment::ALL.to_vec()).prop_map(Command::SetTreatment),
     ]
 }
 

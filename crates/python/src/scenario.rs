@@ -90,6 +90,15 @@ fn output_to_py<'py>(py: Python<'py>, name: &str, out: &ScenarioOutput) -> PyRes
         g.set_item("mean_tip_z", col(&|r| r.mean_tip_z))?;
         d.set_item("global", g)?;
     }
+    if !out.profile.is_empty() {
+        let p = &out.profile;
+        let c = PyDict::new(py);
+        c.set_item("stroke", p.stroke.iter().map(|&s| s as i64).collect::<Vec<_>>().into_pyarray(py))?;
+        c.set_item("t", p.t.clone().into_pyarray(py))?;
+        c.set_item("position_m", p.position_m.clone().into_pyarray(py))?;
+        c.set_item("force_n", p.force_n.clone().into_pyarray(py))?;
+        d.set_item("profile", c)?;
+    }
     if let Some((style, pieces)) = &out.hair {
         d.set_item("hairstyle", curves_to_py(py, style)?)?;
         d.set_item("pieces", curves_to_py(py, pieces)?)?;

@@ -55,6 +55,23 @@ def write_toml(path, d: dict) -> None:
     path.write_text(text)
 
 
+def assert_same(got, want, key: str) -> None:
+    """`got` equals `want` (summary.json values: strings exactly, numbers to 1e-12 relative, dicts and lists entry
+    by entry)."""
+    if isinstance(want, dict):
+        assert set(got) == set(want), key
+        for k in want:
+            assert_same(got[k], want[k], f"{key}.{k}")
+    elif isinstance(want, list):
+        assert len(got) == len(want), key
+        for i, (g, w) in enumerate(zip(got, want)):
+            assert_same(g, w, f"{key}[{i}]")
+    elif isinstance(want, str):
+        assert got == want, key
+    else:
+        assert got == pytest.approx(want, rel=1e-12), key
+
+
 def test_scenario_arrays_equal_the_cli_force_csv(cli, tmp_path):
     scenario = small_comb()
     toml_path = tmp_path / "small.toml"
@@ -75,13 +92,17 @@ def test_scenario_arrays_equal_the_cli_force_csv(cli, tmp_path):
         assert np.all(np.abs(got - csv[:, 1:7]) <= 5e-7 * np.abs(csv[:, 1:7]) + 1e-300)
         assert np.array_equal(r["contacts"], csv[:, 7].astype(np.int64))
         assert np.allclose(r["tool"], csv[:, 8:11], rtol=5e-7, atol=0)
-        # The summary is the CLI's summary.json.
+        # The summary is the CLI's summary.json (nested dicts and lists, such as the combing figures per stroke,
+        # compared entry by entry).
         summary = json.loads((tmp_path / "cli" / "summary.json").read_text())
         for k, v in summary.items():
-            if isinstance(v, str):
-                assert r["summary"][k] == v, k
-            elif "wall" not in k:
-                assert r["summary"][k] == pytest.approx(v, rel=1e-12), k
+            if "wall" not in k:
+                assert_same(r["summary"][k], v, k)
+        # The combing rig's recording is the CLI's profile.csv (t to 4 decimals, the rest to 7 digits).
+        prof = np.loadtxt(tmp_path / "cli" / "profile.csv", delimiter=",", skiprows=1)
+        p = r["profile"]
+        assert np.array_equal(p["stroke"], prof[:, 0].astype(np.int64)) and np.allclose(p["t"], prof[:, 1], rtol=0, atol=5e-5)
+        assert np.allclose(p["position_m"], prof[:, 2], rtol=5e-7, atol=0) and np.allclose(p["force_n"], prof[:, 3], rtol=5e-7, atol=1e-300)
         # Peak force = the largest |force| of the trace.
         peak = next(v for k, v in r["summary"].items() if k.startswith("peak_force"))
         assert peak == pytest.approx(np.linalg.norm(r["force"], axis=1).max(), rel=1e-12)

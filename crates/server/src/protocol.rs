@@ -31,6 +31,9 @@ pub mod client {
     /// Move the head: 3 f32 position of the head frame's origin (m, at most 1 m from the origin), 3 f32
     /// rotation vector (axis times angle, rad, at most pi).
     pub const HEAD: u8 = 0x09;
+    /// u8 surface treatment (`tools::treatment::Treatment::id`: 0 virgin, 1 conditioned, 2 bleached, 3
+    /// bleached twice).
+    pub const SET_TREATMENT: u8 = 0x0A;
 }
 
 /// Server -> client message types.
@@ -169,6 +172,12 @@ pub fn parse_client(b: &[u8]) -> Result<ClientMessage, WireError> {
                 return Err(err(code::MALFORMED, "SET_HAIR holds a non-finite number".into()));
             }
             Ok(ClientMessage::Command(Command::SetHair { hair_type: p[0], curliness: c.clamp(0.0, 1.0), combing_ease: e.clamp(0.0, 1.0) }))
+        }
+        client::SET_TREATMENT => {
+            need(1, "SET_TREATMENT")?;
+            let t = tools::treatment::Treatment::from_id(p[0])
+                .ok_or_else(|| err(code::MALFORMED, format!("SET_TREATMENT treatment {} unknown (0-{})", p[0], tools::treatment::Treatment::ALL.len() - 1)))?;
+            Ok(ClientMessage::Command(Command::SetTreatment(t)))
         }
         client::RESET => need(0, "RESET").map(|_| ClientMessage::Command(Command::Reset)),
         client::LOAD => {
@@ -470,6 +479,9 @@ pub fn encode_frame(seq: u32, lat: &LatticeSnapshot, h: &HapticSnapshot) -> Vec<
     }
     // --- proxy health (issue 16): runaway-guard resets since the session started ---
     w.u32(h.runaways.min(u32::MAX as u64) as u32);
+    // --- the hair's surface (issue 29): treatment id, the tool-hair friction coefficient in use ---
+    w.u8(h.treatment.id());
+    w.f32(h.tool_friction);
     w.0
 }
 
@@ -552,14 +564,16 @@ mod tests {
         assert_eq!((f32_at(4), f32_at(8)), (0.5, 0.25));
         assert_eq!((u32_at(12), u32_at(16), u32_at(20), u32_at(24)), (2, 2, 2, 1));
         assert_eq!((f32_at(28), f32_at(28 + 8 * 4)), (1.0, 9.0));
-        assert_eq!(tail.len(), 28 + 9 * 4 + 28 + 4, "chains, the head pose, the runaway count");
-        assert_eq!(u32::from_le_bytes(f[f.len() - 4..].try_into().unwrap()), 0);
-        // The head pose follows the chains: 3 f32 position, 4 f32 quaternion (x, y, z, w); then u32 runaways.
-        let h = HapticSnapshot { runaways: 7, ..h };
+        assert_eq!(tail.len(), 28 + 9 * 4 + 28 + 4 + 5, "chains, the head pose, the runaway count, the hair's surface");
+        assert_eq!(u32::from_le_bytes(f[f.len() - 9..f.len() - 5].try_into().unwrap()), 0);
+        // The head pose follows the chains: 3 f32 position, 4 f32 quaternion (x, y, z, w); then u32 runaways;
+        // then u8 treatment and f32 tool friction.
+        let h = HapticSnapshot { runaways: 7, treatment: tools::treatment::Treatment::Bleached, tool_friction: 0.375, ..h };
         let lat = LatticeSnapshot { head: nalgebra::Isometry3::new(Vector3::new(0.01, 0.02, 0.03), Vector3::new(0.0, 0.0, 0.5)), ..lat };
         let f = encode_frame(1, &lat, &h);
-        assert_eq!(u32::from_le_bytes(f[f.len() - 4..].try_into().unwrap()), 7);
-        let end: Vec<f32> = (0..7).map(|k| f32::from_le_bytes(f[f.len() - 32 + 4 * k..f.len() - 28 + 4 * k].try_into().unwrap())).collect();
+        assert_eq!(u32::from_le_bytes(f[f.len() - 9..f.len() - 5].try_into().unwrap()), 7);
+        assert_eq!((f[f.len() - 5], f32::from_le_bytes(f[f.len() - 4..].try_into().unwrap())), (2, 0.375));
+        let end: Vec<f32> = (0..7).map(|k| f32::from_le_bytes(f[f.len() - 37 + 4 * k..f.len() - 33 + 4 * k].try_into().unwrap())).collect();
         let want = [0.01, 0.02, 0.03, 0.0, 0.0, (0.25f64).sin(), (0.25f64).cos()];
         assert!(end.iter().zip(want).all(|(a, b)| (*a as f64 - b).abs() < 1e-6), "{end:?}");
         // HEAD: 6 f32; a turn of more than pi or a NaN is refused.
@@ -570,6 +584,12 @@ mod tests {
         }
         assert_eq!(head([0.0, 0.0, 0.0, 0.0, 0.0, 4.0]).unwrap_err().code, code::MALFORMED);
         assert_eq!(head([f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap_err().code, code::MALFORMED);
+        // SET_TREATMENT: one byte, a known treatment id.
+        for t in tools::treatment::Treatment::ALL {
+            assert_eq!(parse_client(&[client::SET_TREATMENT, VERSION, t.id()]).unwrap(), ClientMessage::Command(Command::SetTreatment(t)));
+        }
+        assert!(parse_client(&[client::SET_TREATMENT, VERSION, 4]).unwrap_err().message.contains("treatment 4 unknown"));
+        assert_eq!(parse_client(&[client::SET_TREATMENT, VERSION]).unwrap_err().code, code::MALFORMED);
         // A finite but absurd POSE (1e30 m) is out of range.
         let mut pose = vec![client::POSE, VERSION];
         [1e30f32, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0].iter().for_each(|x| pose.extend_from_slice(&x.to_le_bytes()));

@@ -69,6 +69,16 @@ impl Treatment {
         }
     }
 
+    /// The treatment's wire id (viewer protocol, records): its index in [`Treatment::ALL`].
+    pub fn id(self) -> u8 {
+        Self::ALL.iter().position(|&t| t == self).expect("every treatment is in ALL") as u8
+    }
+
+    /// The treatment of wire id `id` ([`Treatment::id`]), if there is one.
+    pub fn from_id(id: u8) -> Option<Self> {
+        Self::ALL.get(id as usize).copied()
+    }
+
     /// The treatment named `name` (as [`Treatment::name`]), or an error listing the names.
     pub fn by_name(name: &str) -> Result<Self, String> {
         Self::ALL.into_iter().find(|t| t.name() == name).ok_or_else(|| {

@@ -236,6 +236,13 @@ impl HapticCore {
                 self.combing_ease = e;
                 self.renew_interaction(Vec::new());
             }
+            Command::SetTreatment(t) => {
+                // The frictions follow (`force_model`, `fibre_friction`); the strands keep their shape.
+                self.clear_active();
+                self.clipped = false;
+                self.params.haptic.treatment = t;
+                self.renew_interaction(Vec::new());
+            }
             Command::SetHead { position, rotation } => {
                 // Out of range or non-finite: ignored (the server checks and answers before).
                 if let Some(head) = crate::command::head_pose(&position, &rotation) {
@@ -427,6 +434,11 @@ impl HapticCore {
         out.contacts = self.last_contacts;
         out.lattice_version = lattice.version;
         out.runaways = self.runaways;
+        out.treatment = self.params.haptic.treatment;
+        out.tool_friction = match self.interaction.model {
+            tools::interaction::ForceModel::Constraint { friction, .. } => friction,
+            _ => 0.0,
+        };
         out.active.clear();
         out.displacement.clear();
         let ok = lattice.positions.len() == self.scene.lattice.node_count();

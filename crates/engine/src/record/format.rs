@@ -81,6 +81,7 @@ impl Record {
                         b.push(4);
                         b.extend_from_slice(&n.to_le_bytes());
                     }
+                    Command::SetTreatment(t) => b.extend_from_slice(&[5, t.id()]),
                 }
             }
         }
@@ -168,6 +169,10 @@ impl Record {
                     2 => Command::Reset,
                     3 => Command::SetHead { position: Vector3::new(r.f64()?, r.f64()?, r.f64()?), rotation: Vector3::new(r.f64()?, r.f64()?, r.f64()?) },
                     4 => Command::LimitStrands(r.u32()?),
+                    5 => {
+                        let id = r.u8()?;
+                        Command::SetTreatment(tools::treatment::Treatment::from_id(id).ok_or(RecordError::Bad { offset: at + 1, what: format!("treatment id {id}") })?)
+                    }
                     k => return Err(RecordError::Bad { offset: at, what: format!("command kind {k}") }),
                 });
             }

@@ -22,7 +22,9 @@ def run_scenario(
 
     Returns a dict of numpy arrays, one row per recorded step: ``t`` (T,) s; ``force`` (T, 3) N and ``torque``
     (T, 3) N m on the tool; ``contacts`` (T,); ``tool`` (T, 3) tool position, m; plus ``summary`` (the contents
-    of ``summary.json``), ``kind`` and ``name``. Nothing is written unless ``out`` names a folder, which then
+    of ``summary.json``), ``kind`` and ``name``. A tress scenario also gives ``profile``, the combing rig's
+    recording (``profile.csv``): a dict of arrays ``stroke`` (from 1), ``t`` (s), ``position_m`` (the comb's
+    position from the roots along the tress, m) and ``force_n`` (N), one entry per step of each stroke. Nothing is written unless ``out`` names a folder, which then
     receives exactly what ``coiffure run SCENARIO --out DIR`` writes.
 
     ``base_dir``: where a dict's relative file names (``tool.shape`` files, ``tool.path_file``) are looked up

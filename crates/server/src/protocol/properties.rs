@@ -9,7 +9,7 @@ use proptest::prelude::*;
 
 /// Known types (and a few unknown ones) with the right version most of the time.
 fn header() -> impl Strategy<Value = (u8, u8)> {
-    let kind = prop_oneof![9 => 0x01u8..=0x09, 1 => any::<u8>()];
+    let kind = prop_oneof![9 => 0x01u8..=0x0A, 1 => any::<u8>()];
     let version = prop_oneof![9 => Just(VERSION), 1 => any::<u8>()];
     (kind, version)
 }
@@ -43,10 +43,10 @@ proptest! {
         match parse_client(&b) {
             Err(e) => {
                 prop_assert!(!e.message.is_empty());
-                let want = if b.len() < 2 { code::MALFORMED } else if b[1] != VERSION { code::BAD_VERSION } else if !(0x01..=0x09).contains(&b[0]) { code::UNKNOWN_TYPE } else { code::MALFORMED };
+                let want = if b.len() < 2 { code::MALFORMED } else if b[1] != VERSION { code::BAD_VERSION } else if !(0x01..=0x0A).contains(&b[0]) { code::UNKNOWN_TYPE } else { code::MALFORMED };
                 prop_assert_eq!(e.code, want, "{}", e.message);
                 // A malformed message's error names its type (the others name the version or the type byte).
-                const NAMES: [&str; 9] = ["POSE", "TAKE_CONTROL", "SELECT_TOOL", "SET_HAIR", "RESET", "LOAD", "SAVE", "PING", "HEAD"];
+                const NAMES: [&str; 10] = ["POSE", "TAKE_CONTROL", "SELECT_TOOL", "SET_HAIR", "RESET", "LOAD", "SAVE", "PING", "HEAD", "SET_TREATMENT"];
                 if want == code::MALFORMED && b.len() >= 2 {
                     prop_assert!(e.message.contains(NAMES[b[0] as usize - 1]), "{}", e.message);
                 }
@@ -62,6 +62,7 @@ proptest! {
                 prop_assert!((hair_type as usize) < strand::HairType::ALL.len());
                 prop_assert!((0.0..=1.0).contains(&curliness) && (0.0..=1.0).contains(&combing_ease));
             }
+            Ok(ClientMessage::Command(Command::SetTreatment(t))) => prop_assert_eq!(tools::treatment::Treatment::from_id(b[2]), Some(t)),
             Ok(ClientMessage::Command(Command::SetHead { position, rotation })) => {
                 prop_assert!(engine::command::head_pose(&position, &rotation).is_some());
             }

@@ -81,5 +81,5 @@ fn the_rigid_hand_follows_the_path_and_faults_are_flagged() {
     assert!(s.sent >= 195 && s.sent <= 205, "{}", s.sent);
     assert_eq!(s.answered, s.sent);
     let csv = sim::to_csv(&rows);
-    assert!(csv.starts_with("t,x,y,z,fx,fy,fz,latency_us,flags\n") && csv.lines().count() == rows.len() + 1);
+    assert!(csv.starts_with("t,x,y,z,fx,fy,fz,latency_us,flags,hx,hy,hz\n") && csv.lines().count() == rows.len() + 1);
 }

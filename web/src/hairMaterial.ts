@@ -91,7 +91,6 @@ void main() {
 `;
 
 const shadowVertex = /* glsl */ `
-#define HAIR_NO_TANGENT
 ${hairDeformGLSL}
 varying float vCut;
 void main() {
@@ -122,6 +121,8 @@ export class HairMaterial {
   readonly displacementTexture: THREE.DataTexture;
   readonly stateTexture: THREE.DataTexture;
   readonly clumpTexture: THREE.DataTexture;
+  /** Every render vertex's rest position (head frame), for the carried strand's follow-the-leader. */
+  readonly restTexture: THREE.DataTexture;
   readonly params: HairLookParams;
   /** Hairs one render strand stands for (>= 1). */
   readonly hairsPerStrand: number;
@@ -144,6 +145,7 @@ export class HairMaterial {
     this.displacementTexture = floatTexture(this.samples, Math.max(1, scene.guides));
     this.stateTexture = floatTexture(Math.max(1, scene.guides), 1);
     this.clumpTexture = clumpCentres(scene);
+    this.restTexture = restPositions(scene);
     this.resetGuides();
     const deform: Record<string, THREE.IUniform> = {
       latticeNodes: { value: this.latticeTexture },
@@ -159,6 +161,11 @@ export class HairMaterial {
       verticesPerStrand: { value: scene.verticesPerStrand },
       clumpStrength: { value: p.clumpStrength },
       wetnessOverride: { value: -1 },
+      headRotation: { value: new THREE.Matrix3() },
+      headTranslation: { value: new THREE.Vector3() },
+      rootHold: { value: scene.rootHold },
+      restPositions: { value: this.restTexture },
+      restWidth: { value: this.restTexture.image.width },
       ...pushOutUniforms(scene),
     };
     this.material = new THREE.ShaderMaterial({
@@ -212,9 +219,11 @@ export class HairMaterial {
   /** The body's metaballs at rest (head frame), captured before the first head move. */
   private restBalls: THREE.Vector4[] | null = null;
 
-  /** The head pose (head frame to world): the push-out's metaballs move with it (the lattice nodes already
-   * come in the world frame). */
+  /** The head pose (head frame to world): the roots move with it (the carried hair's law) and so do the
+   * push-out's metaballs (the lattice nodes already come in the world frame). */
   setHead(p: THREE.Vector3, q: THREE.Quaternion): void {
+    (this.material.uniforms.headRotation.value as THREE.Matrix3).setFromMatrix4(new THREE.Matrix4().makeRotationFromQuaternion(q));
+    (this.material.uniforms.headTranslation.value as THREE.Vector3).copy(p);
     const balls = this.material.uniforms.metaballs.value as THREE.Vector4[];
     if (!this.restBalls) this.restBalls = balls.map((b) => b.clone());
     const c = new THREE.Vector3();
@@ -259,7 +268,7 @@ export class HairMaterial {
 
   /** Frees the textures and the materials' programs (a new SCENE replaces them). */
   dispose(): void {
-    for (const t of [this.latticeTexture, this.displacementTexture, this.stateTexture, this.clumpTexture]) t.dispose();
+    for (const t of [this.latticeTexture, this.displacementTexture, this.stateTexture, this.clumpTexture, this.restTexture]) t.dispose();
     for (const m of [this.material, this.depthMaterial, this.opacityMaterial]) m.dispose();
   }
 
@@ -313,6 +322,20 @@ function clumpCentres(scene: SceneMsg): THREE.DataTexture {
   }
   for (let o = 0; o < d.length; o += 4) {
     if (d[o + 3] > 0) { d[o] /= d[o + 3]; d[o + 1] /= d[o + 3]; d[o + 2] /= d[o + 3]; }
+  }
+  return t;
+}
+
+/** Every render vertex's rest position (head frame, m): texel (v % width, v / width) for vertex v, width at
+ * most 4096 (WebGL2 guarantees textures that wide). */
+function restPositions(scene: SceneMsg): THREE.DataTexture {
+  const n = Math.max(1, scene.strands * scene.verticesPerStrand);
+  const w = Math.min(4096, n);
+  const t = floatTexture(w, Math.ceil(n / w));
+  const d = t.image.data as Float32Array;
+  const pos = scene.renderPositions;
+  for (let v = 0; v < pos.length / 3; v++) {
+    d[4 * v] = pos[3 * v]; d[4 * v + 1] = pos[3 * v + 1]; d[4 * v + 2] = pos[3 * v + 2];
   }
   return t;
 }

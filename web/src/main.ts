@@ -98,6 +98,8 @@ const status: Status = {
 (window as unknown as { coiffure: Status }).coiffure = status;
 
 // Tool, force arrow, device ghost.
+/** Where the nozzle tools' nozzle is behind the tool point, m (SCENE). */
+let nozzleStandoff = 0.15;
 let toolGroup = toolModel(0);
 view.scene.add(toolGroup);
 const arrow = new THREE.ArrowHelper(new THREE.Vector3(0, 0, 1), new THREE.Vector3(), 0.05, 0xff5533, 0.012, 0.008);
@@ -189,6 +191,10 @@ function onScene(msg: P.SceneMsg): void {
   status.hairTypes = msg.hairTypes.map((name, i) => ({ name, diameter: msg.hairTypeDiameter[i], ellipticity: msg.hairTypeEllipticity[i] }));
   status.sceneLoaded = true;
   restNodes = null;
+  if (msg.nozzleStandoff !== nozzleStandoff) {
+    nozzleStandoff = msg.nozzleStandoff;
+    setTool(status.tool, false);
+  }
 }
 
 // --- scissors (issue 5): shortened strands ---
@@ -291,7 +297,7 @@ function onFrame(f: P.FrameMsg): void {
 function setTool(t: number, send: boolean): void {
   status.tool = t;
   view.scene.remove(toolGroup);
-  toolGroup = toolModel(t);
+  toolGroup = toolModel(t, nozzleStandoff);
   view.scene.add(toolGroup);
   document.querySelectorAll<HTMLButtonElement>('#tools button').forEach((b) => b.classList.toggle('active', Number(b.dataset.tool) === t));
   if (send) status.send(P.encodeSelectTool(t));
@@ -430,6 +436,9 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
 (window as unknown as { coiffureDebug: unknown }).coiffureDebug = {
   /** Stops (true) or resumes (false) drawing; the session, the pointer and the messages go on. */
   holdFrames(on: boolean): void { framesHeld = on; },
+  /** Lets the tool's button go where the tool is (the mouse's release would lift it to the lifted plane): a
+   * nozzle stops blowing and stays there. */
+  releaseButton(): void { device.pressed = false; sendPose(); },
   project(x: number, y: number, z: number): [number, number] {
     const v = new THREE.Vector3(x, y, z).project(view.camera);
     const r = canvas.getBoundingClientRect();

@@ -125,6 +125,8 @@ export interface SceneMsg {
   metaballs: Float32Array; // M x (cx, cy, cz, R), m
   metaballThreshold: number;
   pushOutSkin: number; // m
+  rootHold: number; // m: length of hair from the root the head holds (engine::scene::carried); 0 from older servers
+  nozzleStandoff: number; // m: the nozzle of the dryer and the sprayer, behind the tool point along the tool's +z
   renderGuide: Uint32Array; // guidesPerStrand per strand, nearest first
   renderWeight: Float32Array; // guidesPerStrand per strand, summing to 1
   renderSpan: Float32Array; // per strand: fraction of the guides' length it spans
@@ -216,7 +218,10 @@ export function decodeScene(buf: ArrayBuffer): SceneMsg {
   const sections = f32s(buf, o, 2 * nTypes); o += 8 * nTypes;
   const hairTypeDiameter = new Float32Array(nTypes), hairTypeEllipticity = new Float32Array(nTypes);
   for (let i = 0; i < nTypes; i++) { hairTypeDiameter[i] = sections[2 * i]; hairTypeEllipticity[i] = sections[2 * i + 1]; }
-  return { verticesPerStrand, strands, guidesPerStrand, guides, samples, latticeDims, latticeOrigin, latticeH, hairTypes, hairType, headPositions, headIndices, renderPositions, renderGuide, renderWeight, renderSpan, metaballs, metaballThreshold, pushOutSkin, hairTypeDiameter, hairTypeEllipticity };
+  // Appended block (older servers end here): the root hold and the nozzle standoff.
+  let rootHold = 0, nozzleStandoff = 0.15;
+  if (o + 8 <= buf.byteLength) { rootHold = f32(); nozzleStandoff = f32(); }
+  return { verticesPerStrand, strands, guidesPerStrand, guides, samples, latticeDims, latticeOrigin, latticeH, hairTypes, hairType, headPositions, headIndices, renderPositions, renderGuide, renderWeight, renderSpan, metaballs, metaballThreshold, pushOutSkin, hairTypeDiameter, hairTypeEllipticity, rootHold, nozzleStandoff };
 }
 
 export function decodeFrame(buf: ArrayBuffer): FrameMsg {

@@ -19,6 +19,8 @@ export const CAMERA_VIEWS = {
   /** From behind and a little above, where the hair hangs (the comb tests' view); the light from behind,
    * right and above, so the hanging hair shows its R highlight band. */
   back: { position: [0.3, -0.9, 0.22], target: [0, 0, -0.05], light: [0.7, -0.55, 0.3] },
+  /** From above and a little behind, looking down at the crown (a nozzle held there blows down on it). */
+  above: { position: [0.12, -0.3, 0.72], target: [0, 0, 0.03], light: [0.3, -0.4, 0.85] },
 } as const satisfies Record<string, { position: readonly [number, number, number]; target: readonly [number, number, number]; light: readonly [number, number, number] }>;
 export type CameraView = keyof typeof CAMERA_VIEWS;
 export const DEFAULT_VIEW: CameraView = 'portrait';

@@ -23,8 +23,10 @@ function box(w: number, h: number, d: number, x: number, y: number, z: number, c
   return m;
 }
 
-/** A display model of each tool in its own frame (x along the spine, teeth along -z, as the server's shapes). */
-export function toolModel(tool: number): THREE.Group {
+/** A display model of each tool in its own frame (x along the spine, teeth along -z, as the server's shapes).
+ * The dryer and the sprayer are drawn at their nozzle, `nozzleStandoff` m (SCENE) behind the tool point along
+ * +z, their jet along -z; the tool point, where the jet aims, is air: a small translucent marker shows it. */
+export function toolModel(tool: number, nozzleStandoff = 0.15): THREE.Group {
   const g = new THREE.Group();
   switch (tool) {
     case 0: // comb: spine and 25 teeth
@@ -41,10 +43,13 @@ export function toolModel(tool: number): THREE.Group {
       break;
     case 3: // dryer: nozzle pointing along -z
     case 4: { // sprayer
-      const cone = new THREE.Mesh(new THREE.ConeGeometry(0.02, 0.05, 16), new THREE.MeshStandardMaterial({ color: tool === 3 ? 0x5566cc : 0x33aadd }));
+      const colour = tool === 3 ? 0x5566cc : 0x33aadd;
+      const cone = new THREE.Mesh(new THREE.ConeGeometry(0.02, 0.05, 16), new THREE.MeshStandardMaterial({ color: colour }));
       cone.rotation.x = Math.PI / 2;
-      cone.position.z = 0.02;
+      cone.position.z = nozzleStandoff + 0.02;
       g.add(cone);
+      const aim = new THREE.Mesh(new THREE.SphereGeometry(0.004, 12, 8), new THREE.MeshBasicMaterial({ color: colour, transparent: true, opacity: 0.4, depthWrite: false }));
+      g.add(aim);
       break;
     }
     default: // clip

@@ -1,11 +1,11 @@
 //! How the global layer moves: the built-in hairstyle's lattice under a hand-held dryer and a head turn.
-//! Prints the largest displacement of the guides' points through the lattice (relative to the head, m)
+//! Prints the largest displacement of the guides' points carried by the head and the lattice (relative to the head, m)
 //! over time. Run: `cargo run --release -p coiffure-engine --example global_motion [-- STRANDS [side]]`
 //! (`side`: the dryer at the right side of the head, the live-dryer scenario's place, instead of behind it).
 
 use engine::global::GlobalCore;
 use engine::params::SessionParams;
-use engine::scene::{ffd_map, Scene, SceneOptions};
+use engine::scene::{Scene, SceneOptions};
 use engine::tool::{Tool, ToolInput};
 use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use std::sync::Arc;
@@ -13,7 +13,8 @@ use std::sync::Arc;
 fn displacement(core: &GlobalCore, settled: &[Vector3<f64>]) -> f64 {
     let s = core.scene();
     let inv = core.head_pose().inverse();
-    let pts = s.guides.iter().flat_map(|g| g.reference.iter().map(|p| ffd_map(&s.lattice.ffd, core.positions(), p)));
+    let head = core.head_pose();
+    let pts = (0..s.guides.len()).flat_map(|g| s.guide_points(core.positions(), &head, g));
     pts.zip(settled).map(|(p, q)| ((inv * nalgebra::Point3::from(p)).coords - q).norm()).fold(0.0, f64::max)
 }
 

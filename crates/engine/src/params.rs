@@ -345,11 +345,20 @@ pub struct HairLatticeParams {
     pub min_attachment: f64,
     /// Make the rest sag-free. Default true.
     pub sag_free: bool,
+    /// Length of hair from the root that the head holds (`Scene::root_hold`, the law `scene::carried`), m:
+    /// along it the carried hair goes from the head's rigid motion at the root to the lattice's motion
+    /// (`scene::root_hold_weight`, a smoothstep), so that roots stay on the scalp whatever the lattice does.
+    /// The scale on which a root's clamp dominates a hair's shape: the elastogravity length
+    /// (EI / (lambda g))^(1/3) (Goldstein, Warren and Ball, Phys. Rev. Lett. 108, 078101, 2012: "Shape of a
+    /// ponytail") is 4.0 cm for the caucasian preset (EI 2.9e-9 N m^2, 4.7 mg/m), and a dryer's 8 m/s jet (about
+    /// 5e-3 N per metre of hair) bends a clamped hair by its own length at (8 EI / q)^(1/3) = 1.7 cm from the
+    /// root. Default 0.03 (between the two).
+    pub root_hold: f64,
 }
 
 impl Default for HairLatticeParams {
     fn default() -> Self {
-        Self { stiffener_rate: 3600.0, stiffener_damping_rate: 60.0, bending_rate: 900.0, bending_damping_rate: 15.0, attachment_rate: 900.0, attachment_damping_rate: 90.0, min_attachment: 0.03, sag_free: true }
+        Self { stiffener_rate: 3600.0, stiffener_damping_rate: 60.0, bending_rate: 900.0, bending_damping_rate: 15.0, attachment_rate: 900.0, attachment_damping_rate: 90.0, min_attachment: 0.03, sag_free: true, root_hold: 0.03 }
     }
 }
 

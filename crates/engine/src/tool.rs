@@ -38,8 +38,10 @@ impl Tool {
     pub fn from_id(id: u8) -> Option<Tool> {
         Self::ALL.get(id as usize).copied()
     }
-    /// The tool's shape (capsules and spheres, tool frame, m).
-    pub fn shape(self) -> ToolShape {
+    /// The tool's shape (capsules and spheres, tool frame, m): what is solid of it. The nozzles' (dryer,
+    /// sprayer) is their nozzle, a 2 cm ball `nozzle_standoff` m (`GlobalParams::nozzle_standoff`) behind the
+    /// tool point along the tool's +z: the tool point is where the jet aims, air, nothing solid.
+    pub fn shape(self, nozzle_standoff: f64) -> ToolShape {
         let builtin = |n: &str| ToolShape::builtin(n).expect("built-in shapes parse (tested in tools)");
         let inline = |t: &str| ToolShape::from_toml(t).expect("inline shapes parse (tested below)");
         match self {
@@ -48,15 +50,14 @@ impl Tool {
             Tool::Clip => builtin("clip"),
             // Closed blades: two thin capsules along the tool's x axis.
             Tool::Scissors => inline(SCISSORS_TOML),
-            // Nozzles: a sphere at the tool origin (it pushes hair like a finger).
-            Tool::Dryer => inline(&NOZZLE_TOML.replace("NAME", "dryer")),
-            Tool::Sprayer => inline(&NOZZLE_TOML.replace("NAME", "sprayer")),
+            // Nozzles: the nozzle's body, behind the aim point.
+            Tool::Dryer | Tool::Sprayer => inline(&NOZZLE_TOML.replace("NAME", self.name()).replace("STANDOFF", &format!("{nozzle_standoff:e}"))),
         }
     }
 }
 
 const SCISSORS_TOML: &str = "name = \"scissors\"\nkind = \"scissors\"\n[[capsule]]\na = [-0.04, 0.0, 0.0]\nb = [0.04, 0.0, 0.0]\nradius = 0.0015\n";
-const NOZZLE_TOML: &str = "name = \"NAME\"\nkind = \"NAME\"\n[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 0.012\n";
+const NOZZLE_TOML: &str = "name = \"NAME\"\nkind = \"NAME\"\n[[sphere]]\ncenter = [0.0, 0.0, STANDOFF]\nradius = 0.02\n";
 
 /// What the global layer reads of the tool each step: published by the haptic thread after every haptic
 /// step, kept in the record for replay ([`Record::global_inputs`]).
@@ -129,7 +130,16 @@ mod tests {
     #[test]
     fn inline_tool_shapes_parse() {
         for t in Tool::ALL {
-            assert!(!t.shape().capsules.is_empty(), "{t:?}");
+            assert!(!t.shape(0.15).capsules.is_empty(), "{t:?}");
+        }
+        // Nothing of a nozzle is within 10 cm of its aim point (the tool point): its body is at the nozzle.
+        for t in [Tool::Dryer, Tool::Sprayer] {
+            let s = t.shape(0.15);
+            for c in &s.capsules {
+                let d = tools::geometry::point_segment_distance(&Vector3::zeros(), &Vector3::from(c.a), &Vector3::from(c.b)) - c.radius;
+                assert!(d > 0.1, "{t:?}: solid {d} m from the aim point");
+                assert!((Vector3::from(c.a) - Vector3::new(0.0, 0.0, 0.15)).norm() < 1e-12);
+            }
         }
         assert_eq!(Tool::from_id(5), Some(Tool::Clip));
         assert_eq!(Tool::from_id(6), None);

@@ -344,8 +344,9 @@ pub fn encode_file(format: usize, bytes: &[u8]) -> Vec<u8> {
 }
 
 /// SCENE message: counts, lattice geometry, hair-type names, head mesh, render strands and their guide
-/// binding (layout in docs/protocol.md).
-pub fn encode_scene(s: &Scene) -> Vec<u8> {
+/// binding, the head's metaballs, the hair types' sections, the root hold and the nozzles' standoff
+/// `nozzle_standoff` (m, `GlobalParams::nozzle_standoff`) (layout in docs/protocol.md).
+pub fn encode_scene(s: &Scene, nozzle_standoff: f64) -> Vec<u8> {
     let r = &s.render;
     let strands = r.strands();
     let f = &s.lattice.ffd;
@@ -392,6 +393,10 @@ pub fn encode_scene(s: &Scene) -> Vec<u8> {
     encode_scene_metaballs(&mut w.0, &s.head, s.lattice.params.metaball.threshold);
     // Appended block: the hair types' fibre sections, for the viewer's strand width.
     encode_scene_hair_types(&mut w.0);
+    // Appended block: the root hold (the carried hair's law, `engine::scene::carried`) and where a nozzle is.
+    for x in [s.root_hold, nozzle_standoff] {
+        w.0.extend_from_slice(&(x as f32).to_le_bytes());
+    }
     w.0
 }
 
@@ -635,14 +640,14 @@ mod tests {
         assert_eq!(&b[86..90], &0.001f32.to_le_bytes()); // rooted p95
     }
 
-    /// SCENE decoded field by field as docs/protocol.md lays it out: every byte is accounted for, and the
+    /// SCENE decoded field by field as docs/protocol.md lays it out: every byte is accounted for, the
     /// appended hair-type block carries each preset's fibre section (`strand::HairType::ALL`) in the order of
-    /// the names list.
+    /// the names list, and the last block the scene's root hold and the nozzle standoff.
     #[test]
     fn scene_layout_and_the_hair_types_diameters() {
         let opts = engine::session::SceneOptions { render_strands: 200, guides: 20, hair_type: "asian".into(), ..Default::default() };
         let scene = engine::session::Scene::builtin(&opts).unwrap();
-        let b = encode_scene(&scene);
+        let b = encode_scene(&scene, 0.15);
         assert_eq!((b[0], b[1]), (server::SCENE, VERSION));
         let mut o = 2;
         let mut u32_ = || { let x = u32::from_le_bytes(b[o..o + 4].try_into().unwrap()); o += 4; x as usize };
@@ -679,7 +684,11 @@ mod tests {
             assert!((d / h.major_diameter - 1.0).abs() < 1e-6 && (e / h.ellipticity - 1.0).abs() < 1e-6, "{}: {d} m, {e}", h.name);
             assert!(d > 50e-6 && d < 150e-6 && e >= 1.0, "{}: a human hair's section", h.name);
         }
-        assert_eq!(o + 8 * types, b.len(), "SCENE ends with the hair-type block");
+        o += 8 * types;
+        // The root hold and the nozzle standoff, and nothing after them.
+        assert!((f32_(o) - scene.root_hold).abs() < 1e-7 && scene.root_hold > 0.0, "root hold {}", f32_(o));
+        assert!((f32_(o + 4) - 0.15).abs() < 1e-7, "nozzle standoff {}", f32_(o + 4));
+        assert_eq!(o + 8, b.len(), "SCENE ends with the root hold and the nozzle standoff");
     }
 
     #[test]

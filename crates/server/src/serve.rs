@@ -166,6 +166,8 @@ struct App {
     next_id: AtomicU64,
     started: Instant,
     latest_lattice: Mutex<Vec<[f32; 3]>>,
+    /// The head pose of the latest lattice (head frame to world).
+    latest_head: Mutex<nalgebra::Isometry3<f64>>,
     /// Latest (kept length per guide, active guides, their displacements, samples per guide).
     latest_guides: Mutex<(Arc<Vec<u16>>, Vec<u32>, Vec<nalgebra::Vector3<f64>>, usize)>,
     /// Options of the built-in scene (head, guides, lattice cell) a loaded hairstyle is put on.
@@ -300,7 +302,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     };
     let (session, io) = Session::start_with_device(scene.clone(), params, first_device).context("starting the session")?;
     let SessionIo { device, commands, lattice, haptic } = io;
-    let scene_msg = Arc::new(protocol::encode_scene(&scene));
+    let scene_msg = Arc::new(protocol::encode_scene(&scene, params.global.nozzle_standoff));
     let (frame_tx, frame_rx) = watch::channel(Arc::new(Frame::none()));
     let stop = Arc::new(AtomicBool::new(false));
     let app = Arc::new(App {
@@ -315,6 +317,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         next_id: AtomicU64::new(1),
         started: Instant::now(),
         latest_lattice: Mutex::new(Vec::new()),
+        latest_head: Mutex::new(nalgebra::Isometry3::identity()),
         latest_guides: Mutex::new((Arc::new(Vec::new()), Vec::new(), Vec::new(), 2)),
         opts,
         params,
@@ -369,9 +372,10 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
                 }
             }
             // The latest state for SAVE (skipped while a SAVE reads it: the next frame's will do).
-            if let Ok(mut l) = app_p.latest_lattice.try_lock() {
+            if let (Ok(mut l), Ok(mut h)) = (app_p.latest_lattice.try_lock(), app_p.latest_head.try_lock()) {
                 l.clear();
                 l.extend(lat.positions.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]));
+                *h = lat.head;
             }
             if let Ok(mut g) = app_p.latest_guides.try_lock() {
                 let samples = if hap.active.is_empty() { 2 } else { (hap.displacement.len() / hap.active.len()).max(2) };
@@ -801,7 +805,7 @@ fn load(app: &App, curves: &hairstyle::HairCurves, t0: Instant) -> Result<(), St
     let old = app.session.lock().unwrap().replace(session);
     *app.device.lock().unwrap() = device;
     *app.commands.lock().unwrap() = commands;
-    let msg = Arc::new(protocol::encode_scene(&scene));
+    let msg = Arc::new(protocol::encode_scene(&scene, app.params.global.nozzle_standoff));
     *app.scene.lock().unwrap() = scene.clone();
     *app.scene_msg.lock().unwrap() = msg.clone();
     app.latest_guides.lock().unwrap().0 = Arc::new(Vec::new());
@@ -821,9 +825,10 @@ fn load(app: &App, curves: &hairstyle::HairCurves, t0: Instant) -> Result<(), St
 fn save(app: &App, format: usize) -> Result<Vec<u8>, String> {
     let scene = app.scene.lock().unwrap().clone();
     let nodes: Vec<nalgebra::Point3<f64>> = app.latest_lattice.lock().unwrap().iter().map(|p| nalgebra::Point3::new(p[0] as f64, p[1] as f64, p[2] as f64)).collect();
+    let head = *app.latest_head.lock().unwrap();
     let (kept, active, disp, samples) = app.latest_guides.lock().unwrap().clone();
     let guides = engine::scene::GuideDisplacements { active: &active, displacement: &disp, samples };
-    let curves = scene.render_curves(&nodes, &engine::scene::Scene::kept_lengths_of_points(&kept), &guides);
+    let curves = scene.render_curves(&nodes, &head, &engine::scene::Scene::kept_lengths_of_points(&kept), &guides);
     let f = hairstyle::formats::Format::from_path(Path::new(&format!("x.{}", protocol::FORMATS[format]))).expect("known extension");
     // thickness (USD `widths`) from the scene's hair type
     let mut curves = curves;

@@ -154,7 +154,7 @@ fn run_writes_a_force_trace_and_a_summary() {
     assert!(summary.contains("peak force") && summary.contains("work"), "{summary}");
     let trace = std::fs::read_to_string(out.join("force.csv")).unwrap();
     assert!(trace.starts_with("t,fx,fy,fz,"));
-    assert_eq!(trace.lines().count(), 1 + 200, "header + (0.15 s + 0.05 s) / 1 ms rows");
+    assert_eq!(trace.lines().count(), 1 + 220, "header + (0.15 s + 0.02 s of the ease-in + 0.05 s) / 1 ms rows");
     assert!(std::fs::read_to_string(out.join("summary.txt")).unwrap().contains("GA1"));
     // Deterministic: the same trace twice.
     let out2 = dir.join("again");

@@ -56,10 +56,16 @@ pub enum ConstraintKind {
     },
     /// Coulomb drag without a normal direction: the point is carried along with the constraint's velocity by
     /// a force of at most `max_force` (N), opposing the relative motion (e.g. a tooth passing through a wisp,
-    /// whose parted fibres press on it with a load of their own: `tools::entanglement`).
+    /// whose parted fibres press on it with a load of their own: `tools::entanglement`). Regularised below
+    /// `slip_speed`: the largest force is `max_force min(1, |u| / slip_speed)`, with `u` the point's velocity
+    /// relative to the constraint's without the drag's own impulse (what the rest of the step gives it), so a
+    /// point the drag would hold at rest creeps instead, and the force comes up continuously as the relative
+    /// motion starts (no jump from holding to sliding). 0: plain Coulomb.
     Drag {
         /// Largest force, N (>= 0).
         max_force: f64,
+        /// Relative speed at and above which the drag may reach `max_force`, m/s (>= 0; 0: always).
+        slip_speed: f64,
     },
 }
 
@@ -172,9 +178,12 @@ impl PointConstraint {
                     return bad("non-finite pin target");
                 }
             }
-            ConstraintKind::Drag { max_force } => {
+            ConstraintKind::Drag { max_force, slip_speed } => {
                 if !(max_force.is_finite() && max_force >= 0.0) {
                     return bad("drag force must be finite and >= 0");
+                }
+                if !(slip_speed.is_finite() && slip_speed >= 0.0) {
+                    return bad("drag slip speed must be finite and >= 0");
                 }
             }
         }
@@ -606,7 +615,7 @@ impl ConstraintRows {
                 let pn = p.dot(&normal).max(0.0);
                 normal * pn + clamp_norm(p - normal * p.dot(&normal), friction * pn)
             }
-            ConstraintKind::Drag { max_force } => clamp_norm(*p, max_force * self.h),
+            ConstraintKind::Drag { max_force, .. } => clamp_norm(*p, max_force * self.h),
             ConstraintKind::Pin { .. } => *p,
         };
     }
@@ -635,10 +644,17 @@ impl ConstraintRows {
                 let want = capped(self.pin_error[c] * beta);
                 p + inverse * (want - rel - p * mix)
             }
-            ConstraintKind::Drag { max_force } => {
+            ConstraintKind::Drag { max_force, slip_speed } => {
                 let Rule::Drag { inverse } = self.rule[c] else { return };
-                // Aim for no relative motion, then clamp to the drag's largest impulse.
-                clamp_norm(p + inverse * (-rel - p * mix), max_force * self.h)
+                // Aim for no relative motion, then clamp to the drag's largest impulse, regularised by the relative
+                // speed the point would have without this drag.
+                let share = if slip_speed > 0.0 {
+                    let own = mul3(&self.w[c * self.len() + c], &p);
+                    ((rel - own).norm() / slip_speed).min(1.0)
+                } else {
+                    1.0
+                };
+                clamp_norm(p + inverse * (-rel - p * mix), max_force * self.h * share)
             }
             ConstraintKind::Contact { normal, depth, friction } => {
                 let Rule::Contact(frame) = self.rule[c] else { return };

@@ -248,7 +248,7 @@ fn a_drag_carries_a_free_point_up_to_its_bound() {
     // and pulls along the relative motion (+x); with a zero bound the step is the free step.
     let v = Vector3::new(0.1, 0.0, 0.0);
     let opts = ConstraintOptions::default();
-    let drag = |max_force: f64| PointConstraint { s: 0.1, kind: ConstraintKind::Drag { max_force }, velocity: v };
+    let drag = |max_force: f64| PointConstraint { s: 0.1, kind: ConstraintKind::Drag { max_force, slip_speed: 0.0 }, velocity: v };
     let h = 1e-3;
     let tip_velocity = |s: &Strand| {
         let mut ahead = s.clone();
@@ -264,12 +264,19 @@ fn a_drag_carries_a_free_point_up_to_its_bound() {
     let p = s.step_constrained(h, &[], &[drag(1e-6)], &opts).unwrap();
     assert!((p[0].norm() - 1e-6 * h).abs() < 1e-12 * 1e-6 * h, "impulse {} against the bound {}", p[0].norm(), 1e-6 * h);
     assert!(p[0].x > 0.99 * p[0].norm(), "the drag pulls along the relative motion: {:?}", p[0]);
+    // Regularised (slip speed 1 m/s against the relative speed of 0.1 m/s: the obstacle's, the straight hanging
+    // tip having no free velocity): the bound is scaled by that relative speed over the slip speed.
+    let mut s = hanging();
+    let slow = PointConstraint { kind: ConstraintKind::Drag { max_force: 1e-6, slip_speed: 1.0 }, ..drag(1.0) };
+    let p = s.step_constrained(h, &[], &[slow], &opts).unwrap();
+    let want = 1e-6 * h * 0.1;
+    assert!((p[0].norm() - want).abs() < 1e-9 * want, "regularised impulse {} against {want}", p[0].norm());
     let mut free = hanging();
     free.step(h, &[]).unwrap();
     let mut s = hanging();
     s.step_constrained(h, &[], &[drag(0.0)], &opts).unwrap();
     assert!((&s.state.q - &free.state.q).amax() < 1e-15 && (&s.state.qdot - &free.state.qdot).amax() < 1e-12);
-    let bad = PointConstraint { kind: ConstraintKind::Drag { max_force: f64::NAN }, ..drag(1.0) };
+    let bad = PointConstraint { kind: ConstraintKind::Drag { max_force: f64::NAN, slip_speed: 0.0 }, ..drag(1.0) };
     assert!(hanging().step_constrained(h, &[], &[bad], &opts).is_err());
 }
 

@@ -6,29 +6,45 @@
 //! `r_t` passing along the fibres *through* a wisp parts the fibres in its path: each is bent around the tooth
 //! between two entanglement points, and presses on the tooth with
 //!
-//! `N_f = 48 E I delta / span^3 + w 4 pi gamma sqrt(r_f r_t)`   (N, per parted fibre)
+//! `N_f = held (48 E I delta / span^3 + w (f_a l_c + 4 pi gamma sqrt(r_f r_t)))`   (N, per parted fibre)
 //!
 //! - bending: a span of length `span` held at its ends and deflected by `delta` in its middle (a simply
-//!   supported beam under a central load, `48 E I / L^3`); `delta = (r_t + r_f) / 2`, the mean deflection of
-//!   the fibres in the tooth's path (a fibre `x` off the tooth's axis is pushed `r_t + r_f - |x|` aside);
-//!   `E I` is the fibre's flexural rigidity at its wetness (wet fibres are softer, `crate::wetness`);
-//! - capillary adhesion of wet fibres: the water bridge where a wet fibre crosses the tooth pulls the two
+//!   supported beam under a central load, `48 E I / L^3`); `delta = (r_t + r_f) / 2 + kappa span^2 / 8`: the mean
+//!   deflection of the fibres in the tooth's path (a fibre `x` off the tooth's axis is pushed `r_t + r_f - |x|`
+//!   aside) and, for curled fibres, the sagitta of the curl over the span (**curl interlocking**: a curled fibre
+//!   bulges into its neighbours' spans by `kappa span^2 / 8`, and the tooth must bend that bulge out of its way
+//!   too); `kappa` is the curl the fibres keep where the tooth meets them: the wisp's current curvature there, at
+//!   most its natural (rest) curvature ([`curl_curvature`]). A curl pulled open, by gravity on a hanging tress or
+//!   more on a wet one (heavier, bending and torsion moduli 0.4 and 0.1 of dry: `crate::wetness`), interlocks
+//!   less: **wet curly hair combs easier** as its curl relaxes. Straight hair (rest curvature 0) has none.
+//!   `E I` is the fibre's flexural rigidity at its wetness;
+//! - **capillary adhesion of wet fibres**: wet fibres lying side by side are held together by the menisci
+//!   between them, `f_a` per unit length of contact (default `2 gamma`: a meniscus on each side, each pulling
+//!   with the surface tension per unit length; the elastocapillary coalescence of wet hair, Bico et al., Nature
+//!   432, 690 (2004)); a parted fibre must be pulled off its neighbours over the length `l_c` over which they lie
+//!   side by side: the whole span for straight fibres, and for fibres curled with curvature `kappa` the length over
+//!   which two touching arcs stay within a fibre radius of each other, `2 sqrt(2 r_f / kappa)` (shorter curls touch
+//!   their neighbours at points, so **straight hair combs harder wet, curly hair does not**);
+//! - capillary bridge on the tooth: the water bridge where a wet fibre crosses the tooth pulls the two
 //!   together with `4 pi gamma sqrt(r_f r_t)` (the meniscus between two crossed cylinders in contact, as
 //!   between a sphere of radius `sqrt(r_f r_t)` and a plane, complete wetting; Israelachvili, *Intermolecular
 //!   and Surface Forces*, 3rd ed., ch. 17), `gamma` the surface tension of water, scaled by the wetness `w`
 //!   in [0, 1].
 //!
-//! Within half a span of the fibre's tip there is no entanglement point below the tooth: the bending share
-//! falls linearly to 0 at the tip (the end slips aside).
+//! Within half a span of the fibre's tip there is no entanglement point below the tooth: the share held
+//! (`held`) falls linearly to 0 at the tip (the end slips aside, and at the tip there is no fibre left to part:
+//! the wisp's fibres leave the tooth over the last half span, not all in one step).
 //!
 //! The tooth slides on the parted fibres with the tool-hair Coulomb coefficient `mu`: it feels a drag up to
 //! `mu N_f` per parted fibre, against the relative motion. Of a wisp whose centreline is `d` from the tooth's
 //! axis, the parted share is the share of the wisp's section within `r_t + r_f` of the axis
 //! ([`parted_share`]): it goes smoothly to 0 as the wisp leaves the tooth, so the force has no steps. The
-//! drag is a Coulomb force (rate independent), as combing forces of tresses are at 0.1-0.5 m/s.
+//! drag is a Coulomb force (rate independent), as combing forces of tresses are at 0.1-0.5 m/s. Only a tooth
+//! thinner than the wisp parts it ([`Entanglement::parts`]); a thicker body (a comb's spine) pushes the wisp
+//! aside as a solid.
 //!
-//! Calibration: `span` is the one number set from a measurement (the dry combing force of a 4.75 g tress,
-//! see [`Entanglement::span`]); stiffness, friction, wetness and the tress's size then set every other
+//! Calibration: `span` is the one number set from a measurement (the dry combing force of a 4.75 g tress of
+//! H1, see [`Entanglement::span`]); stiffness, curl, friction, wetness and the tress's size then set every other
 //! hair type's and the wet tresses' forces.
 
 use strand::StrandError;
@@ -47,11 +63,22 @@ pub struct Entanglement {
     pub span: f64,
     /// Surface tension of the water on wet fibres, N/m. Default 0.072 (water at 25 C).
     pub surface_tension: f64,
+    /// Capillary adhesion of two wet fibres lying side by side, per unit length of contact at wetness 1, N/m.
+    /// Default 0.144 = 2 x 0.072: the meniscus on each side of the contact pulls with the surface tension per
+    /// unit length (complete wetting; Bico et al., Nature 432, 690 (2004): wet hair coalesces under an
+    /// adhesion of the order of the surface tension per unit length).
+    pub adhesion: f64,
+    /// Relative speed of the tooth through the wisp at and above which the drag reaches its full Coulomb force,
+    /// m/s (`strand::constraint::ConstraintKind::Drag::slip_speed`); below it the drag grows with the speed (a
+    /// regularised Coulomb drag: a wisp at rest on a still tooth creeps through it instead of hanging on it, and
+    /// the force comes up continuously as the comb starts). Default 0.05: half the slowest combing speed of the
+    /// validated range (0.1-0.5 m/s, over which tress combing forces are rate independent), a model choice.
+    pub slip_speed: f64,
 }
 
 impl Default for Entanglement {
     fn default() -> Self {
-        Self { span: 6.6e-3, surface_tension: 0.072 }
+        Self { span: 6.6e-3, surface_tension: 0.072, adhesion: 2.0 * 0.072, slip_speed: 0.05 }
     }
 }
 
@@ -65,19 +92,50 @@ impl Entanglement {
         if !(self.surface_tension.is_finite() && self.surface_tension >= 0.0) {
             return bad("entanglement.surface_tension", format!("must be >= 0 N/m, got {}", self.surface_tension));
         }
+        if !(self.adhesion.is_finite() && self.adhesion >= 0.0) {
+            return bad("entanglement.adhesion", format!("must be >= 0 N/m, got {}", self.adhesion));
+        }
+        if !(self.slip_speed.is_finite() && self.slip_speed >= 0.0) {
+            return bad("entanglement.slip_speed", format!("must be >= 0 m/s, got {}", self.slip_speed));
+        }
         Ok(())
     }
 
-    /// Normal load one parted fibre puts on a tooth, N: `48 E I delta / span^3 + w 4 pi gamma sqrt(r_f r_t)`, for a fibre of
-    /// flexural rigidity `ei` (N m^2) and radius `fibre_radius` (m), a tooth of radius `tooth_radius` (m) and
-    /// wetness `wetness` (0..1; clamped), `free_length` (m) from the tooth to the fibre's tip. Within half a span
-    /// of the tip the fibre is not held below the tooth (its end slips aside): the bending share falls linearly
-    /// to 0 at the tip, `min(1, 2 free_length / span)`.
-    pub fn parting_load(&self, ei: f64, fibre_radius: f64, tooth_radius: f64, wetness: f64, free_length: f64) -> f64 {
-        let delta = 0.5 * (tooth_radius + fibre_radius);
+    /// Normal load one parted fibre puts on a tooth, N (the module's law): for a fibre of flexural rigidity `ei`
+    /// (N m^2) and radius `fibre_radius` (m), a tooth of radius `tooth_radius` (m), wetness `wetness` (0..1;
+    /// clamped), `free_length` (m) from the tooth to the fibre's tip and the curl `curvature` (1/m, from
+    /// [`curl_curvature`]; 0 for straight fibres) the fibres keep at the tooth. Within half a span of the tip the
+    /// fibre is not held below the tooth (its end slips aside): the load falls linearly to 0 at the tip,
+    /// `min(1, 2 free_length / span)`.
+    pub fn parting_load(&self, ei: f64, fibre_radius: f64, tooth_radius: f64, wetness: f64, free_length: f64, curvature: f64) -> f64 {
+        let kappa = if curvature.is_finite() { curvature.abs() } else { 0.0 };
+        let w = if wetness.is_finite() { wetness.clamp(0.0, 1.0) } else { 0.0 };
+        // The curl's sagitta over a span, at most a quarter span (the beam law's reach).
+        let sagitta = (kappa * self.span * self.span / 8.0).min(0.25 * self.span);
+        let delta = 0.5 * (tooth_radius + fibre_radius) + sagitta;
         let bridge = 4.0 * std::f64::consts::PI * self.surface_tension * (fibre_radius * tooth_radius).sqrt();
+        let adhesion = self.adhesion * self.contact_length(fibre_radius, kappa);
         let held = (2.0 * free_length.max(0.0) / self.span).min(1.0);
-        held * 48.0 * ei * delta / self.span.powi(3) + wetness.clamp(0.0, 1.0) * bridge
+        held * (48.0 * ei * delta / self.span.powi(3) + w * (adhesion + bridge))
+    }
+
+    /// Length over which a fibre of radius `fibre_radius` (m) curled with curvature `curvature` (1/m) lies side
+    /// by side with its neighbours within one span, m: `min(span, 2 sqrt(2 r_f / kappa))` (two touching arcs of
+    /// curvature kappa stay within `r_f` of each other over that length); the span for straight fibres.
+    pub fn contact_length(&self, fibre_radius: f64, curvature: f64) -> f64 {
+        let kappa = if curvature.is_finite() { curvature.abs() } else { 0.0 };
+        if kappa * self.span * self.span <= 8.0 * fibre_radius {
+            return self.span;
+        }
+        (2.0 * (2.0 * fibre_radius / kappa).sqrt()).min(self.span)
+    }
+
+    /// Whether a tooth of radius `tooth_radius` (m) passes through the fibres, parting them (the beam law above):
+    /// a tooth whose diameter is at most half a span, so that the parted fibres' deflection stays small against
+    /// the span they bend over (a comb's teeth, 1.2 mm, a brush's bristles). A thicker body (a comb's 6 mm spine,
+    /// a finger) is not passed through: it pushes the wisp aside as a solid.
+    pub fn parts(&self, tooth_radius: f64) -> bool {
+        4.0 * tooth_radius <= self.span
     }
 
     /// Lateral stiffness of one fibre of flexural rigidity `ei` (N m^2) pressed at a point, N/m: held sideways by
@@ -90,6 +148,23 @@ impl Entanglement {
     pub fn fibre_stiffness(&self, ei: f64) -> f64 {
         48.0 * ei / self.span.powi(3)
     }
+}
+
+/// The curl a wisp's fibres keep at arc length `s` (m) of `strand`, 1/m: the centreline's current curvature there
+/// (`sqrt(kappa_1^2 + kappa_2^2)` of the Super-Helix segment; the reduced model's one bend), at most its rest
+/// (natural) curvature: a curl pulled open counts as far as it is open, a wisp bent further than its natural curl
+/// (around the tooth itself) does not count as curlier. 0 for straight hair.
+pub fn curl_curvature(strand: &strand::Strand, s: f64) -> f64 {
+    let m = &strand.model;
+    let d = m.dofs_per_segment();
+    if m.segments == 0 || !s.is_finite() {
+        return 0.0;
+    }
+    let i = ((s / m.segment_length()).max(0.0) as usize).min(m.segments - 1);
+    let q = &strand.state.q;
+    let now = (1..d).map(|k| q.get(i * d + k).copied().unwrap_or(0.0).powi(2)).sum::<f64>().sqrt();
+    let rest = m.rest.get(i).map_or(0.0, |r| (1..d).map(|k| r[k] * r[k]).sum::<f64>().sqrt());
+    if now.is_finite() { now.min(rest) } else { 0.0 }
 }
 
 /// Share (0..1) of a wisp's fibres, uniform over a disc of radius `wisp_radius` (m), whose centres lie within
@@ -109,6 +184,59 @@ pub fn parted_share(distance: f64, wisp_radius: f64, half_width: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn curled_fibres_interlock_dry_and_lie_apart_wet() {
+        // The default span (6.6 mm), an African fibre (EI 1.46e-9 N m^2, r_f 42.5 um) on a 0.6 mm tooth.
+        let e = Entanglement::default();
+        let (ei, rf, rt) = (1.46e-9, 42.5e-6, 0.6e-3);
+        let span3 = e.span.powi(3);
+        // Curl interlocking: the deflection grows by the curl's sagitta kappa span^2 / 8 (156 1/m: 0.849 mm).
+        let dry_straight = e.parting_load(ei, rf, rt, 0.0, 0.1, 0.0);
+        let dry_curled = e.parting_load(ei, rf, rt, 0.0, 0.1, 156.0);
+        let sagitta = 156.0 * e.span * e.span / 8.0;
+        assert!((dry_curled - dry_straight - 48.0 * ei * sagitta / span3).abs() < 1e-12, "{dry_curled} {dry_straight}");
+        assert!(dry_curled > 3.0 * dry_straight);
+        // The sagitta is capped at a quarter span.
+        assert_eq!(e.parting_load(ei, rf, rt, 0.0, 0.1, 1e6), e.parting_load(ei, rf, rt, 0.0, 0.1, 8.0 / e.span));
+        // Contact length: the span for straight fibres, 2 sqrt(2 r_f / kappa) for curled ones (1.476 mm at 156 1/m),
+        // continuous where they meet (kappa span^2 = 8 r_f).
+        assert_eq!(e.contact_length(rf, 0.0), e.span);
+        assert!((e.contact_length(rf, 156.0) - 2.0 * (2.0 * rf / 156.0f64).sqrt()).abs() < 1e-15);
+        let k0 = 8.0 * rf / (e.span * e.span);
+        assert!((e.contact_length(rf, k0 * (1.0 + 1e-9)) - e.span).abs() < 1e-9 * e.span);
+        // Wet adhesion, per fibre: the straight fibre's 0.144 N/m over the span, the curled one's over its contact.
+        let wet = |kappa: f64| e.parting_load(ei, rf, rt, 1.0, 0.1, kappa) - e.parting_load(ei, rf, rt, 0.0, 0.1, kappa);
+        let bridge = 4.0 * std::f64::consts::PI * 0.072 * (rf * rt).sqrt();
+        assert!((wet(0.0) - (0.144 * e.span + bridge)).abs() < 1e-12);
+        assert!((wet(156.0) - (0.144 * e.contact_length(rf, 156.0) + bridge)).abs() < 1e-12);
+        assert!(wet(156.0) < 0.5 * wet(0.0));
+        // Teeth part the wisp, a comb's 3 mm spine does not (diameter above half a span).
+        assert!(e.parts(0.6e-3) && !e.parts(3e-3));
+    }
+
+    #[test]
+    fn the_curl_is_the_wisps_current_curvature_at_most_its_natural_one() {
+        use strand::{HairType, ModelKind, RootFrame, Strand, StrandModel};
+        let h = HairType::AFRICAN;
+        let (tw, bd) = h.rest_curvature();
+        let m = StrandModel::new(ModelKind::Full, 0.1, 5, h.section().unwrap(), h.material().unwrap()).unwrap().with_uniform_rest(tw, bd, 0.0);
+        let mut s = Strand::new(m, RootFrame::new(nalgebra::Vector3::zeros(), -nalgebra::Vector3::z(), nalgebra::Vector3::x()).unwrap()).unwrap();
+        // At rest in its natural shape: the natural curl (the bend; the twist is no curvature of the centreline).
+        s.state.q.copy_from(&s.model.rest_coordinates());
+        assert!((curl_curvature(&s, 0.05) - bd).abs() < 1e-12);
+        // Pulled half open in segment 2: half; bent further than its curl: the natural curl.
+        s.state.q[3 * 2 + 1] = 0.5 * bd;
+        assert!((curl_curvature(&s, 0.05) - 0.5 * bd).abs() < 1e-12);
+        s.state.q[3 * 2 + 1] = 3.0 * bd;
+        assert!((curl_curvature(&s, 0.05) - bd).abs() < 1e-12);
+        // Straight hair: none, whatever its bend.
+        let hs = HairType::H1;
+        let ms = StrandModel::new(ModelKind::Full, 0.1, 5, hs.section().unwrap(), hs.material().unwrap()).unwrap();
+        let mut st = Strand::new(ms, RootFrame::new(nalgebra::Vector3::zeros(), -nalgebra::Vector3::z(), nalgebra::Vector3::x()).unwrap()).unwrap();
+        st.state.q[4] = 50.0;
+        assert_eq!(curl_curvature(&st, 0.03), 0.0);
+    }
 
     #[test]
     fn the_parted_share_is_the_area_of_the_band() {
@@ -145,17 +273,22 @@ mod tests {
         // the crossed-cylinder meniscus 4 pi gamma sqrt(r_f r_t) = 0.151 mN (figures by hand, 1e-3 relative).
         let e = Entanglement { span: 8e-3, ..Default::default() };
         let (ei, rf, rt) = (7.59e-9, 46.55e-6, 0.6e-3);
-        let beam = e.parting_load(ei, rf, rt, 0.0, 0.1);
+        let beam = e.parting_load(ei, rf, rt, 0.0, 0.1, 0.0);
         assert!((beam - 0.2300e-3).abs() < 1e-3 * 0.23e-3, "{beam}");
-        let wet = e.parting_load(0.4 * ei, rf, rt, 1.0, 0.1);
-        assert!((wet - (0.4 * beam + 0.1511e-3)).abs() < 1e-3 * 0.15e-3, "{wet}");
-        // At the tip only the meniscus is left; half a span from it, half the beam.
-        assert!((e.parting_load(ei, rf, rt, 1.0, 0.0) - 0.1511e-3).abs() < 1e-3 * 0.15e-3);
-        assert!((e.parting_load(ei, rf, rt, 0.0, 0.25 * e.span) - 0.5 * beam).abs() < 1e-12 * beam);
+        let wet = e.parting_load(0.4 * ei, rf, rt, 1.0, 0.1, 0.0);
+        // Wet and straight: the softer beam, the adhesion to the neighbours over the whole span (0.144 N/m x 8 mm
+        // = 1.152 mN) and the bridge on the tooth.
+        assert!((wet - (0.4 * beam + 1.152e-3 + 0.1511e-3)).abs() < 1e-3 * 0.15e-3, "{wet}");
+        // At the tip nothing is left; a quarter span from it, half of everything.
+        assert_eq!(e.parting_load(ei, rf, rt, 1.0, 0.0, 0.0), 0.0);
+        assert!((e.parting_load(0.4 * ei, rf, rt, 1.0, 0.25 * e.span, 0.0) - 0.5 * wet).abs() < 1e-12 * wet);
+        assert!((e.parting_load(ei, rf, rt, 0.0, 0.25 * e.span, 0.0) - 0.5 * beam).abs() < 1e-12 * beam);
         // The fibre's lateral stiffness over one span: 48 EI / L^3 = 0.7116 N/m (by hand), the beam's load per metre of deflection.
         assert!((e.fibre_stiffness(ei) - 0.71156).abs() < 1e-4, "{}", e.fibre_stiffness(ei));
         assert!((e.fibre_stiffness(ei) * 0.5 * (rf + rt) - beam).abs() < 1e-12 * beam);
         assert!(Entanglement { span: 0.0, ..e }.validate().unwrap_err().to_string().contains("entanglement.span"));
+        assert!(Entanglement { adhesion: -1.0, ..e }.validate().unwrap_err().to_string().contains("entanglement.adhesion"));
+        assert!(Entanglement { slip_speed: f64::NAN, ..e }.validate().unwrap_err().to_string().contains("entanglement.slip_speed"));
         assert!(Entanglement { surface_tension: f64::NAN, ..e }.validate().is_err());
     }
 }

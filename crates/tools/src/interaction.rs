@@ -882,11 +882,14 @@ impl LocalInteraction {
                     let r_f = strand.model.section.semi_major;
                     let ei = strand.model.material.young_modulus * strand.model.section.i_soft();
                     let w = self.wetness.get(k).copied().unwrap_or(0.0);
-                    // A wisp of many fibres parts around the capsule (the drag) instead of being pushed aside.
+                    // A wisp of many fibres parts around a tooth (the drag) instead of being pushed aside; a thick
+                    // capsule (a comb's spine: `Entanglement::parts`) pushes it as a solid at the fibre's radius.
                     let parting = entanglement.is_some() && wisp_radius > radius;
                     for (i, c) in mine.iter().enumerate() {
+                        let r_t = self.shape.capsules.get(c.primitive).map_or(0.0, |cap| cap.radius);
+                        let parts = parting && entanglement.is_some_and(|e| e.parts(r_t));
                         let fibre_depth = c.depth - (reach - radius);
-                        if fibre_depth > 0.0 && !parting {
+                        if fibre_depth > 0.0 && !parts {
                             cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Contact { normal: c.normal, depth: fibre_depth, friction }, velocity: c.tool_velocity });
                             levers.push(c.lever);
                             touching.push(Some(**c));
@@ -895,13 +898,13 @@ impl LocalInteraction {
                         // One drag per crossing of a capsule and the wisp: the deepest of the strand's contacts
                         // with that capsule (neighbouring pieces near the crossing are found too).
                         let deepest = || mine.iter().enumerate().all(|(j, o)| o.primitive != c.primitive || o.depth < c.depth || (o.depth == c.depth && j >= i));
-                        if let (Some(e), true) = (entanglement, deepest()) {
-                            let r_t = self.shape.capsules.get(c.primitive).map_or(0.0, |cap| cap.radius);
+                        if let (Some(e), true) = (entanglement.filter(|_| parts), deepest()) {
                             let distance = r_t + reach - c.depth;
                             let share = crate::entanglement::parted_share(distance, wisp_radius, r_t + r_f);
-                            let max_force = friction * share * e.parting_load(ei, r_f, r_t, w, strand.model.length - c.s);
+                            let curl = crate::entanglement::curl_curvature(strand, c.s);
+                            let max_force = friction * share * e.parting_load(ei, r_f, r_t, w, strand.model.length - c.s, curl);
                             if max_force > 0.0 {
-                                cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Drag { max_force }, velocity: c.tool_velocity });
+                                cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Drag { max_force, slip_speed: e.slip_speed }, velocity: c.tool_velocity });
                                 levers.push(c.lever);
                                 touching.push(None);
                                 tags.push((WarmTag::Drag(c.primitive), c.s));

@@ -52,7 +52,8 @@ pub enum Treatment {
 /// Wet rise of the friction of a virgin fibre's surface (wet over dry, dimensionless), the single-fibre
 /// figure the treatments' wet coefficients are built on: friction is higher in water (Nikogeorgos et al. 2010);
 /// 1.5, the low end of the single-fibre wet/dry ratios of 1.5-2 quoted in `docs/wetness.md` (see
-/// `docs/treatment.md` for why no better figure is used).
+/// `docs/treatment.md` for why no better figure is used). The same figure as `WetnessModel::friction_ratio`'s
+/// default (a test holds them equal).
 const VIRGIN_WET_RISE: f64 = 1.5;
 
 impl Treatment {
@@ -182,6 +183,11 @@ mod tests {
                 assert!(order.windows(2).all(|p| p[0] < p[1]), "{order:?}");
             }
         }
+    }
+
+    #[test]
+    fn the_virgin_wet_rise_is_the_wetness_models() {
+        assert_eq!(VIRGIN_WET_RISE, WetnessModel::default().friction_ratio);
     }
 
     #[test]

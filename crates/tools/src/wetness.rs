@@ -12,7 +12,7 @@
 //!   `m(w) = m_dry (1 + w (uptake + surface))`;
 //! - moduli fall geometrically: `E(w) = E_dry r_E^w`, `G(w) = G_dry r_G^w` (log-linear in water content, the
 //!   shape of the modulus-humidity curves of keratin fibres; exactly dry at 0 and exactly the wet ratio at 1);
-//! - the friction coefficient grows linearly: `mu(w) = mu_dry (1 + w (r_mu - 1))`.
+//! - the friction coefficient of the fibre's surface grows linearly: `mu(w) = mu_dry (1 + w (r_mu - 1))`.
 
 use strand::material::Material;
 use strand::HairType;
@@ -68,12 +68,13 @@ pub struct WetnessModel {
     /// Torsional (shear) modulus wet / dry (dimensionless, in (0, 1]). Default 0.1 (Bogaty 1967 via Robbins:
     /// the torsional modulus falls about tenfold from 65 % RH to water, far more than the tensile one).
     pub shear_ratio: f64,
-    /// Friction coefficient wet / dry (dimensionless, >= 1), tool on hair and hair on hair. Default 6.0: an
-    /// *effective* coefficient, calibrated on the tress scenarios (docs/scenarios.md). Wet combing of a 4.75 g
-    /// tress takes about 7.5 times the dry force (0.9 N / 0.12 N, J. Soc. Cosmet. Chem. 24, 1973); part of that
-    /// rise is the capillary bridges and the softer wet fibres of the comb's drag (`crate::entanglement`), the
-    /// rest is put here: 6.0 gives the four Table 1 tresses wet/dry peak ratios of 5.0-6.7. Single-fibre wet/dry
-    /// friction ratios are smaller (about 1.5-2), so this still lumps wet clumping in (docs/wetness.md).
+    /// Friction coefficient wet / dry (dimensionless, >= 1), tool on hair and hair on hair, of the fibre's surface.
+    /// Default 1.5: the low end of the single-fibre wet/dry ratios (1.5-2; friction is higher in water for
+    /// virgin, damaged and conditioned hair, Nikogeorgos et al. 2010; docs/wetness.md, docs/treatment.md). Not
+    /// fitted to combing: the rest of the wet rise of a straight tress (about 7.5 times the dry force, J. Soc.
+    /// Cosmet. Chem. 24, 1973) comes from the capillary adhesion of wet fibres and the bridges on the tooth
+    /// (`crate::entanglement`). (It was 6.0 until issue 29, an effective coefficient calibrated on the tresses'
+    /// wet/dry ratios.)
     pub friction_ratio: f64,
 }
 
@@ -84,7 +85,7 @@ impl Default for WetnessModel {
             surface_water: 0.5,
             young_ratio: 0.4,
             shear_ratio: 0.1,
-            friction_ratio: 6.0,
+            friction_ratio: 1.5,
         }
     }
 }
@@ -288,7 +289,7 @@ mod tests {
             assert!(rel(w.young_modulus, 0.4 * dry.young_modulus) < 1e-15);
             assert!(rel(w.shear_modulus, 0.1 * dry.shear_modulus) < 1e-15);
             assert!(rel(w.density, 1.8 * dry.density) < 1e-15);
-            assert!(rel(w.friction, 6.0 * h.friction_coefficient()) < 1e-15);
+            assert!(rel(w.friction, 1.5 * h.friction_coefficient()) < 1e-15);
         }
     }
 

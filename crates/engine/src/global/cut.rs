@@ -2,7 +2,7 @@
 //! thread), its result applied to the kept lengths, and the pieces turned into falling clusters.
 
 use super::GlobalCore;
-use crate::scene::{ffd_map, Scene};
+use crate::scene::{GuideDisplacements, Scene};
 use hairstyle::cut::{cut_polylines, polyline_length, Blade};
 use lattice::cluster::{ClusterSet, CutPiece};
 use nalgebra::{Isometry3, Point3, Vector3};
@@ -133,24 +133,26 @@ impl CutJob {
         }
         let rh = &self.scene.render;
         let v = rh.vertices_per_strand;
-        let (f, nodes) = (&self.scene.lattice.ffd, &self.nodes);
+        let nodes = &self.nodes;
         let c = Vector3::from(blade.point);
         let vert = |i: usize, j: usize| Vector3::from(rh.positions[i * v + j]).cast::<f64>();
-        // Polyline of strand i as kept now, through the lattice.
+        // Polyline of strand i as kept now, carried by the head and the lattice (`Scene::render_vertex`).
+        let mapped = |i: usize, j: usize| self.scene.render_vertex(nodes, &self.head, &GuideDisplacements::default(), i, j);
         let line = |i: usize, k: f64| -> Vec<[f64; 3]> {
             let whole = (k.floor() as usize).min(v - 1);
-            let mut out: Vec<[f64; 3]> = (0..=whole).map(|j| ffd_map(f, nodes, &vert(i, j)).into()).collect();
+            let mut out: Vec<[f64; 3]> = (0..=whole).map(|j| mapped(i, j).into()).collect();
             let frac = k - whole as f64;
             if frac > 0.0 && whole + 1 < v {
                 // The cut end on the straight segment between the mapped vertices (where the cut was made).
-                let (a, b) = (Vector3::from(out[whole]), ffd_map(f, nodes, &vert(i, whole + 1)));
+                let (a, b) = (Vector3::from(out[whole]), mapped(i, whole + 1));
                 out.push((a * (1.0 - frac) + b * frac).into());
             }
             out
         };
         let mut idx = Vec::new();
         let mut lines = Vec::new();
-        // The FFD moves no point farther than the farthest node moved (its weights are a convex combination):
+        // The FFD moves no point farther than the farthest node moved (its weights are a convex combination),
+        // and the head's hold near the root only blends that motion towards the head's (`scene::carried`):
         // a strand whose rest vertices all stay farther than that from the blade's plane on one side, or from
         // the disk, cannot cross it, and is skipped without mapping it through the lattice.
         let reach = nodes.iter().zip(&self.scene.lattice.rest).map(|(x, r)| (x - self.head * r).norm()).fold(0.0, f64::max) + 1e-9;

@@ -25,7 +25,7 @@ mod nozzle;
 pub use cut::{CutJob, CutReport, CutResult};
 
 use crate::params::{GlobalParams, SessionParams};
-use crate::scene::{ffd_map, Scene};
+use crate::scene::Scene;
 use crate::snapshot::LatticeSnapshot;
 use crate::tool::{tool_metaballs, ToolInput};
 use hairstyle::cut::Blade;
@@ -63,8 +63,6 @@ pub struct GlobalCore {
     pub(crate) blow_force: f64,
     /// Wetness per guide and segment.
     pub(crate) wet: WetnessField,
-    /// Rest (head-frame) centres of each guide's segments, m.
-    pub(crate) centres: Vec<Vec<Vector3<f64>>>,
     /// Kept length of each render strand in vertex units (V - 1: uncut).
     pub(crate) kept_len: Vec<f64>,
     pub(crate) kept: Arc<Vec<u16>>,
@@ -101,24 +99,15 @@ impl GlobalCore {
             blade_radius: params.global.blade_radius,
         };
         let segs: Vec<usize> = scene.guides.iter().map(|g| g.model.segments).collect();
-        let centres = scene.guides.iter().map(|g| {
-            let n = g.model.segments;
-            let r = &g.reference;
-            (0..n).map(|k| {
-                let u = (k as f64 + 0.5) / n as f64 * (r.len() - 1) as f64;
-                let (i, f) = ((u.floor() as usize).min(r.len() - 2), u - u.floor().min((r.len() - 2) as f64));
-                r[i] * (1.0 - f) + r[i + 1] * f
-            }).collect()
-        }).collect();
         let rh = &scene.render;
         let v = rh.vertices_per_strand;
         let g0 = scene.guides.first();
         let lambda = g0.map_or(6.5e-5, |g| g.model.linear_density());
         let drag = g0.map_or_else(HairDrag::default, |g| HairDrag::for_section_area(g.model.section.area()));
         Self {
-            model, state, workspace: LatticeWorkspace::default(), version: 0, head, outside, tools, drag, forces: Vec::new(), blow_force: 0.0, wet: WetnessField::dry(&segs), centres,
+            model, state, workspace: LatticeWorkspace::default(), version: 0, head, outside, tools, drag, forces: Vec::new(), blow_force: 0.0, wet: WetnessField::dry(&segs),
             kept_len: vec![v.saturating_sub(1) as f64; rh.strands()], kept: Arc::new(vec![v as u16; rh.strands()]), kept_version: 0, cuts: 0,
-            lambda, params: params.global, shapes: crate::tool::Tool::ALL.iter().map(|t| t.shape()).collect(), clusters: Vec::new(), cluster_params: ClusterParams::default(), last_cut: None, deferred: false, pending: Vec::new(), failed: 0, scene,
+            lambda, params: params.global, shapes: crate::tool::Tool::ALL.iter().map(|t| t.shape(params.global.nozzle_standoff)).collect(), clusters: Vec::new(), cluster_params: ClusterParams::default(), last_cut: None, deferred: false, pending: Vec::new(), failed: 0, scene,
         }
     }
     /// Back to rest: lattice, wetness, cuts and falling clusters (keeps counting versions and cuts).
@@ -266,11 +255,20 @@ impl GlobalCore {
         LatticeSnapshot { version: self.version, positions: self.state.positions.clone(), step_seconds: 0.0, wetness, kept_version: self.kept_version, kept: self.kept.clone(), chains, head: self.head }
     }
 
-    /// Guide segment centres now (rest centres through the lattice), m.
+    /// Guide segment centres now (on the guides' references carried by the head and the lattice,
+    /// `Scene::guide_points`), m.
     pub(crate) fn centres_now(&self) -> Vec<Vec<Vector3<f64>>> {
-        let (f, n) = (&self.model.ffd, &self.state.positions);
-        self.centres.iter().map(|c| c.iter().map(|p| ffd_map(f, n, p)).collect()).collect()
+        (0..self.scene.guides.len()).map(|g| segment_centres(&self.scene.guide_points(&self.state.positions, &self.head, g), self.scene.guides[g].model.segments)).collect()
     }
+}
+
+/// The centres of `n` even segments of the polyline of even samples `r` (linear between samples), m.
+fn segment_centres(r: &[Vector3<f64>], n: usize) -> Vec<Vector3<f64>> {
+    (0..n).map(|k| {
+        let u = (k as f64 + 0.5) / n as f64 * (r.len() - 1) as f64;
+        let (i, f) = ((u.floor() as usize).min(r.len() - 2), u - u.floor().min((r.len() - 2) as f64));
+        r[i] * (1.0 - f) + r[i + 1] * f
+    }).collect()
 }
 
 /// The nozzle tools' and the scissors' settings the global layer uses (what a viewer's settings or a
@@ -290,6 +288,7 @@ pub struct ToolSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::ffd_map;
     use crate::testing::{small_scene, test_rot};
     use crate::tool::Tool;
 
@@ -308,7 +307,7 @@ mod tests {
         let behind = Vector3::new(0.0, -0.13, 0.0);
         let tool = free.positions().iter().map(|x| x.coords).min_by(|a, b| (a - behind).norm().total_cmp(&(b - behind).norm())).unwrap();
         let input = ToolInput { tool: Tool::Clip, present: true, position: tool, rotation: test_rot(), pressed: false, cuts: 0, ..ToolInput::default() };
-        let balls = tool_metaballs(&Tool::Clip.shape(), &tool, &test_rot(), &GlobalParams::default());
+        let balls = tool_metaballs(&Tool::Clip.shape(0.15), &tool, &test_rot(), &GlobalParams::default());
         for _ in 0..30 {
             free.step(0.01, &ToolInput::default());
             pushed.step(0.01, &input);

@@ -32,9 +32,8 @@
 
 use super::strands::samples_along;
 use super::HapticCore;
-use crate::scene::ffd_map;
 use tools::geometry::point_segment_distance;
-use nalgebra::{Matrix3, Point3, Vector3};
+use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 use strand::Strand;
 
 /// Where a simulated strand is in its life in the active set.
@@ -86,18 +85,15 @@ pub(crate) struct Choice {
     near: Vec<(f64, usize)>,
 }
 
-/// Each guide's settled shape bounded, so that the choice's scan passes over the guides far from the tool
-/// without mapping their samples through the lattice. The FFD's weights are non-negative and sum to one, so a
-/// sample mapped through the nodes is within D of itself mapped through the rest nodes, D the largest node
-/// displacement from rest: every mapped sample of guide g lies in the ball of centre `centres[g]` and radius
-/// `radii[g] + D`.
+/// Each guide's carried shape bounded, so that the choice's scan passes over the guides far from the tool
+/// without carrying their samples by the head and the lattice. The carried hair keeps its rest segment lengths
+/// with its root where the head holds it (`scene::carry_strand`), so every carried sample of guide g lies
+/// within the guide's length `radii[g]` of its root `centres[g]` carried by the head.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct GuideBounds {
-    /// The lattice's rest nodes, m.
-    rest: Vec<Point3<f64>>,
-    /// Centre of each guide's reference samples mapped through the rest nodes, m.
+    /// Each guide's root (head frame), m.
     centres: Vec<Vector3<f64>>,
-    /// Radius about it, m (rounding allowance included).
+    /// Its reference's length (rounding allowance included), m.
     radii: Vec<f64>,
 }
 
@@ -108,25 +104,9 @@ impl GuideBounds {
 
     /// The bounds of the scene's guides.
     pub fn new(scene: &crate::scene::Scene) -> Self {
-        let ffd = &scene.lattice.ffd;
-        let rest = ffd.rest_positions();
-        let (mut centres, mut radii) = (Vec::new(), Vec::new());
-        for g in &scene.guides {
-            let x: Vec<Vector3<f64>> = g.reference.iter().map(|p| ffd_map(ffd, &rest, p)).collect();
-            let (lo, hi) = x.iter().fold((Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY)), |(l, h), p| (l.inf(p), h.sup(p)));
-            let c = if x.is_empty() { Vector3::zeros() } else { (lo + hi) * 0.5 };
-            centres.push(c);
-            radii.push(x.iter().map(|p| (p - c).norm()).fold(0.0, f64::max) + Self::ROUNDING);
-        }
-        Self { rest, centres, radii }
-    }
-
-    /// The largest displacement of `nodes` from the rest nodes, m (infinite if they are not the lattice's).
-    fn slack(&self, nodes: &[Point3<f64>]) -> f64 {
-        if nodes.len() != self.rest.len() {
-            return f64::INFINITY;
-        }
-        nodes.iter().zip(&self.rest).map(|(n, r)| (n - r).norm()).fold(0.0, f64::max) + Self::ROUNDING
+        let centres = scene.guides.iter().map(|g| g.reference.first().copied().unwrap_or_default()).collect();
+        let radii = scene.guides.iter().map(|g| g.reference.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>() * (1.0 + 1e-12) + Self::ROUNDING).collect();
+        Self { centres, radii }
     }
 }
 
@@ -158,17 +138,31 @@ impl HapticCore {
     /// comb's outer teeth are 6.5 cm from it, and a strand chosen only once a tooth is inside it is kicked.
     /// All at once ([`HapticCore::update_active`] spreads the same scan over steps).
     #[cfg(test)]
-    pub(crate) fn choose(&self, tool: &Vector3<f64>, ahead: &Vector3<f64>, rotation: &Matrix3<f64>, nodes: &[Point3<f64>]) -> Vec<usize> {
+    pub(crate) fn choose(&self, tool: &Vector3<f64>, ahead: &Vector3<f64>, rotation: &Matrix3<f64>, nodes: &[Point3<f64>], head: &Isometry3<f64>) -> Vec<usize> {
         let mut c = Choice { tool: *tool, ahead: *ahead, rotation: *rotation, next: 0, near: Vec::new() };
-        self.scan(&mut c, self.scene.guides.len(), nodes);
+        self.scan(&mut c, self.scene.guides.len(), nodes, head);
         self.chosen(c)
     }
 
-    /// Scans the next `count` guides of the choice `c` (see [`HapticCore::choose`]).
-    fn scan(&self, c: &mut Choice, count: usize, nodes: &[Point3<f64>]) {
+    /// What of the tool the choice looks near (tool frame: capsules' ends and radius, m): its shape's capsules;
+    /// a blowing nozzle's jet instead (dryer, sprayer with the button held at the last step: its axis from the
+    /// nozzle, `GlobalParams::nozzle_standoff` behind the tool point along +z, over its cone's range along -z,
+    /// `tools::dryer::Cone::range`), so that the strands the jet blows are simulated, not those near the nozzle
+    /// or the aim point. A nozzle that does not blow touches the hair only with its body.
+    fn reach(&self) -> Vec<(Vector3<f64>, Vector3<f64>, f64)> {
+        if self.was_pressed && matches!(self.tool, crate::tool::Tool::Dryer | crate::tool::Tool::Sprayer) {
+            let back = self.params.global.nozzle_standoff;
+            let range = if self.tool == crate::tool::Tool::Dryer { tools::dryer::HairDryer::default().cone.range } else { tools::sprayer::Sprayer::default().cone.range };
+            return vec![(Vector3::new(0.0, 0.0, back), Vector3::new(0.0, 0.0, back - range), 0.0)];
+        }
+        self.shapes[self.tool as usize].capsules.iter().map(|c| (Vector3::from(c.a), Vector3::from(c.b), c.radius)).collect()
+    }
+
+    /// Scans the next `count` guides of the choice `c` (see [`HapticCore::choose`]), their references carried
+    /// by the lattice `nodes` and the head at `head`.
+    fn scan(&self, c: &mut Choice, count: usize, nodes: &[Point3<f64>], head: &Isometry3<f64>) {
         let r = self.params.activation_radius;
-        let shape = &self.shapes[self.tool as usize];
-        let caps: Vec<(Vector3<f64>, Vector3<f64>, f64)> = shape.capsules.iter().map(|c| (Vector3::from(c.a), Vector3::from(c.b), c.radius)).collect();
+        let caps = self.reach();
         let reach = caps.iter().map(|(a, b, rad)| a.norm().max(b.norm()) + rad).fold(0.0, f64::max);
         // The shape's box in its own frame: a point farther than d from it is farther than d from every capsule.
         let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
@@ -179,17 +173,14 @@ impl HapticCore {
         let (tool, ahead, rotation) = (c.tool, c.ahead, c.rotation);
         let poses = [tool, (tool + ahead) * 0.5, ahead];
         let end = (c.next + count).min(self.scene.guides.len());
-        let slack = self.bounds.slack(nodes);
         for g in c.next..end {
             // The guide's ball farther than the radius from the swept shape: none of its samples is nearer.
-            let ball = self.bounds.radii[g] + slack;
-            if point_segment_distance(&self.bounds.centres[g], &tool, &ahead) - reach - ball >= r {
+            let centre = (head * Point3::from(self.bounds.centres[g])).coords;
+            if point_segment_distance(&centre, &tool, &ahead) - reach - self.bounds.radii[g] >= r {
                 continue;
             }
-            let guide = &self.scene.guides[g];
             let mut d = f64::INFINITY;
-            for p in &guide.reference {
-                let x = ffd_map(&self.scene.lattice.ffd, nodes, p);
+            for x in self.scene.guide_points(nodes, head, g) {
                 // Cheap rejection by the shape's bounding sphere swept along the way.
                 let limit = r.min(d);
                 if point_segment_distance(&x, &tool, &ahead) - reach >= limit {
@@ -232,7 +223,7 @@ impl HapticCore {
     /// Stage 3 of the step: the choice (started when the tool, the proxy at `proxy`, m, moving at `velocity`,
     /// m/s, has moved far enough; one share of its scan per step) and the membership changes (joining, let-go
     /// strands leaving the simulation). Never while the clip holds a strand.
-    pub(crate) fn update_active(&mut self, proxy: &Vector3<f64>, velocity: &Vector3<f64>, rotation: &Matrix3<f64>, nodes: &[Point3<f64>]) {
+    pub(crate) fn update_active(&mut self, proxy: &Vector3<f64>, velocity: &Vector3<f64>, rotation: &Matrix3<f64>, nodes: &[Point3<f64>], head: &Isometry3<f64>) {
         if self.clipped || nodes.len() != self.scene.lattice.node_count() {
             return;
         }
@@ -251,7 +242,7 @@ impl HapticCore {
             let clock = std::time::Instant::now();
             let n = self.scene.guides.len();
             let share = n.div_ceil(self.params.haptic.choice_steps.max(1));
-            self.scan(&mut c, share, nodes);
+            self.scan(&mut c, share, nodes, head);
             let chosen = if c.next >= n { Some(self.chosen(c)) } else {
                 self.choice = Some(c);
                 None
@@ -363,7 +354,15 @@ impl HapticCore {
                 let g = old_guides[i];
                 let weight = old_members.get(i).map_or(0.0, |m| m.weight);
                 if weight > 0.0 {
-                    self.faded.push(Faded { guide: g, samples: samples_along(&s, self.scene.guides[g].model.length, samples), weight });
+                    let pts = samples_along(&s, self.scene.guides[g].model.length, samples);
+                    // The hand-over: what the display's fade hides (the strand's shown displacement from its
+                    // place carried by the global layer, at the nodes last seen).
+                    let mut cache = self.references.borrow_mut();
+                    let ok = cache.has_nodes(self.scene.lattice.node_count());
+                    let jump = pts.iter().zip(cache.bases(&self.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max);
+                    drop(cache);
+                    self.handover_max = self.handover_max.max(jump);
+                    self.faded.push(Faded { guide: g, samples: pts, weight });
                 }
                 self.strands[g] = Some(self.let_go(g, s));
             }
@@ -500,7 +499,7 @@ mod tests {
             }
         }
         let (from, to) = way.unwrap();
-        let want = core.choose(&from, &to, &test_rot(), &snap.positions);
+        let want = core.choose(&from, &to, &test_rot(), &snap.positions, &snap.head);
         let per = params.haptic.joins_per_step;
         assert!(want.len() > per, "the comb is in the hair, more guides than join in one step: {want:?}");
         assert!(core.active().is_empty(), "nothing joins on the step the scan ends");
@@ -609,30 +608,30 @@ mod tests {
 
     #[test]
     fn the_guide_balls_hold_every_mapped_sample_and_the_scan_chooses_the_same_guides() {
-        // Lattice nodes moved by a smooth field (up to ~1 cm): every guide sample mapped through them lies in its
-        // guide's ball (radius + the nodes' largest displacement), and a choice made with the balls is the
-        // choice made sample by sample (balls disabled), for tools all over the head.
+        // Lattice nodes moved by a smooth field (up to ~1 cm), the head still or turned and moved: every guide
+        // sample carried by them lies in its guide's ball (its length about its root), and a choice made with the
+        // balls is the choice made sample by sample (balls disabled), for tools all over the head.
         let scene = small_scene();
         let params = SessionParams::default();
         let mut core = HapticCore::new(scene.clone(), params).unwrap();
         let rest = scene.lattice.ffd.rest_positions();
         let mut compared = 0;
-        for a in [0.0, 4e-3, -9e-3] {
-            let nodes: Vec<Point3<f64>> = rest.iter().map(|p| p + Vector3::new(a * (7.0 * p.y).sin(), a * (5.0 * p.z).cos(), -a * p.x)).collect();
-            let slack = core.bounds.slack(&nodes);
-            for (g, guide) in scene.guides.iter().enumerate() {
-                for p in &guide.reference {
-                    let x = ffd_map(&scene.lattice.ffd, &nodes, p);
-                    assert!((x - core.bounds.centres[g]).norm() <= core.bounds.radii[g] + slack, "guide {g}, a {a}");
+        for (a, turn) in [(0.0, 0.0), (4e-3, 0.0), (-9e-3, 0.0), (4e-3, 0.3)] {
+            let head = Isometry3::new(Vector3::new(0.0, 0.005, -0.01) * turn, Vector3::new(0.0, 0.2, 1.0) * turn);
+            let nodes: Vec<Point3<f64>> = rest.iter().map(|p| head * p + Vector3::new(a * (7.0 * p.y).sin(), a * (5.0 * p.z).cos(), -a * p.x)).collect();
+            for g in 0..scene.guides.len() {
+                let centre = (head * Point3::from(core.bounds.centres[g])).coords;
+                for x in scene.guide_points(&nodes, &head, g) {
+                    assert!((x - centre).norm() <= core.bounds.radii[g], "guide {g}, a {a}");
                 }
             }
             for k in 0..12 {
                 let angle = k as f64 * 0.52;
                 let tool = Vector3::new(0.11 * angle.sin(), -0.11 * angle.cos(), 0.04 - 0.01 * k as f64);
                 let ahead = tool + Vector3::new(0.0, 0.0, -0.015);
-                let with = core.choose(&tool, &ahead, &test_rot(), &nodes);
+                let with = core.choose(&tool, &ahead, &test_rot(), &nodes, &head);
                 let radii = std::mem::replace(&mut core.bounds.radii, vec![f64::INFINITY; scene.guides.len()]);
-                let without = core.choose(&tool, &ahead, &test_rot(), &nodes);
+                let without = core.choose(&tool, &ahead, &test_rot(), &nodes, &head);
                 core.bounds.radii = radii;
                 assert_eq!(with, without, "tool at {tool:?}, a {a}");
                 compared += with.len();

@@ -127,6 +127,9 @@ pub struct HapticCore {
     pub runaways: u64,
     /// Strand steps that failed (state kept).
     pub failed: u64,
+    /// The largest hand-over to the global layer so far: a let-go strand's largest shown displacement from its
+    /// place carried by the global layer when it leaves the simulation (what its display fade hides), m.
+    pub(crate) handover_max: f64,
     /// Wall-clock time of the last step's stages.
     pub(crate) timings: StepPhases,
 }
@@ -198,14 +201,14 @@ impl HapticCore {
         let start = Vector3::from(params.haptic.start);
         let pose = ToolPose { position: start, rotation: Matrix3::identity() };
         let n = scene.guides.len();
-        let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape()).collect();
+        let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape(params.global.nozzle_standoff)).collect();
         let mut interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
         interaction.hold_distance = params.haptic.hold_distance;
         let bounds = active::GuideBounds::new(&scene);
         let side = DeviceSide::new(params, shapes.clone(), (scene.head.clone(), scene.lattice.params.metaball.threshold));
         Ok(Self {
             scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, side, proxy: ProxyState::default(), anchors: 0, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), references: Default::default(), staged: Default::default(), choice: None, bounds, queued: Vec::new(), max_tip_speed: 0.0, interaction,
-            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, strand_limit: params.max_active, head: nalgebra::Isometry3::identity(), rejected: 0, runaways: 0, failed: 0, timings: StepPhases::default(),
+            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, strand_limit: params.max_active, head: nalgebra::Isometry3::identity(), rejected: 0, runaways: 0, failed: 0, handover_max: 0.0, timings: StepPhases::default(),
         })
     }
 
@@ -329,7 +332,7 @@ impl HapticCore {
         let t1 = clock.elapsed().as_secs_f64();
         self.timings.coupling = t1;
         // 3. Active set; 4. roots.
-        self.update_active(&position, &velocity, &rotation, &lattice.positions);
+        self.update_active(&position, &velocity, &rotation, &lattice.positions, &lattice.head);
         self.roots_follow(dt);
         self.hold_in_place(lattice);
         let t2 = clock.elapsed().as_secs_f64();
@@ -385,7 +388,7 @@ impl HapticCore {
         let share = (self.step % every) as usize;
         let ok = lattice.positions.len() == self.scene.lattice.node_count();
         let mut cache = self.references.borrow_mut();
-        cache.use_nodes(&lattice.positions);
+        cache.use_nodes(&lattice.positions, &lattice.head);
         let mut staged = self.staged.borrow_mut();
         for slot in (share..self.active.len()).step_by(every as usize) {
             let g = self.active[slot];
@@ -444,7 +447,7 @@ impl HapticCore {
         let ok = lattice.positions.len() == self.scene.lattice.node_count();
         let every = self.params.publish_every.max(1);
         let mut cache = self.references.borrow_mut();
-        cache.use_nodes(&lattice.positions);
+        cache.use_nodes(&lattice.positions, &lattice.head);
         let mut staged = self.staged.borrow_mut();
         for (slot, &g) in self.active.iter().enumerate() {
             out.active.push(g as u32);
@@ -501,6 +504,12 @@ impl HapticCore {
     /// Fastest tip of the simulated strands over the last step, m/s.
     pub fn max_tip_speed(&self) -> f64 {
         self.max_tip_speed
+    }
+    /// The largest hand-over to the global layer so far, m: a let-go strand's largest shown displacement from
+    /// its place carried by the global layer when it left the simulation (what the display's fade over
+    /// `HapticParams::blend_time` hides).
+    pub fn handover_max(&self) -> f64 {
+        self.handover_max
     }
     /// Length of each active strand, m (shorter than its guide's once cut).
     pub fn active_lengths(&self) -> Vec<f64> {

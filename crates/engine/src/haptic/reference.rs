@@ -1,17 +1,18 @@
-//! The shown guides' reference samples mapped through the lattice, for
-//! [`HapticCore::snapshot`](super::HapticCore::snapshot): the viewer's displacement of a sample is its strand
-//! point minus this base.
+//! The shown guides' reference samples carried by the head and the lattice ([`carried`](crate::scene::carried)),
+//! for [`HapticCore::snapshot`](super::HapticCore::snapshot): the viewer's displacement of a sample is its
+//! strand point minus this base.
 //!
 //! Mapping every reference sample through the FFD on every published snapshot cost ~135 us on the haptic
 //! thread. A reference sample never moves, so its FFD stencil (27 node indices and weights) is found once per
-//! guide while the guide is shown, and the bases are summed again only when the lattice nodes change (at the
-//! global rate, not the publish rate). The numbers are the same as [`ffd_map`](crate::scene::ffd_map)'s: the
-//! same stencil and the same sum ([`FfdLattice::combine`]).
+//! guide while the guide is shown, and the bases are summed again only when the lattice nodes or the head
+//! change (at the global rate, not the publish rate). The numbers are the same as
+//! [`Scene::guide_points`]'s: the same stencil and the same sum ([`FfdLattice::combine`]), blended with the
+//! head's rigid motion by the same weight, then the same [`follow_the_leader`].
 
 use lattice::ffd::FfdLattice;
-use nalgebra::{Point3, Vector3};
+use nalgebra::{Isometry3, Point3, Vector3};
 
-use crate::scene::Scene;
+use crate::scene::{follow_the_leader, Scene};
 
 /// One guide's stencils and bases.
 #[derive(Debug, Clone)]
@@ -19,6 +20,8 @@ struct Entry {
     guide: usize,
     /// Each reference sample's FFD stencil (None: the sample could not be located, e.g. NaN; it maps to itself).
     stencils: Vec<Option<([usize; 27], [f64; 27])>>,
+    /// Each reference sample's weight of the lattice's motion (`Scene::guide_hold_weights`).
+    weights: Vec<f64>,
     /// The bases for the nodes in [`ReferenceCache::nodes`], m (head frame).
     bases: Vec<Vector3<f64>>,
     /// Whether the bases are for the current nodes.
@@ -30,14 +33,17 @@ struct Entry {
 pub(crate) struct ReferenceCache {
     /// The lattice nodes the fresh bases were mapped through, m (empty: none yet).
     nodes: Vec<Point3<f64>>,
+    /// The head pose they were carried by.
+    head: Isometry3<f64>,
     entries: Vec<Entry>,
 }
 
 impl ReferenceCache {
-    /// Maps through `nodes` from now on: the bases become stale if the nodes changed (compared exactly, so a
-    /// cached base is never from other nodes).
-    pub fn use_nodes(&mut self, nodes: &[Point3<f64>]) {
-        if self.nodes.as_slice() != nodes {
+    /// Maps through `nodes` and the head at `head` from now on: the bases become stale if either changed
+    /// (compared exactly, so a cached base is never from other nodes).
+    pub fn use_nodes(&mut self, nodes: &[Point3<f64>], head: &Isometry3<f64>) {
+        if self.nodes.as_slice() != nodes || self.head != *head {
+            self.head = *head;
             self.nodes.clear();
             self.nodes.extend_from_slice(nodes);
             for e in &mut self.entries {
@@ -46,31 +52,41 @@ impl ReferenceCache {
         }
     }
 
-    /// The reference samples of `guide` mapped through the nodes given to [`use_nodes`](Self::use_nodes) (`ok`: they
-    /// are the lattice's nodes; otherwise the references themselves, as `ffd_map` does), m.
+    /// The reference samples of `guide` carried by the head and the nodes given to [`use_nodes`](Self::use_nodes)
+    /// (`ok`: they are the lattice's nodes; otherwise the references carried by the head alone), m.
     pub fn bases<'a>(&'a mut self, scene: &'a Scene, guide: usize, ok: bool) -> &'a [Vector3<f64>] {
         let reference = &scene.guides[guide].reference;
-        if !ok {
-            return reference;
-        }
         let ffd: &FfdLattice = &scene.lattice.ffd;
         let i = match self.entries.iter().position(|e| e.guide == guide) {
             Some(i) => i,
             None => {
                 let stencils = reference.iter().map(|p| ffd.weights_clamped(&Point3::from(*p)).ok()).collect();
-                self.entries.push(Entry { guide, stencils, bases: Vec::new(), fresh: false });
+                self.entries.push(Entry { guide, stencils, weights: scene.guide_hold_weights(guide), bases: Vec::new(), fresh: false });
                 self.entries.len() - 1
             }
         };
         let e = &mut self.entries[i];
         if !e.fresh {
             e.bases.clear();
-            for (s, p) in e.stencils.iter().zip(reference) {
-                e.bases.push(s.as_ref().map_or(*p, |(idx, w)| FfdLattice::combine(idx, w, &self.nodes)));
+            for ((s, p), &w) in e.stencils.iter().zip(reference).zip(&e.weights) {
+                // As `scene::carried`: the head's rigid motion, blended into the FFD by the sample's weight.
+                let rigid = (self.head * Point3::from(*p)).coords;
+                let base = match (ok && w > 0.0, s.as_ref()) {
+                    (true, Some((idx, fw))) => rigid + (FfdLattice::combine(idx, fw, &self.nodes) - rigid) * w,
+                    (true, None) => rigid + (*p - rigid) * w,
+                    (false, _) => rigid,
+                };
+                e.bases.push(base);
             }
+            follow_the_leader(reference, &self.head, &mut e.bases);
             e.fresh = true;
         }
         &e.bases
+    }
+
+    /// Whether the nodes last given are a lattice's of `count` nodes.
+    pub fn has_nodes(&self, count: usize) -> bool {
+        self.nodes.len() == count
     }
 
     /// Drops the guides not in `shown` (those no snapshot shows any more).
@@ -84,7 +100,6 @@ mod tests {
     use super::*;
     use crate::global::GlobalCore;
     use crate::params::SessionParams;
-    use crate::scene::ffd_map;
     use crate::testing::small_scene;
 
     /// The rest nodes moved by a smooth field scaled by `a` (m), so every stencil sees different nodes.
@@ -93,22 +108,23 @@ mod tests {
     }
 
     #[test]
-    fn bases_equal_ffd_map_exactly_and_follow_the_nodes() {
-        // The cache must give bit-for-bit the numbers of mapping each reference sample afresh (`ffd_map`),
-        // also after the nodes change (stale bases would differ by ~mm here) and for guides dropped and re-shown.
+    fn bases_equal_the_carried_references_exactly_and_follow_the_nodes_and_the_head() {
+        // The cache must give bit-for-bit the numbers of carrying each reference sample afresh
+        // (`Scene::guide_points`), also after the nodes or the head change (stale bases would differ by ~mm here)
+        // and for guides dropped and re-shown.
         let scene = small_scene();
         let rest = GlobalCore::new(scene.clone(), &SessionParams::default()).snapshot().positions;
         let mut cache = ReferenceCache::default();
         let guides = [0, scene.guides.len() / 2, scene.guides.len() - 1];
-        for (round, a) in [0.0, 3e-3, 3e-3, -2e-3].into_iter().enumerate() {
+        for (round, a) in [0.0, 3e-3, 3e-3, -2e-3, -2e-3].into_iter().enumerate() {
             let nodes = moved(&rest, a);
-            cache.use_nodes(&nodes);
+            let head = if round == 4 { Isometry3::new(Vector3::new(0.0, 0.01, 0.0), Vector3::new(0.0, 0.0, 0.2)) } else { Isometry3::identity() };
+            cache.use_nodes(&nodes, &head);
             // Round 2 shows one guide only, so the others are dropped and made again in round 3.
             let shown: &[usize] = if round == 2 { &guides[..1] } else { &guides };
             for &g in shown {
-                let want: Vec<_> = scene.guides[g].reference.iter().map(|p| ffd_map(&scene.lattice.ffd, &nodes, p)).collect();
+                let want = scene.guide_points(&nodes, &head, g);
                 assert_eq!(cache.bases(&scene, g, true), want.as_slice(), "guide {g}, round {round}");
-                assert_eq!(cache.bases(&scene, g, false), scene.guides[g].reference.as_slice());
             }
             cache.keep_only(&shown.iter().map(|&g| g as u32).collect::<Vec<_>>());
             assert_eq!(cache.entries.len(), shown.len());

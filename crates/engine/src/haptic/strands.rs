@@ -79,7 +79,7 @@ impl HapticCore {
         let share = (self.step % shares) as usize;
         let ok = lattice.positions.len() == self.scene.lattice.node_count();
         let mut cache = self.references.borrow_mut();
-        cache.use_nodes(&lattice.positions);
+        cache.use_nodes(&lattice.positions, &lattice.head);
         for (slot, &g) in self.active.iter().enumerate() {
             let hold = &mut self.interaction.holds[slot];
             if hold.is_some() && slot % shares as usize != share {

@@ -112,7 +112,7 @@ mod tests {
         let want = SessionParams::default().haptic.combing_friction(wet.friction, 0.0);
         assert!((friction(&wet_core) - want).abs() < 1e-12 * want, "wet friction {} vs {want}", friction(&wet_core));
         assert!((friction(&dry_core) - SessionParams::default().haptic.combing_friction(h.friction_coefficient(), 0.0)).abs() < 1e-12);
-        assert!(friction(&wet_core) > 5.0 * friction(&dry_core));
+        assert!(friction(&wet_core) > 1.4 * friction(&dry_core), "the fibre surface's wet rise (1.5)");
         // The constraints' cap is the fibre's lateral stiffness over the entanglement span (6.6 mm), 48 EI / span^3,
         // with the wet fibre's softer E when wet (`strands::contact_options`; the formula written out here).
         let cap = |c: &HapticCore| match c.interaction.model {

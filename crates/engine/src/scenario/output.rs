@@ -198,6 +198,9 @@ pub struct LiveSummary {
     pub max_force_change_n: f64,
     /// Fastest tip of a simulated strand over the run, m/s.
     pub max_strand_speed_m_s: f64,
+    /// The largest hand-over of a local strand to the global layer: its shown displacement from its place
+    /// carried by the global layer when it left the simulation (what the display's fade hides), m.
+    pub max_handover_m: f64,
     /// Deepest render vertex inside the head and body at any measure as the viewer shows it (every 25th
     /// strand sampled; the lattice's FFD, then the viewer's push-out), m; 0 if none.
     pub max_depth_in_body_m: f64,
@@ -263,6 +266,7 @@ impl LiveSummary {
             stroke_force_share: if moving > 0 { felt_moving as f64 / moving as f64 } else { 0.0 },
             max_force_change_n: change,
             max_strand_speed_m_s: meter.max_tip_speed,
+            max_handover_m: meter.handover,
             max_depth_in_body_m: meter.max_depth,
             max_depth_before_push_out_m: meter.max_depth_raw,
             haptic_step_p50_us: p50 * 1e6,

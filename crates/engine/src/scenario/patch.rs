@@ -10,7 +10,7 @@
 //!    the comb drags through the wisps against the fibres it parts ([`tools::entanglement`]);
 //! 3. settle the patch under gravity in the [`tools::interaction::LocalInteraction`] (hair-hair contacts on, the
 //!    tool held at its path's start);
-//! 4. every step move the tool along its path, step the interaction and record the force and torque on the
+//! 4. every step move the tool along its path (coming up to speed over `[tool] ease_in`), step the interaction and record the force and torque on the
 //!    tool, scaled by the number of real hairs each simulated strand stands for;
 //! 5. summarise, with the stroke's quality figures ([`super::output::StrokeMetrics`]) and a combing rig's
 //!    ([`super::combing`]: the force by the comb's position from the roots, the combing work, the work in each
@@ -173,6 +173,12 @@ pub struct ToolSpec {
     /// slider does ([`HapticParams::combing_friction`]).
     #[serde(default)]
     pub combing_ease: f64,
+    /// Time the tool takes to come up to its path's speed from rest, s (default 0.04): the path's clock runs as
+    /// `t^2 / (2 T)` for the first `T` seconds (uniform acceleration), then `t - T / 2`, so the path ends `T / 2`
+    /// later. A rig's drive or a hand starts a stroke from rest (at 0.25 m/s, 0.04 s is 6 m/s^2); a tool thrown
+    /// to speed in one step jerks every fibre it holds at once. 0: the path as written.
+    #[serde(default = "default_ease_in")]
+    pub ease_in: f64,
     /// Waypoints (time from the end of settling, s).
     #[serde(default)]
     pub path: Vec<Waypoint>,
@@ -186,6 +192,21 @@ pub struct ToolSpec {
 
 fn default_strokes() -> u32 {
     1
+}
+
+fn default_ease_in() -> f64 {
+    0.04
+}
+
+/// The path's clock at time `t` (s) for a tool coming up to speed over `ease_in` s ([`ToolSpec::ease_in`]).
+pub fn eased_time(t: f64, ease_in: f64) -> f64 {
+    if ease_in <= 0.0 {
+        t
+    } else if t < ease_in {
+        t * t / (2.0 * ease_in)
+    } else {
+        t - 0.5 * ease_in
+    }
 }
 
 fn default_force_model() -> String {
@@ -322,6 +343,9 @@ impl Scenario {
             "constraint" | "paper" => {}
             other => return bad(format!("tool.force_model must be \"constraint\" or \"paper\", got {other:?}")),
         }
+        if !(self.tool.ease_in.is_finite() && (0.0..=1.0).contains(&self.tool.ease_in)) {
+            return bad(format!("tool.ease_in must be in [0, 1] s, got {}", self.tool.ease_in));
+        }
         if !(self.tool.gain.is_finite() && self.tool.gain >= 0.0) {
             return bad(format!("tool.gain must be >= 0, got {}", self.tool.gain));
         }
@@ -427,14 +451,15 @@ impl Scenario {
         for n in 0..settle_steps {
             it.step(self.dt, path.pose(0.0)).map_err(|e| ScenarioError::Simulation { time: -self.settle + n as f64 * self.dt, source: e })?;
         }
-        let duration = self.duration.unwrap_or(cycle.end_time() + 0.05);
+        let ease = self.tool.ease_in;
+        let duration = self.duration.unwrap_or(cycle.end_time() + 0.5 * ease + 0.05);
         let steps = (duration / self.dt).round() as usize;
         let mut rows = Vec::with_capacity(steps);
         let mut work = 0.0;
         let mut last = path.pose(0.0).position;
         for n in 1..=steps {
             let t = n as f64 * self.dt;
-            let (pose, stroke) = cycle.pose(t);
+            let (pose, stroke) = cycle.pose(eased_time(t, ease));
             let r = it.step(self.dt, pose).map_err(|e| ScenarioError::Simulation { time: t, source: e })?;
             let force = r.force * k;
             work -= force.dot(&(pose.position - last));
@@ -507,7 +532,7 @@ mod tests {
         assert_eq!(a.0, b.0, "same trace twice, to the bit");
         assert!(a.1.contact_steps > 0, "the comb met the hair");
         assert!(a.1.peak_force > 0.0);
-        assert_eq!(a.1.steps, 250);
+        assert_eq!(a.1.steps, 270, "0.2 s of path, 0.02 s later for the ease-in, and 0.05 s");
     }
 
     #[test]

@@ -51,7 +51,7 @@ impl Scene {
         let ffd = FfdLattice::enclosing(lo, hi, opts.cell).map_err(|e| SessionError::Scene(e.to_string()))?;
         let hair_mass: f64 = style.guides.first().map_or(0.0, |g| g.model.mass()) * render.strands() as f64;
         let lattice = lattice_for_hair(ffd, &render.positions, hair_mass.max(1e-6), &style.head.body, rad)?;
-        Ok(Scene { head: style.head.body.clone(), head_mesh, render, guides, hair_type, lattice })
+        Ok(Scene { head: style.head.body.clone(), head_mesh, render, guides, hair_type, lattice, root_hold: HairLatticeParams::default().root_hold })
     }
 }
 

@@ -60,7 +60,7 @@ impl Scene {
         }
         let radius = hairstyle::HeadParams::default().head_radius;
         let lattice = lattice_for_hair(ffd, &render.positions, hair_mass.max(1e-6), &base.head, radius)?;
-        Ok(Scene { head: base.head, head_mesh: base.head_mesh, render, guides: base.guides, hair_type: base.hair_type, lattice })
+        Ok(Scene { head: base.head, head_mesh: base.head_mesh, render, guides: base.guides, hair_type: base.hair_type, lattice, root_hold: base.root_hold })
     }
 }
 

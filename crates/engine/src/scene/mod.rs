@@ -1,6 +1,7 @@
 //! The scene (model: immutable once built, shared by the threads): head, render hair, guides and lattice.
 //! Built from the built-in hairstyle ([`builtin`]) or from a file's curves ([`from_curves`]); where the render
-//! strands are now ([`render`]: [`Scene::render_curves`]).
+//! strands are now ([`render`]: [`Scene::render_curves`]); the one law of hair carried by the head and the
+//! lattice ([`carried`]).
 
 mod builtin;
 mod from_curves;
@@ -12,7 +13,7 @@ pub use render::GuideDisplacements;
 use lattice::ffd::FfdLattice;
 use lattice::lattice::LatticeModel;
 use lattice::metaball::MetaballSet;
-use nalgebra::{Point3, Vector3};
+use nalgebra::{Isometry3, Point3, Vector3};
 use strand::{HairType, StrandModel};
 
 /// A triangle mesh for display, f32 (head frame, m).
@@ -113,6 +114,9 @@ pub struct Scene {
     pub hair_type: HairType,
     /// The lattice (geometry, masses, stiffeners).
     pub lattice: LatticeModel,
+    /// Length of hair from the root over which the head's hold gives way to the lattice's motion, m
+    /// ([`root_hold_weight`]; `HairLatticeParams::root_hold`).
+    pub root_hold: f64,
 }
 
 impl Scene {
@@ -120,6 +124,73 @@ impl Scene {
     pub fn samples(&self) -> usize {
         self.guides.first().map_or(0, |g| g.reference.len())
     }
+
+    /// Weight of the lattice's motion at each reference sample of guide `g` ([`root_hold_weight`] of its
+    /// arc length from the root: the samples are even in arc length over the guide's length).
+    pub fn guide_hold_weights(&self, g: usize) -> Vec<f64> {
+        let guide = &self.guides[g];
+        let n = guide.reference.len();
+        (0..n).map(|k| root_hold_weight(k as f64 / (n - 1).max(1) as f64 * guide.model.length, self.root_hold)).collect()
+    }
+
+    /// Guide `g`'s reference samples carried by the head at `head` and the lattice `nodes` now, by the one law
+    /// of the carried hair ([`carry_strand`]), m (world).
+    pub fn guide_points(&self, nodes: &[Point3<f64>], head: &Isometry3<f64>, g: usize) -> Vec<Vector3<f64>> {
+        let mut out = Vec::new();
+        carry_strand(&self.lattice.ffd, nodes, head, &self.guides[g].reference, &self.guide_hold_weights(g), &mut out);
+        out
+    }
+}
+
+/// Weight of the lattice's motion, in [0, 1], at rest arc length `s` (m) from a strand's root, the head
+/// holding the first `hold` m (m; 0: none): 0 at the root, rising as the smoothstep 3x^2 - 2x^3 of
+/// x = s / hold to 1 at `hold` and beyond (C1, as GLSL's `smoothstep(0, hold, s)`).
+pub fn root_hold_weight(s: f64, hold: f64) -> f64 {
+    if !(hold > 0.0) {
+        return 1.0;
+    }
+    let x = (s / hold).clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+/// Where the global layer puts a rest point `p` (head frame, m) whose lattice weight is `w` ([`root_hold_weight`]
+/// of its arc length from its root): `H p + w (FFD(p) - H p)`, H the head pose (head frame to world) and FFD the
+/// lattice's map through the nodes `nodes` ([`ffd_map`]), m (world): the head's rigid motion at the root,
+/// the lattice's from `Scene::root_hold` on. The lattice at rest (its nodes at H of their rest) gives H p for
+/// every w, since the FFD reproduces affine maps. The target of a strand point in [`carry_strand`].
+pub fn carried(ffd: &FfdLattice, nodes: &[Point3<f64>], head: &Isometry3<f64>, p: &Vector3<f64>, w: f64) -> Vector3<f64> {
+    let rigid = (head * Point3::from(*p)).coords;
+    if w <= 0.0 {
+        return rigid;
+    }
+    rigid + (ffd_map(ffd, nodes, p) - rigid) * w
+}
+
+/// Follow the leader (Mueller, Kim and Chentanez, "Fast simulation of inextensible hair and fur", VRIPHYS
+/// 2012): `points` hold each strand point's target (m, world), root first; the root stays on its target and
+/// each next point is put at its rest distance from the previous one (`rest`: the rest points, m), towards its
+/// target (along the rest segment turned by the head `head` if the target is on the previous point). The
+/// strand then has its rest segment lengths exactly, whatever the targets.
+pub fn follow_the_leader(rest: &[Vector3<f64>], head: &Isometry3<f64>, points: &mut [Vector3<f64>]) {
+    for k in 1..points.len().min(rest.len()) {
+        let length = (rest[k] - rest[k - 1]).norm();
+        let to = points[k] - points[k - 1];
+        let dir = if to.norm() > 1e-12 { to / to.norm() } else { (head.rotation * (rest[k] - rest[k - 1])).try_normalize(0.0).unwrap_or_else(Vector3::zeros) };
+        points[k] = points[k - 1] + dir * length;
+    }
+}
+
+/// The one law of hair carried by the global layer, for the render strands ([`Scene::render_vertex`], the
+/// server's save, the scissors' cut), the guides' references ([`Scene::guide_points`]: what the local strands'
+/// displacements are measured from, the choice of the local strands) and the viewer's shader
+/// (`web/src/shaders/hairDeform.glsl.ts`): a strand's rest points `rest` (head frame, root first, m) with the
+/// lattice's weights `weights` ([`root_hold_weight`]) go to their targets ([`carried`]: the root where the head
+/// holds it, the hair beyond the root hold with the lattice), then [`follow_the_leader`] keeps the rest segment
+/// lengths. Fills `out` (cleared first) with the points now, m (world).
+pub fn carry_strand(ffd: &FfdLattice, nodes: &[Point3<f64>], head: &Isometry3<f64>, rest: &[Vector3<f64>], weights: &[f64], out: &mut Vec<Vector3<f64>>) {
+    out.clear();
+    out.extend(rest.iter().zip(weights).map(|(p, &w)| carried(ffd, nodes, head, p, w)));
+    follow_the_leader(rest, head, out);
 }
 
 /// FFD of a head-frame point through lattice nodes (clamped to the embedded volume;

@@ -1,11 +1,12 @@
-//! Where the render strands are now: the one Rust law of the render hair following the lattice and the
-//! local strands, used by the `[[action]]` scenarios' output and the server's save. The viewer's vertex
-//! shader (`web/src/shaders/hairDeform.glsl.ts`, steps 2 and 3: FFD of the rest position, then the
-//! guides' displacement interpolated along the guide) computes the same on the GPU; its wet clumping,
-//! curl helix and body push-out (steps 1, 4, 5) are display effects that are not saved.
+//! Where the render strands are now: the one Rust law of the render hair following the head, the lattice and
+//! the local strands, used by the `[[action]]` scenarios' output and the server's save. The viewer's vertex
+//! shader (`web/src/shaders/hairDeform.glsl.ts`, steps 2 and 3: the strand carried by the head and the
+//! lattice, [`carry_strand`], then the guides' displacement interpolated along the guide) computes the same on
+//! the GPU; its wet clumping, curl helix and body push-out (steps 1, 4, 5) are display effects that are not
+//! saved.
 
-use super::{ffd_map, Scene};
-use nalgebra::{Point3, Vector3};
+use super::{carry_strand, root_hold_weight, Scene};
+use nalgebra::{Isometry3, Point3, Vector3};
 
 /// The local strands' displacements the render strands follow (what the haptic snapshot carries:
 /// `HapticSnapshot::active` and `displacement`).
@@ -21,15 +22,47 @@ pub struct GuideDisplacements<'a> {
 }
 
 impl Scene {
-    /// Vertex `j` of render strand `i` now, m (head frame): its rest position through the lattice of node
-    /// positions `nodes` (the FFD, [`ffd_map`]), plus, for each of its guides that is active, the guide's
-    /// displacement at the fraction `span_i j / (V - 1)` of its length (linear between samples) times the
-    /// strand's weight for that guide.
-    pub fn render_vertex(&self, nodes: &[Point3<f64>], guides: &GuideDisplacements, i: usize, j: usize) -> Vector3<f64> {
+    /// Rest arc length of vertex `j` of render strand `i` from the strand's root, m (the sum of its rest
+    /// segments' lengths, in f64 of the f32 positions, as the viewer sums them).
+    pub fn render_arc_length(&self, i: usize, j: usize) -> f64 {
+        let nv = self.render.vertices_per_strand;
+        let p = |k: usize| Vector3::from(self.render.positions[i * nv + k]).cast::<f64>();
+        (1..=j.min(nv.saturating_sub(1))).map(|k| (p(k) - p(k - 1)).norm()).sum()
+    }
+
+    /// Render strand `i` carried by the head at `head` and the lattice of node positions `nodes` now, without
+    /// the local strands: the one law of the carried hair ([`carry_strand`]; each vertex's lattice weight from
+    /// its rest arc length, [`root_hold_weight`]), m (world).
+    pub fn render_strand(&self, nodes: &[Point3<f64>], head: &Isometry3<f64>, i: usize) -> Vec<Vector3<f64>> {
+        let nv = self.render.vertices_per_strand;
+        let rest: Vec<Vector3<f64>> = self.render.positions[i * nv..(i + 1) * nv].iter().map(|p| Vector3::from(*p).cast::<f64>()).collect();
+        let mut arc = 0.0;
+        let weights: Vec<f64> = (0..nv)
+            .map(|j| {
+                if j > 0 {
+                    arc += (rest[j] - rest[j - 1]).norm();
+                }
+                root_hold_weight(arc, self.root_hold)
+            })
+            .collect();
+        let mut out = Vec::with_capacity(nv);
+        carry_strand(&self.lattice.ffd, nodes, head, &rest, &weights, &mut out);
+        out
+    }
+
+    /// Vertex `j` of render strand `i` now, m (world): the strand carried by the head at `head` and the lattice
+    /// of node positions `nodes` ([`Scene::render_strand`]), plus, for each of its guides that is active, the
+    /// guide's displacement at the fraction `span_i j / (V - 1)` of its length (linear between samples) times
+    /// the strand's weight for that guide.
+    pub fn render_vertex(&self, nodes: &[Point3<f64>], head: &Isometry3<f64>, guides: &GuideDisplacements, i: usize, j: usize) -> Vector3<f64> {
+        self.render_strand(nodes, head, i)[j] + self.guide_offset(guides, i, j)
+    }
+
+    /// The active guides' displacement of vertex `j` of render strand `i` (see [`Scene::render_vertex`]), m.
+    fn guide_offset(&self, guides: &GuideDisplacements, i: usize, j: usize) -> Vector3<f64> {
         let r = &self.render;
         let nv = r.vertices_per_strand;
-        let p = r.positions[i * nv + j];
-        let mut q = ffd_map(&self.lattice.ffd, nodes, &Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64));
+        let mut q = Vector3::zeros();
         let (k, s) = (r.guides_per_strand, guides.samples);
         if guides.active.is_empty() || s == 0 {
             return q;
@@ -53,12 +86,12 @@ impl Scene {
     /// units: `V - 1` uncut, `k + f` ends on the straight segment from vertex k to k + 1 at the fraction f, where
     /// the global layer cut it; a missing entry: uncut), as f32 curves (m). Strands left with fewer than two
     /// points are left out. Lattice `nodes` of the wrong count are taken as the rest lattice.
-    pub fn render_curves(&self, nodes: &[Point3<f64>], kept: &[f64], guides: &GuideDisplacements) -> hairstyle::HairCurves {
-        let rest;
+    pub fn render_curves(&self, nodes: &[Point3<f64>], head: &Isometry3<f64>, kept: &[f64], guides: &GuideDisplacements) -> hairstyle::HairCurves {
+        let rest: Vec<Point3<f64>>;
         let nodes = if nodes.len() == self.lattice.node_count() {
             nodes
         } else {
-            rest = self.lattice.rest.clone();
+            rest = self.lattice.rest.iter().map(|p| head * p).collect();
             &rest
         };
         let nv = self.render.vertices_per_strand;
@@ -68,10 +101,12 @@ impl Scene {
             .map(|i| {
                 let k = kept.get(i).map_or(last, |&k| if k.is_finite() { k.clamp(0.0, last) } else { last });
                 let whole = k.floor() as usize;
-                let mut s: Vec<[f32; 3]> = (0..=whole).map(|j| f32s(self.render_vertex(nodes, guides, i, j))).collect();
+                let strand = self.render_strand(nodes, head, i);
+                let vertex = |j: usize| strand[j] + self.guide_offset(guides, i, j);
+                let mut s: Vec<[f32; 3]> = (0..=whole).map(|j| f32s(vertex(j))).collect();
                 let frac = k - whole as f64;
                 if frac > 0.0 && whole + 1 < nv {
-                    let (a, b) = (self.render_vertex(nodes, guides, i, whole), self.render_vertex(nodes, guides, i, whole + 1));
+                    let (a, b) = (vertex(whole), vertex(whole + 1));
                     s.push(f32s(a * (1.0 - frac) + b * frac));
                 }
                 s
@@ -94,19 +129,40 @@ mod tests {
     use crate::testing::small_scene;
 
     #[test]
-    fn render_strands_follow_the_lattice_and_the_active_guides() {
-        // At rest and without active guides every vertex is its rest position (to 1e-9 m, the FFD's
-        // round trip); a uniform lattice shift moves every vertex by it; an active guide displaced by a
-        // constant vector moves the strands bound to it by their weight for it times that vector (1e-9 m).
+    fn render_strands_keep_their_roots_and_lengths_follow_the_lattice_beyond_and_the_active_guides() {
+        // At rest and without active guides every vertex is its rest position (to 1e-7 m, the FFD's round trip
+        // in f32). Under a uniform lattice shift of 2.3 cm (a 2 cm cell would move the roots by it through the
+        // FFD alone) every root stays where the head holds it, every rest segment keeps its length (1e-9 m) and
+        // the tips move with the shift (most of it along it). The head turned and moved with the lattice carried
+        // rigidly moves every vertex rigidly (1e-9 m); an active guide displaced by a constant vector moves the
+        // strands bound to it by their weight for it times that vector (1e-9 m).
         let s = small_scene();
+        let id = Isometry3::identity();
         let none = GuideDisplacements::default();
         let rest = s.lattice.rest.clone();
-        let p0 = s.render.positions[5 * s.render.vertices_per_strand + 3];
-        let v = s.render_vertex(&rest, &none, 5, 3);
+        let nv = s.render.vertices_per_strand;
+        let far = nv - 1;
+        let p0 = s.render.positions[5 * nv + far];
+        let v = s.render_vertex(&rest, &id, &none, 5, far);
         assert!((v - Vector3::new(p0[0] as f64, p0[1] as f64, p0[2] as f64)).norm() < 1e-7, "{v:?} vs {p0:?}");
         let shift = Vector3::new(0.01, -0.02, 0.005);
         let moved: Vec<Point3<f64>> = rest.iter().map(|p| p + shift).collect();
-        assert!((s.render_vertex(&moved, &none, 5, 3) - v - shift).norm() < 1e-9);
+        for i in 0..s.render.strands() {
+            let x = s.render_strand(&moved, &id, i);
+            let r: Vec<Vector3<f64>> = (0..nv).map(|j| Vector3::from(s.render.positions[i * nv + j]).cast::<f64>()).collect();
+            assert!((x[0] - r[0]).norm() < 1e-12, "root of strand {i} left the head");
+            for j in 1..nv {
+                assert!(((x[j] - x[j - 1]).norm() - (r[j] - r[j - 1]).norm()).abs() < 1e-9, "strand {i} segment {j} changed its length");
+            }
+            let tip = x[nv - 1] - r[nv - 1];
+            assert!(tip.dot(&shift) > 0.5 * shift.norm_squared(), "strand {i}: tip moved {tip:?} under the shift {shift:?}");
+        }
+        let head = Isometry3::new(Vector3::new(0.01, 0.0, -0.02), Vector3::new(0.1, -0.3, 0.2));
+        let carried: Vec<Point3<f64>> = rest.iter().map(|p| head * p).collect();
+        for j in 0..nv {
+            let r = Point3::from(Vector3::from(s.render.positions[5 * nv + j]).cast::<f64>());
+            assert!((s.render_vertex(&carried, &head, &none, 5, j) - (head * r).coords).norm() < 1e-9, "vertex {j}");
+        }
         let k = s.render.guides_per_strand;
         let g = s.render.guide[5 * k];
         let n = s.samples();
@@ -115,20 +171,22 @@ mod tests {
         let active = [g];
         let with = GuideDisplacements { active: &active, displacement: &disp, samples: n };
         let want: f64 = (0..k).filter(|&m| s.render.guide[5 * k + m] == g).map(|m| s.render.weight[5 * k + m] as f64).sum();
-        let got = s.render_vertex(&rest, &with, 5, 3) - v;
+        let got = s.render_vertex(&rest, &id, &with, 5, far) - v;
         assert!(want > 0.0 && (got - d * want).norm() < 1e-9, "{got:?} vs {want} x {d:?}");
         // Kept points cut the curves; strands with fewer than 2 points are left out.
         let mut kept = vec![s.render.vertices_per_strand as u16; s.render.strands()];
         kept[0] = 3;
         kept[1] = 1;
-        let c = s.render_curves(&rest, &Scene::kept_lengths_of_points(&kept), &none);
+        let c = s.render_curves(&rest, &id, &Scene::kept_lengths_of_points(&kept), &none);
         assert_eq!(c.strands.len(), s.render.strands() - 1);
         assert_eq!(c.strands[0].len(), 3);
         // A fractional kept length ends between two vertices, on the straight segment.
         let mut k = vec![(s.render.vertices_per_strand - 1) as f64; s.render.strands()];
         k[0] = 2.25;
-        let c = s.render_curves(&rest, &k, &none);
-        let (a, b) = (s.render_vertex(&rest, &none, 0, 2), s.render_vertex(&rest, &none, 0, 3));
+        let c = s.render_curves(&moved, &id, &k, &none);
+        let (a, b) = (s.render_vertex(&moved, &id, &none, 0, 2), s.render_vertex(&moved, &id, &none, 0, 3));
+        let whole = s.render_curves(&moved, &id, &[], &none);
+        assert!((0..nv).all(|j| (0..3).all(|x| (whole.strands[0][j][x] as f64 - s.render_vertex(&moved, &id, &none, 0, j)[x]).abs() < 1e-7)), "the curves are the vertices");
         let e = a * 0.75 + b * 0.25;
         assert_eq!(c.strands[0].len(), 4);
         assert!((0..3).all(|x| (c.strands[0][3][x] as f64 - e[x]).abs() < 1e-7));

@@ -28,6 +28,7 @@ interface Status {
   chainPoints: number; // points of the falling chains in the last frame
   tool: number;
   errors: P.ErrorMsg[];
+  recordStopped: string | null; // why `serve --record` stopped recording (ERROR 7), kept in the status bar
   frameTimes: number[];
   gpuFrameMs: number | null; // GPU time of the last measured frame (EXT_disjoint_timer_query_webgl2), null if unavailable
   gpuTimer: boolean; // the timer query extension exists
@@ -71,7 +72,7 @@ const device = new MouseDevice(view.camera, canvas);
 const status: Status = {
   webgl2: view.renderer.getContext() instanceof WebGL2RenderingContext,
   connected: false, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
-  runaways: 0, treatment: '', toolFriction: NaN, lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], frameTimes: [], strands: 0,
+  runaways: 0, treatment: '', toolFriction: NaN, lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], recordStopped: null, frameTimes: [], strands: 0,
   gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairColour: DEFAULT_HAIR_COLOUR,
   get hairDrawCalls() { return view.hairDrawCalls; },
   get hairSegmentsPerCall() { return view.hairSegmentsPerCall; },
@@ -157,6 +158,7 @@ ws.onmessage = (ev) => {
     case P.Server.ERROR: {
       const e = P.decodeError(buf);
       status.errors.push(e);
+      if (e.code === 7) status.recordStopped = e.message;
       statusEl.textContent = `server: ${e.message}`;
       break;
     }
@@ -164,7 +166,7 @@ ws.onmessage = (ev) => {
       const v = new DataView(buf);
       status.youControl = v.getUint8(2) === 1;
       status.viewers = v.getUint32(3, true);
-      statusEl.textContent = `${status.youControl ? 'you control the tool' : 'watching'} (${status.viewers} viewer${status.viewers === 1 ? '' : 's'})`;
+      statusEl.textContent = `${status.youControl ? 'you control the tool' : 'watching'} (${status.viewers} viewer${status.viewers === 1 ? '' : 's'})${status.recordStopped ? `; ${status.recordStopped}` : ''}`;
       break;
     }
     case P.Server.FILE: {

@@ -3,11 +3,16 @@
 //! [`DeviceSide`]) and the **physics** at the haptic rate (a thread running the caller's physics step), on the
 //! schedule [`crate::haptic::HapticCore::step_rates`] runs in lockstep, so a live session and its replay agree
 //! to the bit:
-//! - at the start of physics period k (every `device_steps`-th device step) the device thread takes the model
-//!   physics step k - 1 published (waiting for it if it is late: a late physics step delays the device loop,
-//!   counted in [`PhysicsStats::waits`]) and hands physics step k the proxy's state ([`Handover`]);
-//! - the device steps of period k render that model while physics step k runs on its own thread, with the
-//!   whole period to finish.
+//! - physics period k starts at the first device step within half a device period of one physics period after
+//!   the device step that started period k - 1, or later (every `device_steps`-th device step when the device loop keeps its rate; a
+//!   later one after the loop lost ticks to a busy machine, so the physics keeps the wall clock's pace
+//!   instead of waiting for `device_steps` ticks; at most [`MAX_DEVICE_STEPS`] device steps per period). There
+//!   the device thread takes the model physics step k - 1 published (waiting for it if it is late: a late
+//!   physics step delays the device loop, counted in [`PhysicsStats::waits`]) and hands physics step k the
+//!   proxy's state and the previous period's readings ([`Handover`]), which the record keeps, so the replay
+//!   runs the same device steps per period;
+//! - the device steps of period k, each of `dt / device_steps` s, render that model while physics step k runs
+//!   on its own thread, with the whole period to finish.
 //!
 //! Nothing takes a lock: the hand-overs go through wait-free triple buffers with a period counter each.
 
@@ -110,6 +115,9 @@ impl DeviceLoop {
 
         // Physics thread.
         let (handed_p, done_p, stop_p) = (handed.clone(), done.clone(), stop.clone());
+        // The device loop's thread, once it has waited for a late physics step (the physics thread wakes it).
+        let device_thread: Arc<std::sync::OnceLock<std::thread::Thread>> = Arc::default();
+        let device_thread_p = device_thread.clone();
         let refused = on_refused.clone();
         let physics_thread = std::thread::Builder::new()
             .name("coiffure-physics".into())
@@ -140,6 +148,9 @@ impl DeviceLoop {
                     last = out;
                     pub_in.write(out);
                     done_p.store(h.period, Ordering::Release);
+                    if let Some(t) = device_thread_p.get() {
+                        t.unpark();
+                    }
                     let took = t0.elapsed().as_secs_f64();
                     hist.add(took);
                     over += (took > dt) as u64;
@@ -154,25 +165,39 @@ impl DeviceLoop {
         let waker = physics_thread.thread().clone();
         let (waits_d, stalls_d) = (waits.clone(), stalls.clone());
         let h = dt / device_steps as f64;
-        let mut tick = 0u64;
         let mut published = first;
         let mut readings = [None; MAX_DEVICE_STEPS];
         let mut count = 0;
         let mut force = Vector3::zeros();
+        // Physics periods by the wall clock: the start of the current one, and how many have started.
+        let period = Duration::from_secs_f64(dt);
+        let half_tick = Duration::from_secs_f64(h / 2.0);
+        let mut started: Option<Instant> = None;
+        let mut k = 0u64;
         let step = move |reading: Option<DeviceReading>, _t: f64, _dt: f64| -> DeviceCommand {
-            if tick % device_steps as u64 == 0 {
-                let k = tick / device_steps as u64 + 1;
+            let now = Instant::now();
+            let due = match started {
+                None => true,
+                Some(s) => now + half_tick >= s + period || count == MAX_DEVICE_STEPS,
+            };
+            if due {
+                // A device step late by more than a period starts the next period late: the lost periods are not
+                // run (the physics clock skips them, as the device loop skips ticks).
+                started = Some(now);
+                k += 1;
                 if k >= 2 && done.load(Ordering::Acquire) < k - 1 {
                     // Physics step k - 1 is late: wait for its model (the schedule the replay runs).
                     waits_d.fetch_add(1, Ordering::Relaxed);
                     let since = Instant::now();
+                    // Parked, not spinning: on a busy machine a spinning device thread takes the core the late
+                    // physics step needs (the physics thread unparks it when it has published).
+                    device_thread.get_or_init(std::thread::current);
                     while done.load(Ordering::Acquire) < k - 1 {
                         if since.elapsed().as_secs_f64() > PHYSICS_STALL {
                             stalls_d.fetch_add(1, Ordering::Relaxed);
                             break;
                         }
-                        std::hint::spin_loop();
-                        std::thread::yield_now();
+                        std::thread::park_timeout(Duration::from_micros(200));
                     }
                 }
                 published = *pub_out.read();
@@ -188,7 +213,6 @@ impl DeviceLoop {
             readings[count] = reading;
             count += 1;
             force = cmd.force;
-            tick += 1;
             cmd
         };
         let rate = device_steps as f64 / dt;

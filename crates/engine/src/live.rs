@@ -16,9 +16,11 @@
 //!
 //! Replay: a physics period is a pure function of (the haptic state, its device steps' readings, the lattice
 //! snapshot its physics step read, the commands applied before it): the two threads keep the lockstep
-//! schedule ([`crate::device_loop`]). A [`Record`] keeps, per physics period, the readings and the lattice
-//! version used; [`crate::replay::replay`] re-runs the global and haptic cores in lockstep on one thread and
-//! gives the same forces bit for bit.
+//! schedule ([`crate::device_loop`]). A record ([`crate::record`]) keeps, per physics period, the readings and
+//! the lattice version used, and per global step its tool input; [`crate::replay::replay`] re-runs the global
+//! and haptic cores in lockstep on one thread and gives the same forces bit for bit. A recording session
+//! ([`Session::start_recording`]) streams its record to disk as it runs (`crate::record::stream`): both threads
+//! hand their steps to a writer thread through wait-free queues.
 
 use crate::budget::{BudgetReport, StrandBudget};
 use crate::command::Command;
@@ -26,7 +28,7 @@ use crate::error::SessionError;
 use crate::global::{CutResult, GlobalCore};
 use crate::haptic::HapticCore;
 use crate::params::SessionParams;
-use crate::record::{Record, StepRecord};
+use crate::record::{GlobalRecord, RecordReport, RecordStatus, RecordTarget, RecordWriter, StepRecord};
 use crate::scene::Scene;
 use crate::snapshot::{HapticSnapshot, LatticeSnapshot};
 use crate::tool::ToolInput;
@@ -72,8 +74,8 @@ pub struct SessionReport {
     pub global_step_mean: f64,
     /// Times the lattice was found non-finite and reset.
     pub global_recoveries: u64,
-    /// The record, if asked for.
-    pub record: Option<Record>,
+    /// What the record holds, if the session was recorded.
+    pub record: Option<RecordReport>,
     /// What the haptic thread's strand budget did (`crate::budget`).
     pub budget: BudgetReport,
 }
@@ -86,7 +88,7 @@ pub struct Session {
     reset_epoch: Arc<AtomicU64>,
     global: Option<JoinHandle<GlobalRun>>,
     haptic: Option<DeviceLoop>,
-    record: Arc<std::sync::Mutex<Option<Record>>>,
+    record: Option<RecordWriter>,
     budget: Arc<std::sync::Mutex<BudgetReport>>,
 }
 
@@ -99,7 +101,21 @@ impl Session {
     /// [`Session::start`] with the haptic thread reading `device` (e.g. a `haptics::udp::UdpDevice`, with
     /// `params.input` = `InputKind::Device`) instead of the mouse; None: the mouse.
     pub fn start_with_device(scene: Arc<Scene>, params: SessionParams, device: Option<Box<dyn HapticDevice>>) -> Result<(Session, SessionIo), SessionError> {
+        Self::start_recording(scene, params, device, None)
+    }
+
+    /// [`Session::start_with_device`], recording the session to `record` (e.g. a [`crate::record::RecordFile`])
+    /// if given: its header is written before the threads start (an error there is returned), then the steps as
+    /// they run (`params.record`).
+    pub fn start_recording(scene: Arc<Scene>, params: SessionParams, device: Option<Box<dyn HapticDevice>>, record: Option<RecordTarget>) -> Result<(Session, SessionIo), SessionError> {
         params.validate()?;
+        let (writer, mut step_tx, mut global_tx) = match record {
+            Some(RecordTarget { sink, settings }) => {
+                let (w, s, g) = RecordWriter::start(sink, settings.as_ref(), params.haptic_rate_hz, params.global_rate_hz, params.record)?;
+                (Some(w), Some(s), Some(g))
+            }
+            None => (None, None, None),
+        };
         let mut core = HapticCore::new(scene.clone(), params)?;
         let (side, first_model) = (core.side.clone(), core.published());
         let mut global = GlobalCore::new(scene.clone(), &params);
@@ -121,27 +137,24 @@ impl Session {
         let (stop_g, epoch_g) = (stop.clone(), reset_epoch.clone());
         let period = Duration::from_secs_f64(1.0 / params.global_rate_hz);
         let gdt = period.as_secs_f64();
-        let recording = params.record;
         global.defer_cuts(true);
         let global_thread = std::thread::Builder::new().name("coiffure-global".into()).spawn(move || {
             let (mut steps, mut busy, mut recov) = (0u64, 0.0f64, 0u64);
             // Scissors cuts run on a worker thread (one at a time) and are swapped in when done, so a cut of
             // 100k strands does not stall the lattice. (The haptic forces do not depend on them.)
             let mut cutting: Option<JoinHandle<CutResult>> = None;
-            let mut resets = Vec::new();
-            let mut inputs = Vec::new();
             let mut seen_epoch = 0;
             let start = Instant::now();
             while !stop_g.load(Ordering::Relaxed) {
                 let e = epoch_g.load(Ordering::Acquire);
-                if e != seen_epoch {
+                let reset = e != seen_epoch;
+                if reset {
                     seen_epoch = e;
                     global.reset();
-                    resets.push(global.version + 1);
                 }
                 let input = *tool_out.read();
-                if recording {
-                    inputs.push(input);
+                if let Some(g) = global_tx.as_mut() {
+                    g.send(GlobalRecord { reset, input });
                 }
                 let (mut snap, bad) = global.step(gdt, &input);
                 if cutting.as_ref().is_some_and(|h| h.is_finished()) {
@@ -170,12 +183,10 @@ impl Session {
                     std::thread::sleep(next - now);
                 }
             }
-            GlobalRun { steps, mean: busy / steps.max(1) as f64, recoveries: recov, resets, inputs }
+            GlobalRun { steps, mean: busy / steps.max(1) as f64, recoveries: recov }
         }).map_err(|e| SessionError::Start(e.to_string()))?;
 
         // Haptic thread.
-        let record = Arc::new(std::sync::Mutex::new(params.record.then(|| Record::new(params.haptic_rate_hz))));
-        let mut recorder = params.record.then(|| Recorder { local: Vec::with_capacity(4096), shared: record.clone() });
         let epoch_h = reset_epoch.clone();
         let publish_every = params.publish_every;
         let budget_report = Arc::new(std::sync::Mutex::new(BudgetReport { lowest: params.max_active, last: params.max_active, ..BudgetReport::default() }));
@@ -206,13 +217,12 @@ impl Session {
             let lattice = lat_h_out.read();
             core.physics_step(&h.proxy, lattice, dt);
             tool_in.write(core.tool_input());
-            if let Some(r) = recorder.as_mut() {
+            if let Some(r) = step_tx.as_mut() {
+                // Period k's record is whole at physics step k + 1: its device readings and last force come
+                // with this hand-over.
                 if let Some((commands, lattice_version)) = pending.take() {
                     let (first, more) = h.previous_readings().split_first().map_or((None, &[][..]), |(a, b)| (*a, b));
-                    r.local.push(StepRecord { reading: first, more_readings: more.to_vec(), lattice_version, commands, force: h.force });
-                    if r.local.len() >= 1000 {
-                        r.flush(false);
-                    }
+                    r.send(StepRecord { reading: first, more_readings: more.to_vec(), lattice_version, commands, force: h.force });
                 }
                 pending = Some((cmds, lattice.version));
             }
@@ -230,7 +240,7 @@ impl Session {
         let on_refused = |why: String| tracing::warn!("haptic thread: {why}");
         let haptic = DeviceLoop::spawn(dev, side, first_model, dt, params.device_steps(), params.haptic_priority, physics, on_refused)
             .map_err(SessionError::Start)?;
-        let session = Session { scene, params, stop, reset_epoch, global: Some(global_thread), haptic: Some(haptic), record, budget: budget_report };
+        let session = Session { scene, params, stop, reset_epoch, global: Some(global_thread), haptic: Some(haptic), record: writer, budget: budget_report };
         Ok((session, SessionIo { device: handle, commands: cmd_tx, lattice: lat_v_out, haptic: hap_out }))
     }
 
@@ -244,17 +254,19 @@ impl Session {
         &self.params
     }
 
-    /// Stops both threads and returns timing and the record.
+    /// The record's status, if the session is recorded.
+    pub fn record_status(&self) -> Option<Arc<RecordStatus>> {
+        self.record.as_ref().map(RecordWriter::status)
+    }
+
+    /// Stops both threads (and the record's writer, after it wrote their last steps) and returns timing and
+    /// what the record holds.
     pub fn stop(mut self) -> SessionReport {
         let _ = self.reset_epoch.load(Ordering::Relaxed);
         let (haptic, physics) = self.haptic.take().expect("running").stop();
         self.stop.store(true, Ordering::Relaxed);
         let g = self.global.take().expect("running").join().expect("the global thread panicked");
-        let mut record = self.record.lock().map(|mut g| g.take()).unwrap_or(None);
-        if let Some(r) = record.as_mut() {
-            r.global_resets = g.resets;
-            r.global_inputs = g.inputs;
-        }
+        let record = self.record.take().map(RecordWriter::finish);
         let budget = self.budget.lock().map(|b| *b).unwrap_or_default();
         SessionReport { haptic, physics, global_steps: g.steps, global_step_mean: g.mean, global_recoveries: g.recoveries, record, budget }
     }
@@ -277,8 +289,6 @@ struct GlobalRun {
     steps: u64,
     mean: f64,
     recoveries: u64,
-    resets: Vec<u64>,
-    inputs: Vec<ToolInput>,
 }
 
 /// The haptic thread's strand budget and its change to apply before the next step; its report is handed
@@ -294,30 +304,6 @@ impl Drop for BudgetRun {
         if let Ok(mut g) = self.shared.lock() {
             *g = self.budget.report();
         }
-    }
-}
-
-/// Collects step records on the haptic thread and hands them over in batches: the lock is only tried on
-/// the haptic path (never waited on); the last batch is handed over when the loop ends (on drop).
-struct Recorder {
-    local: Vec<StepRecord>,
-    shared: Arc<std::sync::Mutex<Option<Record>>>,
-}
-
-impl Recorder {
-    fn flush(&mut self, wait: bool) {
-        let guard = if wait { self.shared.lock().ok() } else { self.shared.try_lock().ok() };
-        if let Some(mut g) = guard {
-            if let Some(r) = g.as_mut() {
-                r.steps.append(&mut self.local);
-            }
-        }
-    }
-}
-
-impl Drop for Recorder {
-    fn drop(&mut self) {
-        self.flush(true);
     }
 }
 
@@ -356,6 +342,7 @@ mod tests {
         let sum = l.wetness.iter().sum::<f32>();
         eprintln!("kept version after the scissors {cuts}; tool {} step {} wetness summed over guides {sum}", h.tool, h.step);
         let report = session.stop();
+        eprintln!("device loop {:?}\nphysics {:?}", report.haptic, report.physics);
         assert!(cuts > 0, "the scissors cut");
         assert_eq!(h.tool, Tool::Sprayer as u8, "the haptic thread took the sprayer");
         // 3.5 s of wall time: a loop that kept running made most of its 3500 periods (those lost to a busy

@@ -30,6 +30,8 @@ pub struct Lockstep {
     pub gdt: f64,
     /// A record of the steps (the format of `coiffure serve --record`), if asked for.
     pub record: Option<Record>,
+    /// The last physics period's device commands, one per device step, in order.
+    pub device_commands: Vec<DeviceCommand>,
 }
 
 impl Lockstep {
@@ -45,6 +47,7 @@ impl Lockstep {
             dt: Duration::from_secs_f64(1.0 / haptic_rate_hz).as_secs_f64(),
             gdt: Duration::from_secs_f64(1.0 / params.global_rate_hz).as_secs_f64(),
             record: None,
+            device_commands: Vec::new(),
         })
     }
 
@@ -70,8 +73,11 @@ impl Lockstep {
     /// `commands` and the physics step with the latest lattice snapshot (recorded if asked for). Returns the
     /// period's last device command.
     pub fn haptic_step(&mut self, commands: &[Command], readings: &[Option<DeviceReading>]) -> DeviceCommand {
-        let mut last = DeviceCommand::default();
-        self.haptic.step_rates(commands, readings, &self.lattice, self.dt, |_, c| last = *c);
+        let mut period = std::mem::take(&mut self.device_commands);
+        period.clear();
+        self.haptic.step_rates(commands, readings, &self.lattice, self.dt, |_, c| period.push(*c));
+        let last = period.last().copied().unwrap_or_default();
+        self.device_commands = period;
         if let Some(r) = self.record.as_mut() {
             let reading = readings.first().copied().flatten();
             let more_readings = readings.get(1..).unwrap_or_default().to_vec();

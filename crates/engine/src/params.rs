@@ -4,6 +4,7 @@
 
 pub use crate::budget::BudgetParams;
 use crate::error::SessionError;
+use crate::record::RecordParams;
 use haptics::device::DeviceProfile;
 use haptics::target::TargetParams;
 
@@ -68,8 +69,9 @@ pub struct SessionParams {
     pub device_follow: TargetParams,
     /// Haptic steps between two snapshots published for the viewer. Default 5 (200 Hz).
     pub publish_every: u64,
-    /// Keep a record of the device input for replay. Default false.
-    pub record: bool,
+    /// How a recorded session's record is streamed to disk (`crate::record::stream`; recording itself is asked
+    /// for by giving `Session::start_recording` a file). Default [`RecordParams::default`].
+    pub record: RecordParams,
     /// Sprayer wetting rate s0 at the nozzle (`tools::sprayer::Sprayer`), 1/s. Default 1.
     pub wetting_rate: f64,
     /// Dryer drying rate k0 at the nozzle (`tools::dryer::HairDryer`), 1/s. Default 0.05.
@@ -95,7 +97,7 @@ pub struct SessionParams {
 
 impl Default for SessionParams {
     fn default() -> Self {
-        Self { haptic_rate_hz: 1000.0, device_rate_hz: 4000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 56, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams::default(), input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: false, wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default(), budget: BudgetParams::default() }
+        Self { haptic_rate_hz: 1000.0, device_rate_hz: 4000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 56, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams::default(), input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: RecordParams::default(), wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default(), budget: BudgetParams::default() }
     }
 }
 
@@ -143,6 +145,7 @@ impl SessionParams {
         }
         self.haptic.validate()?;
         self.budget.validate()?;
+        self.record.validate()?;
         self.global.validate()
     }
 }

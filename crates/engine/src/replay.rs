@@ -23,12 +23,25 @@ pub fn replay(scene: Arc<Scene>, params: SessionParams, record: &Record) -> Resu
     Ok(out)
 }
 
+/// [`replay`], giving the force of every device step (N), by haptic step: the forces the device was sent,
+/// several per haptic step when the device loop runs faster than the physics (`SessionParams::device_steps`).
+pub fn replay_device_steps(scene: Arc<Scene>, params: SessionParams, record: &Record) -> Result<Vec<Vec<Vector3<f64>>>, SessionError> {
+    let mut ls = Lockstep::new(scene, params, record.rate_hz)?;
+    let mut out = Vec::with_capacity(record.steps.len());
+    ls.replay(record, |ls, cmd| {
+        if cmd.is_some() {
+            out.push(ls.device_commands.iter().map(|c| c.force).collect());
+        }
+    });
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::command::Command;
     use crate::live::Session;
-    use crate::testing::{small_scene, test_rot};
+    use crate::testing::{read_record, record_file, small_scene, test_rot};
     use crate::tool::Tool;
     use std::time::Duration;
     use haptics::device::DeviceReading;
@@ -37,13 +50,14 @@ mod tests {
     fn a_recorded_live_session_replays_to_the_same_forces() {
         // A live session (both threads, real time) is driven through the virtual device by this thread: a
         // comb stroke down the back of the head at 0.1 m/s, then the sprayer held on the hair, then the
-        // scissors closed once, and a reset on the way. Its record (through the file format, version 2 with
-        // the global steps' tool inputs) replayed in lockstep on one thread gives every haptic step's force
+        // scissors closed once, and a reset on the way. Its record (streamed to a file as the session ran)
+        // replayed in lockstep on one thread gives every haptic step's force
         // again within 1e-9 N (in fact bit for bit), although the live threads' timing was whatever the
         // machine gave them.
         let scene = small_scene();
-        let params = SessionParams { record: true, ..SessionParams::default() };
-        let (session, mut io) = Session::start(scene.clone(), params).unwrap();
+        let params = SessionParams::default();
+        let (path, sink) = record_file("replay-stroke", &params);
+        let (session, mut io) = Session::start_recording(scene.clone(), params, None, Some(sink)).unwrap();
         let rot = test_rot();
         // The path follows the haptic thread's own step count (published every 5 steps), so the test does
         // not depend on how fast this machine runs the threads.
@@ -72,10 +86,13 @@ mod tests {
             std::thread::sleep(Duration::from_micros(500));
         }
         let report = session.stop();
-        eprintln!("live: {:?}, global steps {}", report.haptic, report.global_steps);
-        let rec = report.record.expect("recorded");
-        // (The last physics period's record is completed by the next hand-over: the record holds the periods
-        // before it.)
+        eprintln!("live: {:?}, global steps {}, record {:?}", report.haptic, report.global_steps, report.record);
+        let written = report.record.expect("recorded");
+        // The file streamed while the session ran, read back whole.
+        let rec = read_record(&path);
+        assert_eq!((written.steps, written.global_steps, written.stopped.as_deref()), (rec.steps.len() as u64, rec.global_inputs.len() as u64, None));
+        // (A physics period's record is whole at the next hand-over: the record holds the periods before the
+        // last one run.)
         assert!(rec.steps.len() >= 1799, "{} steps", rec.steps.len());
         assert_eq!(rec.global_resets.len(), 1, "one lattice reset recorded");
         // The viewer's three commands (and whatever the strand budget decided on this machine, replayed too).
@@ -103,8 +120,9 @@ mod tests {
         use crate::budget::BudgetParams;
         let scene = small_scene();
         let budget = BudgetParams { target: 0.001, hold: 0.02, ..BudgetParams::default() };
-        let params = SessionParams { record: true, budget, ..SessionParams::default() };
-        let (session, mut io) = Session::start(scene.clone(), params).unwrap();
+        let params = SessionParams { budget, ..SessionParams::default() };
+        let (path, sink) = record_file("replay-budget", &params);
+        let (session, mut io) = Session::start_recording(scene.clone(), params, None, Some(sink)).unwrap();
         let rot = test_rot();
         loop {
             let step = io.haptic.read().step;
@@ -116,7 +134,7 @@ mod tests {
             std::thread::sleep(Duration::from_micros(500));
         }
         let report = session.stop();
-        let rec = report.record.expect("recorded");
+        let rec = read_record(&path);
         let limits: Vec<u32> = rec.steps.iter().flat_map(|s| &s.commands).filter_map(|c| match c {
             Command::LimitStrands(n) => Some(*n),
             _ => None,
@@ -149,8 +167,9 @@ mod tests {
         let scene = small_scene();
         let text = crate::testing::LIVE_COMB.replace("settle = 0.2", "settle = 0.0");
         let s: crate::scenario::LiveScenario = toml::from_str(&text).unwrap();
-        let params = SessionParams { record: true, ..SessionParams::default() };
-        let (session, mut io) = Session::start(scene.clone(), params).unwrap();
+        let params = SessionParams::default();
+        let (path, sink) = record_file("replay-live-scenario", &params);
+        let (session, mut io) = Session::start_recording(scene.clone(), params, None, Some(sink)).unwrap();
         loop {
             let step = io.haptic.read().step;
             if step >= 800 {
@@ -159,8 +178,9 @@ mod tests {
             io.device.push(s.reading(step as f64 * 1e-3));
             std::thread::sleep(Duration::from_micros(300));
         }
-        let rec = session.stop().record.expect("recorded");
-        let rec = Record::from_bytes(&rec.to_bytes()).unwrap();
+        let report = session.stop();
+        eprintln!("device loop {:?}\nphysics {:?}", report.haptic, report.physics);
+        let rec = read_record(&path);
         let (trace, summary) = crate::scenario::live::replay_record(scene, params, &rec).unwrap();
         assert_eq!(trace.len(), rec.steps.len());
         for (i, st) in rec.steps.iter().enumerate() {

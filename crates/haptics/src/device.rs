@@ -97,14 +97,14 @@ impl DeviceProfile {
     /// A mouse in the browser (no force output; the force is only shown).
     pub const MOUSE: DeviceProfile = DeviceProfile { name: "mouse", max_force: 10.0, max_force_rate: 1e4, max_torque: 0.0, max_torque_rate: 0.0, max_stiffness: 1000.0, max_speed: 20.0, mass: 0.0, damping: 0.0, workspace: [0.0; 3] };
 
-    /// Looks a profile up by a short name: "omni", "desktop", "omega3", "premium6" ("phantom-premium-6dof"),
-    /// "mouse".
+    /// Looks a profile up by a short name ("omni", "desktop", "omega3", "premium6" / "phantom-premium-6dof",
+    /// "mouse") or its own name.
     pub fn by_name(name: &str) -> Option<DeviceProfile> {
         match name.to_ascii_lowercase().as_str() {
-            "omni" | "phantom-omni" | "touch" => Some(Self::PHANTOM_OMNI),
-            "desktop" | "phantom-desktop" => Some(Self::PHANTOM_DESKTOP),
+            "omni" | "phantom-omni" | "touch" | "phantom omni" => Some(Self::PHANTOM_OMNI),
+            "desktop" | "phantom-desktop" | "phantom desktop" => Some(Self::PHANTOM_DESKTOP),
             "omega3" | "omega.3" => Some(Self::OMEGA3),
-            "premium6" | "phantom-premium-6dof" => Some(Self::PHANTOM_PREMIUM_6DOF),
+            "premium6" | "phantom-premium-6dof" | "phantom premium 1.5 6-dof" => Some(Self::PHANTOM_PREMIUM_6DOF),
             "mouse" => Some(Self::MOUSE),
             _ => None,
         }

@@ -152,7 +152,8 @@ impl SimRow {
 pub const CSV_HEADER: &str = "t,x,y,z,fx,fy,fz,latency_us,flags,hx,hy,hz";
 
 /// Rows as CSV (`t,x,y,z,fx,fy,fz,latency_us,flags,hx,hy,hz`: s, m device frame, the force answered in N,
-/// microseconds, the answer's flags, the force the hand felt in N; `nan` where no answer came).
+/// microseconds, the answer's flags, the force the hand felt in N; `NaN` where no answer came). The time and
+/// forces are exact (shortest decimals reading back to the same f64).
 pub fn to_csv(rows: &[SimRow]) -> String {
     let mut s = String::with_capacity(64 * rows.len() + 64);
     s.push_str(CSV_HEADER);
@@ -160,7 +161,8 @@ pub fn to_csv(rows: &[SimRow]) -> String {
     for r in rows {
         let (p, f) = (r.position, r.force);
         let h = r.felt;
-        s.push_str(&format!("{:.6},{:.7},{:.7},{:.7},{:.6},{:.6},{:.6},{:.1},{},{:.6},{:.6},{:.6}\n", r.t, p.x, p.y, p.z, f.x, f.y, f.z, r.latency * 1e6, r.flags, h.x, h.y, h.z));
+        // Time and forces exactly (shortest round-trip decimals): a record's replay is compared with them bit for bit.
+        s.push_str(&format!("{},{:.7},{:.7},{:.7},{:e},{:e},{:e},{:.1},{},{:e},{:e},{:e}\n", r.t, p.x, p.y, p.z, f.x, f.y, f.z, r.latency * 1e6, r.flags, h.x, h.y, h.z));
     }
     s
 }
@@ -298,12 +300,18 @@ pub fn run(server: SocketAddr, path: &dyn Fn(f64) -> DeviceReading, p: &SimParam
         } else {
             Sent::Pose
         };
-        let (seq, sent) = if kind == Sent::Duplicate {
+        let sent = if kind == Sent::Duplicate {
             let (s, r) = last_packet.expect("checked");
-            client.send_raw(&encode_pose_version(s, &r, version)).map_err(|e| format!("cannot send to {server}: {e}"))?;
-            (s, r)
+            client.send_raw(&encode_pose_version(s, &r, version)).map(|()| (s, r))
         } else {
-            (client.send(&r).map_err(|e| format!("cannot send to {server}: {e}"))?, r)
+            client.send(&r).map(|s| (s, r))
+        };
+        let (seq, sent) = match sent {
+            Ok(x) => x,
+            // The server's port is closed (it stopped or died; the ICMP of an earlier pose comes back here): this
+            // pose is lost, as a device's would be, and the stream goes on.
+            Err(e) if e.kind() == std::io::ErrorKind::ConnectionRefused => continue,
+            Err(e) => return Err(format!("cannot send to {server}: {e}")),
         };
         sent_at.push(Instant::now());
         rows.push(SimRow { t, seq, kind, position: sent.position, force: Vector3::from_element(f64::NAN), latency: f64::NAN, flags: 0, felt });

@@ -51,7 +51,8 @@ fn frame_tool(f: &[u8]) -> (f64, Vector3<f64>, Vector3<f64>, Vector3<f64>, u32) 
     let f32_at = |i: usize| f32::from_le_bytes(f[i..i + 4].try_into().unwrap()) as f64;
     let v = |i: usize| Vector3::new(f32_at(i), f32_at(i + 4), f32_at(i + 8));
     // docs/protocol.md: 2 header, u32 seq, f32 time, u8 tool, u8 flags, u16 contacts, proxy, quaternion, device, force.
-    let runaways = u32::from_le_bytes(f[f.len() - 4..].try_into().unwrap());
+    // The runaway count, before the hair's surface (u8 treatment, f32 tool friction) that ends the FRAME.
+    let runaways = u32::from_le_bytes(f[f.len() - 9..f.len() - 5].try_into().unwrap());
     (f32_at(6), v(14), v(42), v(54), runaways)
 }
 

@@ -50,7 +50,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         .collect::<Result<_>>()?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let trace_path = args.out.join("trace.csv");
-    let mut trace = std::io::BufWriter::new(std::fs::File::create(&trace_path).with_context(|| format!("cannot write {}", trace_path.display()))?);
+    // Written whole at the end (`write_atomic`): never half-written under its name.
+    let mut trace = Vec::new();
     write!(trace, "t")?;
     for i in 0..args.strands {
         write!(trace, ",x{i},y{i},z{i}")?;
@@ -74,7 +75,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         }
         writeln!(trace)?;
     }
-    trace.flush()?;
+    hairstyle::formats::write_atomic(&trace_path, &trace).with_context(|| format!("cannot write {}", trace_path.display()))?;
     let wall = started.elapsed().as_secs_f64();
     let strand_steps = (steps * args.strands) as f64;
     let energy: f64 = strands.iter_mut().map(|s| s.energy()).sum();

@@ -26,6 +26,10 @@ pub struct DeviceSimArgs {
     /// Length of the run, s (default: the path's last waypoint + 0.2 s).
     #[arg(long)]
     pub duration: Option<f64>,
+    /// Play the path forward, then backward, and so on until `--duration` (a long session from a short path:
+    /// the hand never jumps).
+    #[arg(long)]
+    pub repeat: bool,
     /// `rigid` (the end-effector follows the path exactly) or `spring` (a hand pulls it towards the path;
     /// the device's mass and damping and the received force act on it).
     #[arg(long, default_value = "rigid")]
@@ -42,7 +46,8 @@ pub struct DeviceSimArgs {
     /// Device workspace to head frame, as `serve --device-workspace` (must be the server's).
     #[arg(long)]
     pub device_workspace: Option<String>,
-    /// Write `t,x,y,z,fx,fy,fz,latency_us,flags` (one row per packet sent; device frame) to this file.
+    /// Write `t,x,y,z,fx,fy,fz,latency_us,flags` (one row per packet sent; device frame; the time and the
+    /// forces received exactly, as the shortest decimals that read back to the same f64) to this file.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Fraction of poses dropped at random, in [0, 1).
@@ -94,19 +99,25 @@ pub fn run(args: &DeviceSimArgs) -> anyhow::Result<()> {
             Ok((a.trim().parse::<f64>().map_err(|e| anyhow!("--pause {p:?}: {e}"))?, b.trim().parse::<f64>().map_err(|e| anyhow!("--pause {p:?}: {e}"))?))
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
+    let end = scenario.tool.path.last().map_or(0.0, |w| w.t);
+    if args.repeat && (args.duration.is_none() || end <= 0.0) {
+        return Err(anyhow!("--repeat needs --duration and a path longer than 0 s"));
+    }
     let params = SimParams {
         rate_hz: args.rate,
-        duration: args.duration.unwrap_or_else(|| scenario.tool.path.last().map_or(0.0, |w| w.t) + 0.2),
+        duration: args.duration.unwrap_or(end + 0.2),
         hand,
         profile,
         workspace,
         faults: Faults { loss: args.loss, seed: args.seed, nan_at: args.nan_at.clone(), teleport_at: args.teleport_at.clone(), duplicate_at: args.duplicate_at.clone(), pause },
         render: args.render,
     };
-    let rows = sim::run(server, &|t| scenario.reading(t), &params).map_err(|e| anyhow!(e))?;
+    // With --repeat, path time runs back and forth over [0, end].
+    let path_time = |t: f64| if args.repeat { end - (t.rem_euclid(2.0 * end) - end).abs() } else { t };
+    let rows = sim::run(server, &|t| scenario.reading(path_time(t)), &params).map_err(|e| anyhow!(e))?;
     if let Some(out) = &args.out {
         crate::ensure_parent(out)?;
-        std::fs::write(out, sim::to_csv(&rows)).with_context(|| format!("cannot write {}", out.display()))?;
+        hairstyle::formats::write_atomic(out, sim::to_csv(&rows).as_bytes()).with_context(|| format!("cannot write {}", out.display()))?;
     }
     println!("device-sim: {}", SimSummary::of(&rows));
     Ok(())

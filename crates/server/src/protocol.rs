@@ -73,6 +73,9 @@ pub mod code {
     pub const FILE: u16 = 5;
     /// A text frame (the protocol is binary).
     pub const TEXT: u16 = 6;
+    /// Recording (`serve --record`) stopped before the session ended (disk full, file unwritable, the writer
+    /// fell behind); the text says why and up to where the record replays. The session goes on.
+    pub const RECORD: u16 = 7;
 }
 
 /// File formats by wire id (the server's formats).

@@ -38,34 +38,59 @@ pub struct ReplayArgs {
     /// Output folder (default: a folder named after the record in the current directory).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Render strands of the built-in hairstyle the server ran (as `coiffure serve`).
-    #[arg(long, default_value_t = 100_000)]
-    render_strands: usize,
-    /// Guide strands the server ran (as `coiffure serve`).
-    #[arg(long, default_value_t = 200)]
-    guides: usize,
-    /// Real hairs per render strand the server ran with (as `coiffure serve`).
-    #[arg(long, default_value_t = 1.0)]
-    hairs_per_render_strand: f64,
+    /// Render strands of the built-in hairstyle (default: the record's, which says what the server ran).
+    #[arg(long)]
+    render_strands: Option<usize>,
+    /// Guide strands (default: the record's).
+    #[arg(long)]
+    guides: Option<usize>,
+    /// Real hairs per render strand (default: the record's).
+    #[arg(long)]
+    hairs_per_render_strand: Option<f64>,
 }
 
 /// `coiffure replay RECORD`: the recorded session replayed headless into `force.csv`, `summary.txt` and
-/// `summary.json` (the outputs of a `[live]` scenario).
+/// `summary.json` (the outputs of a `[live]` scenario). A record cut short (the server died, the disk filled)
+/// is replayed up to its last whole chunk, and the output says where it was cut and what is lost.
 pub fn replay(args: &ReplayArgs) -> Result<()> {
     let bytes = std::fs::read(&args.record).with_context(|| format!("cannot read the record {}", args.record.display()))?;
-    let rec = engine::record::Record::from_bytes(&bytes).with_context(|| format!("{}", args.record.display()))?;
-    let opts = engine::session::SceneOptions { render_strands: args.render_strands, guides: args.guides, ..Default::default() };
+    let read = engine::record::Record::read(&bytes).with_context(|| format!("{}", args.record.display()))?;
+    let ending = ending_lines(&read);
+    let rec = read.record;
+    // The scene and settings the server ran, from the record; the options override them.
+    let settings = rec.settings.clone().unwrap_or_default();
+    let mut opts = settings.scene_options();
+    opts.render_strands = args.render_strands.unwrap_or(opts.render_strands);
+    opts.guides = args.guides.unwrap_or(opts.guides);
     let scene = Arc::new(engine::session::Scene::builtin(&opts)?);
-    let params = engine::session::SessionParams { hairs_per_render_strand: args.hairs_per_render_strand, ..Default::default() };
-    params.validate().context("--hairs-per-render-strand")?;
+    let mut params = settings.session_params(rec.rate_hz).map_err(|e| anyhow::anyhow!("{}: the record's settings: {e}", args.record.display()))?;
+    params.hairs_per_render_strand = args.hairs_per_render_strand.unwrap_or(params.hairs_per_render_strand);
+    params.validate().context("--hairs-per-render-strand, or the record's settings")?;
     let (force, summary) = engine::scenario::live::replay_record(scene, params, &rec)?;
     let o = ScenarioOutput { kind: "replay", wall_time_s: summary.wall_time_s, force, global_rows: vec![], profile: Default::default(), summary: ScenarioSummary::Live(summary), hair: None };
     let stem = args.record.file_stem().and_then(|s| s.to_str()).unwrap_or("replay").to_string();
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from(&stem));
     let head = format!(
-        "record          {} ({} haptic steps at {} Hz, {} global steps)\nscene           built-in head, {} render strands, {} guides\n",
-        args.record.display(), rec.steps.len(), rec.rate_hz, rec.global_inputs.len(), args.render_strands, args.guides
+        "record          {} ({} haptic steps at {} Hz = {:.3} s, {} global steps)\n{ending}scene           built-in head, {} render strands, {} guides\n",
+        args.record.display(), rec.steps.len(), rec.rate_hz, rec.seconds(), rec.global_inputs.len(), opts.render_strands, opts.guides
     );
     print!("{}", engine::scenario::write_replay(&o, &head, &out)?);
     Ok(())
+}
+
+/// What the output says about how a record ends: nothing when whole; else where it stopped and what is lost.
+fn ending_lines(read: &engine::record::ReadRecord) -> String {
+    use engine::record::Ending;
+    match &read.ending {
+        Ending::Complete => String::new(),
+        Ending::Stopped(why) => format!("record ending    recording stopped before the session ended: {why}\n"),
+        Ending::Cut(c) => format!(
+            "record ending    cut: read up to byte {} of {} ({} bytes lost): {}; the steps the session ran after that are lost (the server writes a chunk at least every {} s, so at most about that much if it died)\n",
+            c.offset,
+            c.file_bytes,
+            c.file_bytes - c.offset,
+            c.why,
+            engine::record::RecordParams::default().flush_interval
+        ),
+    }
 }

@@ -13,7 +13,7 @@ use axum::response::IntoResponse;
 use axum::routing::get;
 use axum::Router;
 use clap::Args;
-use engine::record::Record;
+use engine::record::{RecordFile, RecordSettings, RecordStatus, RecordTarget};
 use engine::session::{Command, HapticSnapshot, InputKind, LatticeSnapshot, Scene, SceneOptions, Session, SessionIo, SessionParams};
 use triple_buffer::Output;
 use futures_util::{SinkExt, StreamExt};
@@ -56,7 +56,8 @@ pub struct ServeArgs {
     /// Visual frames per second sent to viewers.
     #[arg(long, default_value_t = 60.0)]
     pub fps: f64,
-    /// Record the device input to this file (written when the server stops) for replay.
+    /// Record the session to this file for replay (`coiffure replay`): created at start, written as the session
+    /// runs (a chunk at least every 0.5 s), readable up to its last whole chunk if the server dies.
     #[arg(long)]
     pub record: Option<PathBuf>,
     /// Stop by itself after this many seconds (for benchmarks and scripts).
@@ -188,6 +189,8 @@ struct App {
     loading: Mutex<()>,
     /// A viewer's time limit (`--viewer-timeout`).
     viewer_timeout: Duration,
+    /// The record's status with `--record` (its stop is told to every viewer, ERROR 7).
+    record: Option<Arc<RecordStatus>>,
 }
 
 /// Shortest time between two SAVEs (each writes the whole hairstyle).
@@ -272,7 +275,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let haptic_priority = (args.haptic_priority != 0).then_some(args.haptic_priority);
     let profile = device_profile(&args.device_profile)?;
     let input = if args.device.is_some() { InputKind::Device } else { InputKind::Pointer };
-    let mut params = SessionParams { record: args.record.is_some(), haptic_priority, hairs_per_render_strand: args.hairs_per_render_strand, haptic_rate_hz: args.haptic_rate, device_rate_hz: args.device_rate, profile, input, ..SessionParams::default() };
+    let mut params = SessionParams { haptic_priority, hairs_per_render_strand: args.hairs_per_render_strand, haptic_rate_hz: args.haptic_rate, device_rate_hz: args.device_rate, profile, input, ..SessionParams::default() };
     if let Some(lag) = args.max_proxy_lag {
         params.haptic.max_proxy_lag = lag;
     }
@@ -300,7 +303,15 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         Some((d, _)) => Some(Box::new(d.try_clone()?) as Box<dyn HapticDevice>),
         None => None,
     };
-    let (session, io) = Session::start_with_device(scene.clone(), params, first_device).context("starting the session")?;
+    let record = match &args.record {
+        Some(path) => Some(RecordTarget {
+            sink: Box::new(RecordFile::create(path).with_context(|| format!("cannot create the record {}", path.display()))?),
+            settings: Some(RecordSettings::of(&opts, &params)),
+        }),
+        None => None,
+    };
+    let (session, io) = Session::start_recording(scene.clone(), params, first_device, record).context("starting the session")?;
+    let record_status = session.record_status();
     let SessionIo { device, commands, lattice, haptic } = io;
     let scene_msg = Arc::new(protocol::encode_scene(&scene, params.global.nozzle_standoff));
     let (frame_tx, frame_rx) = watch::channel(Arc::new(Frame::none()));
@@ -328,6 +339,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         viewer_timeout,
         swap: Mutex::new(None),
         udp,
+        record: record_status,
     });
     let app_end = app.clone();
 
@@ -345,6 +357,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         let (mut lattice, mut haptic) = (lattice, haptic);
         let mut st = PumpStats::default();
         let mut kept_sent = 0u64;
+        let mut record_stop_sent = false;
         let period = Duration::from_secs_f64(1.0 / fps);
         let start = Instant::now();
         while !stop_p.load(Ordering::Relaxed) {
@@ -387,6 +400,11 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
             app_p.published.note(st.frames as u32, published);
             let _ = frame_tx.send(Arc::new(Frame { bytes: msg, published }));
             st.max_build = st.max_build.max((published - w0).as_secs_f64());
+            // Recording stopped (disk full, file unwritable): every viewer is told why, once.
+            if let Some(why) = app_p.record.as_ref().and_then(|r| r.stopped()).filter(|_| !record_stop_sent) {
+                record_stop_sent = true;
+                app_p.broadcast(&record_stopped(why));
+            }
             // The device's status to every viewer, about 10 times a second.
             if let Some((_, status)) = &app_p.udp {
                 if st.frames % (fps / 10.0).ceil().max(1.0) as u64 == 0 {
@@ -477,9 +495,12 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
             c.accepted, c.rejected_total(), c.rejected[0], c.rejected[1], c.rejected[2], c.rejected[3], c.malformed, c.foreign, c.lost, c.answered
         );
     }
-    if let (Some(path), Some(rec)) = (&args.record, report.record) {
-        write_record(path, &rec)?;
-        println!("record: {} haptic steps written to {}", rec.steps.len(), path.display());
+    if let Some(r) = &report.record {
+        let secs = r.steps as f64 / args.haptic_rate;
+        match &r.stopped {
+            None => println!("record: {} haptic steps ({secs:.1} s), {} global steps, {} bytes written to {}", r.steps, r.global_steps, r.bytes, r.name),
+            Some(why) => println!("record: stopped early, {} haptic steps ({secs:.1} s) in {} ({} bytes); {} steps after it not recorded: {why}", r.steps, r.name, r.bytes, r.unrecorded),
+        }
     }
     served
 }
@@ -494,9 +515,9 @@ fn nodelay(listener: tokio::net::TcpListener) -> impl axum::serve::Listener<Io =
     })
 }
 
-fn write_record(path: &Path, rec: &Record) -> anyhow::Result<()> {
-    crate::ensure_parent(path)?;
-    std::fs::write(path, rec.to_bytes()).with_context(|| format!("cannot write the record {}", path.display()))
+/// ERROR 7: recording stopped before the session ended, and why (the session goes on).
+fn record_stopped(why: &str) -> Vec<u8> {
+    protocol::encode_error(&WireError { code: protocol::code::RECORD, message: format!("recording stopped: {why}") })
 }
 
 /// CPU time of the calling thread, s, or None if the clock is unavailable.
@@ -579,6 +600,9 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
     }
     if let Some((_, status)) = &app.udp {
         outbox.post(protocol::encode_device(&status.counts()));
+    }
+    if let Some(why) = app.record.as_ref().and_then(|r| r.stopped()) {
+        outbox.post(record_stopped(why));
     }
     app.broadcast_control();
     let mut frames = app.frames.clone();
@@ -794,7 +818,7 @@ fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
 /// the frame thread switched to the new session's snapshots. The old session stops. Refused while
 /// recording (a record is of one scene).
 fn load(app: &App, curves: &hairstyle::HairCurves, t0: Instant) -> Result<(), String> {
-    if app.params.record {
+    if app.record.is_some() {
         return Err("cannot load a hairstyle while recording (--record): a record replays one scene".into());
     }
     let scene = Arc::new(Scene::from_curves(curves, &app.opts).map_err(|e| format!("cannot use the loaded hairstyle: {e}"))?);

@@ -81,16 +81,16 @@ pub fn run(args: &StrandArgs) -> Result<()> {
         let mut trace = match &args.trace {
             Some(p) => {
                 crate::ensure_parent(p)?;
-                let f = std::fs::File::create(p).with_context(|| format!("cannot write trace {}", p.display()))?;
-                let mut w = std::io::BufWriter::new(f);
+                // Written whole at the end (`write_atomic`): never half-written under its name.
+                let mut w = Vec::new();
                 writeln!(w, "t,x,y,z")?;
-                Some(w)
+                Some((p, w))
             }
             None => None,
         };
         let started = std::time::Instant::now();
         for n in 0..=steps {
-            if let Some(w) = trace.as_mut() {
+            if let Some((_, w)) = trace.as_mut() {
                 let tip = segment_frames(&model, &strand.state)[model.segments].position;
                 writeln!(w, "{:.6},{:.9e},{:.9e},{:.9e}", strand.state.time, tip.x, tip.y, tip.z)?;
             }
@@ -98,8 +98,8 @@ pub fn run(args: &StrandArgs) -> Result<()> {
                 strand.step(args.dt, &[]).with_context(|| format!("step {n} failed"))?;
             }
         }
-        if let Some(mut w) = trace {
-            w.flush()?;
+        if let Some((p, w)) = trace {
+            hairstyle::formats::write_atomic(p, &w).with_context(|| format!("cannot write trace {}", p.display()))?;
         }
         let wall = started.elapsed().as_secs_f64();
         tracing::info!(steps, wall_s = wall, us_per_step = 1e6 * wall / steps.max(1) as f64, "simulated");

@@ -22,9 +22,10 @@ fn pose(p: [f32; 3]) -> Vec<u8> {
     b
 }
 
-/// FRAME's runaway count (its last 4 bytes, docs/protocol.md "FRAME, proxy health").
+/// FRAME's runaway count (docs/protocol.md "FRAME, proxy health"): the u32 before the hair's surface (u8
+/// treatment, f32 tool friction), which ends the FRAME.
 fn runaways(frame: &[u8]) -> u32 {
-    u32::from_le_bytes(frame[frame.len() - 4..].try_into().unwrap())
+    u32::from_le_bytes(frame[frame.len() - 9..frame.len() - 5].try_into().unwrap())
 }
 
 #[test]

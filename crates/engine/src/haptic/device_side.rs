@@ -41,11 +41,14 @@ pub struct Published {
     pub tool: Tool,
     /// The head pose (head frame to world).
     pub head: Isometry3<f64>,
+    /// The device side's re-anchorings the physics step had seen (`ProxyState::anchors`): the model holds about
+    /// the proxy of that anchoring only.
+    pub anchors: u64,
 }
 
 impl Default for Published {
     fn default() -> Self {
-        Self { model: HairReaction::none(), step: 0, tool: Tool::Comb, head: Isometry3::identity() }
+        Self { model: HairReaction::none(), step: 0, tool: Tool::Comb, head: Isometry3::identity(), anchors: 0 }
     }
 }
 
@@ -142,7 +145,11 @@ impl DeviceSide {
     fn take(&mut self, p: &Published) {
         if p.step != self.model_step {
             self.model_step = p.step;
-            self.model = p.model;
+            // A model made about the proxy before its last re-anchoring (the device came back elsewhere after a
+            // loss, a runaway put it back on the device) holds nowhere near the proxy now: no hair until the next
+            // one. (Seen when a late physics step published the hair's reaction at the old place after the device
+            // came back 12 cm away: 0.78 N at once.)
+            self.model = if p.anchors == self.anchors { p.model } else { HairReaction::none() };
         }
         self.tool = p.tool;
         if p.head != self.head && crate::command::is_finite_pose(&p.head) {

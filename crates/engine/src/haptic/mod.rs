@@ -279,20 +279,26 @@ impl HapticCore {
     /// command for the device.
     pub fn step(&mut self, reading: Option<DeviceReading>, lattice: &LatticeSnapshot, dt: f64) -> DeviceCommand {
         let mut last = DeviceCommand::default();
-        self.step_rates(&[], &[reading], lattice, dt, |_, c| last = *c);
+        self.period(&[], &[reading], lattice, dt, dt, |_, c| last = *c);
         last
     }
 
     /// One physics period of `dt` s as the live session's two threads run it, on one thread: the device
-    /// steps, one per reading of `readings` (each `dt / readings.len()` s), render the local force model the
-    /// previous physics step published (with its tool and head pose), while this period's physics step runs
-    /// after the viewer `commands`, with the proxy's state at the period's start; its model is rendered in the
-    /// next period (the live physics thread has the whole period to make it). `each(i, command)` sees each
-    /// device step's command.
-    pub fn step_rates(&mut self, commands: &[Command], readings: &[Option<DeviceReading>], lattice: &LatticeSnapshot, dt: f64, mut each: impl FnMut(usize, &DeviceCommand)) {
+    /// steps, one per reading of `readings`, each of the session's device period (`dt /
+    /// SessionParams::device_steps`; a live period whose device loop lost ticks to a busy machine has fewer),
+    /// render the local force model the previous physics step published (with its tool and head pose), while
+    /// this period's physics step runs after the viewer `commands`, with the proxy's state at the period's
+    /// start; its model is rendered in the next period (the live physics thread has the whole period to make
+    /// it). `each(i, command)` sees each device step's command.
+    pub fn step_rates(&mut self, commands: &[Command], readings: &[Option<DeviceReading>], lattice: &LatticeSnapshot, dt: f64, each: impl FnMut(usize, &DeviceCommand)) {
+        let h = dt / self.params.device_steps() as f64;
+        self.period(commands, readings, lattice, dt, h, each);
+    }
+
+    /// [`HapticCore::step_rates`] with device steps of `h` s.
+    fn period(&mut self, commands: &[Command], readings: &[Option<DeviceReading>], lattice: &LatticeSnapshot, dt: f64, h: f64, mut each: impl FnMut(usize, &DeviceCommand)) {
         let published = self.published();
         let proxy = self.side.proxy_state();
-        let h = dt / readings.len().max(1) as f64;
         for (i, r) in readings.iter().enumerate() {
             let c = self.side.step(*r, h, &published);
             each(i, &c);
@@ -306,7 +312,7 @@ impl HapticCore {
     /// What the last physics step published for the device loop: its local force model, the tool and the head
     /// pose.
     pub fn published(&self) -> Published {
-        Published { model: self.hair_force, step: self.step, tool: self.tool, head: self.head }
+        Published { model: self.hair_force, step: self.step, tool: self.tool, head: self.head, anchors: self.anchors }
     }
 
     /// The physics step (stages 3-8) of `dt` s with the proxy's state `proxy` (from the device side) and the

@@ -108,9 +108,14 @@ pub fn write_replay(output: &ScenarioOutput, head: &str, out: &Path) -> Result<S
     Ok(text)
 }
 
+/// Writes one output file whole (`hairstyle::formats::write_atomic`: never half-written under its name).
+fn write(p: &Path, bytes: &[u8]) -> Result<(), ScenarioError> {
+    hairstyle::formats::write_atomic(p, bytes).map_err(|e| io_err(p, format!("cannot write: {e}")))
+}
+
 fn write_text(out: &Path, text: &str) -> Result<(), ScenarioError> {
     let p = out.join("summary.txt");
-    std::fs::write(&p, text).map_err(|e| io_err(&p, format!("cannot write: {e}")))
+    write(&p, text.as_bytes())
 }
 
 /// The contents of `summary.json`: the summary's fields and `kind` ("patch", "global", "live", "replay").
@@ -128,20 +133,20 @@ pub fn summary_json(o: &ScenarioOutput) -> serde_json::Value {
 fn write_json(out: &Path, o: &ScenarioOutput) -> Result<(), ScenarioError> {
     let p = out.join("summary.json");
     let text = serde_json::to_string_pretty(&summary_json(o)).map_err(|e| io_err(&p, e))?;
-    std::fs::write(&p, text + "\n").map_err(|e| io_err(&p, format!("cannot write: {e}")))
+    write(&p, (text + "\n").as_bytes())
 }
 
 /// `force.csv`; returns its path.
 fn write_force(out: &Path, o: &ScenarioOutput) -> Result<std::path::PathBuf, ScenarioError> {
     let p = out.join("force.csv");
-    std::fs::write(&p, o.force.to_csv()).map_err(|e| io_err(&p, format!("cannot write: {e}")))?;
+    write(&p, o.force.to_csv().as_bytes())?;
     Ok(p)
 }
 
 /// `profile.csv` (a combing rig's recording, [`super::combing::CombingProfile::to_csv`]); returns its path.
 fn write_profile(out: &Path, o: &ScenarioOutput) -> Result<std::path::PathBuf, ScenarioError> {
     let p = out.join("profile.csv");
-    std::fs::write(&p, o.profile.to_csv()).map_err(|e| io_err(&p, format!("cannot write: {e}")))?;
+    write(&p, o.profile.to_csv().as_bytes())?;
     Ok(p)
 }
 
@@ -204,7 +209,7 @@ fn write_global(scenario: &GlobalScenario, o: &ScenarioOutput, name: &str, out: 
             r.t, r.wetness[0], r.wetness[1], r.wetness[2], r.in_cone, r.blow_force, r.cluster_energy, r.mean_tip_z
         );
     }
-    std::fs::write(&trace_path, csv).map_err(|e| io_err(&trace_path, format!("cannot write: {e}")))?;
+    write(&trace_path, csv.as_bytes())?;
     let hair_path = out.join("hairstyle.hair");
     hairstyle::write_file(&hair_path, hair).map_err(|e| io_err(&hair_path, e))?;
     let pieces_path = out.join("pieces.hair");

@@ -14,11 +14,14 @@ use std::path::{Path, PathBuf};
 
 pub(crate) use bytes::{put_f32, put_u32, Cursor};
 
+mod atomic;
 pub mod bytes;
 pub mod hair;
 pub mod tfx;
 pub mod usc;
 pub mod usda;
+
+pub use atomic::write_atomic;
 
 /// A set of hair strands as polylines, with optional per-vertex attributes.
 ///
@@ -211,13 +214,14 @@ pub fn read_file_with_metadata(
     Ok((curves, format, meta))
 }
 
-/// Write a hair file, choosing the format from its extension. Nothing is written on error.
+/// Write a hair file, choosing the format from its extension. Nothing is written on error, and the file is
+/// replaced whole ([`write_atomic`]).
 pub fn write_file(path: impl AsRef<Path>, curves: &HairCurves) -> Result<(), FormatError> {
     let path = path.as_ref();
     let format =
         Format::from_path(path).ok_or_else(|| FormatError::UnknownExtension(path.into()))?;
     let bytes = format.write(curves)?;
-    std::fs::write(path, bytes).map_err(|source| FormatError::Io {
+    write_atomic(path, &bytes).map_err(|source| FormatError::Io {
         path: path.into(),
         source,
     })

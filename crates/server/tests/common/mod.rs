@@ -50,6 +50,12 @@ impl Server {
         kb * 1024
     }
 
+    /// Kills the server at once (SIGKILL: no clean exit) and waits for it.
+    pub fn kill(&mut self) {
+        self.child.kill().unwrap();
+        self.child.wait().unwrap();
+    }
+
     /// The first later output line containing `text`, within `timeout`.
     pub fn line_with(&self, text: &str, timeout: Duration) -> Option<String> {
         let deadline = Instant::now() + timeout;
@@ -72,17 +78,22 @@ impl Drop for Server {
 /// Starts `coiffure serve --port 0 --haptic-priority 0 --web STUB` with `args` (and `--duration 60` unless they
 /// say); returns once it printed its URL (and, with `--device`, its device address).
 pub fn serve(args: &[&str]) -> Server {
+    serve_with(args, |_| {})
+}
+
+/// [`serve`], with the command set up further by `configure` before it starts (e.g. resource limits).
+pub fn serve_with(args: &[&str], configure: impl FnOnce(&mut Command)) -> Server {
     let web = scratch("web");
     std::fs::write(web.join("index.html"), "<!doctype html><title>stub</title>").unwrap();
-    let mut child = bin()
-        .args(["serve", "--port", "0", "--haptic-priority", "0", "--web"])
+    let mut cmd = bin();
+    cmd.args(["serve", "--port", "0", "--haptic-priority", "0", "--web"])
         .arg(&web)
         .args(if args.contains(&"--duration") { &[][..] } else { &["--duration", "60"][..] })
         .args(args)
         .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
+        .stderr(Stdio::null());
+    configure(&mut cmd);
+    let mut child = cmd.spawn().unwrap();
     let out = child.stdout.take().unwrap();
     let (tx, rx) = mpsc::channel();
     std::thread::spawn(move || {

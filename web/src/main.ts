@@ -11,6 +11,7 @@ import { skinUnderHair } from './person';
 interface Status {
   webgl2: boolean;
   connected: boolean;
+  closeReason: string | null; // why the server closed the connection (its close code and reason), null while open
   sceneLoaded: boolean;
   framesReceived: number;
   framesRendered: number;
@@ -71,7 +72,7 @@ const device = new MouseDevice(view.camera, canvas);
 
 const status: Status = {
   webgl2: view.renderer.getContext() instanceof WebGL2RenderingContext,
-  connected: false, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
+  connected: false, closeReason: null, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
   runaways: 0, treatment: '', toolFriction: NaN, lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], recordStopped: null, frameTimes: [], strands: 0,
   gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairColour: DEFAULT_HAIR_COLOUR,
   get hairDrawCalls() { return view.hairDrawCalls; },
@@ -117,7 +118,11 @@ url.protocol = url.protocol === 'https:' ? 'wss:' : 'ws:';
 const ws = new WebSocket(url);
 ws.binaryType = 'arraybuffer';
 ws.onopen = () => { status.connected = true; statusEl.textContent = 'connected'; };
-ws.onclose = () => { status.connected = false; statusEl.textContent = 'disconnected (is coiffure serve running?)'; };
+ws.onclose = (ev) => {
+  status.connected = false;
+  status.closeReason = `${ev.code}${ev.reason ? ` ${ev.reason}` : ''}`;
+  statusEl.textContent = ev.reason ? `disconnected by the server: ${ev.reason}` : 'disconnected (is coiffure serve running?)';
+};
 ws.onmessage = (ev) => {
   const buf = ev.data as ArrayBuffer;
   const type = new Uint8Array(buf)[0];

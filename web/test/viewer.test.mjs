@@ -317,14 +317,20 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     // animation frames) and the watcher need not draw before it speaks the protocol.
     const poll = { timeout: 60_000, polling: 100 };
     const { page: second } = await openViewer(browser, server.url, { drawn: 0 });
+    // Neither page needs to draw for this test: both hold their frames, so that each reads its socket promptly.
+    for (const p of [page, second]) await p.evaluate(() => window.coiffureDebug.holdFrames(true));
     await second.waitForFunction(() => window.coiffure.viewers === 2, null, poll);
     assert.equal(await second.evaluate(() => window.coiffure.youControl), false);
     await second.evaluate(() => window.coiffure.send(new Uint8Array([0x05, 1]).buffer)); // RESET from a watcher
-    await second.waitForFunction(() => window.coiffure.errors.some((e) => e.code === 4), null, poll);
+    await second.waitForFunction(() => window.coiffure.errors.some((e) => e.code === 4) || !window.coiffure.connected, null, poll);
+    assert.equal(await second.evaluate(() => window.coiffure.closeReason), null, 'the watcher stays connected');
+    assert.ok(await second.evaluate(() => window.coiffure.errors.some((e) => e.code === 4)), 'a watcher\'s RESET is refused (ERROR 4)');
     await second.evaluate(() => document.getElementById('take').click());
     await second.waitForFunction(() => window.coiffure.youControl === true, null, poll);
     await page.waitForFunction(() => window.coiffure.youControl === false, null, poll);
     await second.close();
     await page.waitForFunction(() => window.coiffure.youControl === true, null, poll);
+    await page.evaluate(() => window.coiffureDebug.holdFrames(false));
+    assert.equal(await page.evaluate(() => window.coiffure.closeReason), null);
   });
 });

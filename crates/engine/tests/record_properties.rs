@@ -113,7 +113,7 @@ proptest! {
     #[test]
     fn arbitrary_bytes_never_panic(mut bytes in prop::collection::vec(any::<u8>(), 0..300), magic in any::<bool>()) {
         if magic && bytes.len() >= 8 {
-            bytes[..8].copy_from_slice(b"CFREC3\0\0");
+            bytes[..8].copy_from_slice(b"CFREC4\0\0");
         }
         check_refusal(&bytes)?;
     }

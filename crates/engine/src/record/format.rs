@@ -212,16 +212,18 @@ impl Record {
     pub fn read(bytes: &[u8]) -> Result<ReadRecord, RecordError> {
         let bad = |offset: usize, what: String| RecordError::Bad { offset, what };
         if bytes.len() < MAGIC.len() {
-            return Err(if MAGIC.starts_with(bytes) { bad(bytes.len(), format!("cut inside the magic ({} of its 8 bytes)", bytes.len())) } else { bad(0, "not a Coiffure session record (magic CFREC3)".into()) });
+            return Err(if MAGIC.starts_with(bytes) { bad(bytes.len(), format!("cut inside the magic ({} of its 8 bytes)", bytes.len())) } else { bad(0, "not a Coiffure session record (magic CFREC4)".into()) });
         }
         let magic = &bytes[..8];
         if magic != MAGIC {
             return Err(match magic.strip_prefix(b"CFREC") {
                 Some([v, 0, 0]) if v.is_ascii_digit() => bad(0, format!(
-                    "a version-{} session record (CFREC{}), written by an older Coiffure before records were streamed: this version reads version 3 (CFREC3) only; replay it with the Coiffure that recorded it",
-                    *v as char, *v as char
+                    "a version-{} session record (CFREC{}), written by an older Coiffure {}: this version reads version 4 (CFREC4) only; replay it with the Coiffure that recorded it",
+                    *v as char,
+                    *v as char,
+                    if *v == b'3' { "whose device loop was its physics loop (one device step per haptic step)" } else { "before records were streamed" }
                 )),
-                _ => bad(0, "not a Coiffure session record (magic CFREC3)".into()),
+                _ => bad(0, "not a Coiffure session record (magic CFREC4)".into()),
             });
         }
         let (header, mut at) = match chunk::next(bytes, 8) {
@@ -533,7 +535,7 @@ mod tests {
 
     #[test]
     fn older_versions_are_refused_naming_their_version() {
-        for v in [1, 2] {
+        for v in [1, 2, 3] {
             let mut b = format!("CFREC{v}\0\0").into_bytes();
             b.extend_from_slice(&1000.0f64.to_le_bytes());
             let e = Record::read(&b).unwrap_err().to_string();

@@ -7,7 +7,7 @@
 //! the power cut) reads up to its last whole chunk ([`Record::read`] says where and why it stopped).
 //!
 //! File format, version 3 ([`format`], [`chunk`]; little-endian, every f64 kept exactly):
-//! - magic `CFREC3\0\0` (8 bytes), then chunks;
+//! - magic `CFREC4\0\0` (8 bytes), then chunks;
 //! - a chunk: u32 payload length L (bytes, at most [`chunk::MAX_PAYLOAD`]), u32 CRC-32 (IEEE) of the payload,
 //!   then the L payload bytes, whose first byte is the chunk's kind:
 //!   - 0 **header** (the first chunk, once): f64 haptic rate (Hz), u32 byte length n, n bytes of UTF-8 TOML text:
@@ -30,9 +30,9 @@
 //!   (`SessionParams::device_steps`) writes has-reading 2, then u8 count of device steps and each one's reading
 //!   as above (u8 has-reading 0 or 1, and if 1 the reading).
 //!
-//! Older versions (`CFREC1`, `CFREC2`: one block written at a clean exit) are refused with an error naming
-//! their version: a record replays bit for bit only on the code that wrote it, and those were written by
-//! versions of Coiffure before records were streamed.
+//! Older versions are refused with an error naming their version: a record replays bit for bit only on the code
+//! that wrote it. `CFREC1`, `CFREC2`: one block written at a clean exit, before records were streamed; `CFREC3`:
+//! streamed, but one device step per haptic step (before the device loop ran at its own rate, issue 31).
 
 pub mod chunk;
 mod format;

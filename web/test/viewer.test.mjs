@@ -288,9 +288,11 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     const file = join(repoDir, '..', 'shared', 'data', 'tressfx', 'Ratboy_mohawk.tfx');
     const buf = readFileSync(file);
     // Forget the previous load's FIT, so that the wait below sees this file's (CI once read the earlier file's +z).
+    // The load took 19 s on a quiet CI machine and over 120 s on a loaded one: the wait polls on a timer (a
+    // software-rendered frame takes seconds) for up to 5 minutes.
     await page.evaluate(() => { window.coiffure.fit = null; });
     await page.setInputFiles('#load', { name: 'Ratboy_mohawk.tfx', mimeType: 'application/octet-stream', buffer: buf });
-    await page.waitForFunction(() => window.coiffure.strands === 2228 && window.coiffure.fit !== null, null, { timeout: 120_000 });
+    await page.waitForFunction(() => window.coiffure.strands === 2228 && window.coiffure.fit !== null, null, { timeout: 300_000, polling: 250 });
     const fit = await page.evaluate(() => window.coiffure.fit);
     const frames = await page.evaluate(() => window.coiffure.framesReceived);
     await page.waitForFunction((f) => window.coiffure.framesReceived > f + 5, frames, { timeout: 30_000 });

@@ -3,7 +3,7 @@
 the next while the comb is in the hair, away from the scripted path's corners (device-sim moves the device
 through them with unbounded acceleration, which the coupling's damper feels whatever the follower does).
 
-    python3 bench/device_forces.py bench/out/device-1000.csv [--path bench/device-comb.toml] [--away 0.04]
+    python3 bench/device_forces.py bench/out/device-1000.csv [--path bench/device-comb.toml] [--away 0.04] [--felt]
 
 Prints, per trace: the one-step change of the force vector (N) during the strokes (from the second waypoint to
 the last but one) more than --away s from any waypoint: median, p90, p99, max and how many steps exceed 0.1 N;
@@ -18,6 +18,7 @@ ap = argparse.ArgumentParser()
 ap.add_argument("traces", nargs="+")
 ap.add_argument("--path", default="bench/device-comb.toml")
 ap.add_argument("--away", type=float, default=0.04)
+ap.add_argument("--felt", action="store_true", help="the force the hand felt (hx,hy,hz: device-sim --render's own rendering) instead of the answered one")
 a = ap.parse_args()
 with open(a.path, "rb") as f:
     corners = [w["t"] for w in tomllib.load(f)["tool"]["path"]]
@@ -25,7 +26,8 @@ start, end = corners[1], corners[-2]
 for trace in a.traces:
     rows = list(csv.DictReader(open(trace)))
     t = [float(r["t"]) for r in rows]
-    f = [(float(r["fx"]), float(r["fy"]), float(r["fz"])) for r in rows]
+    k = ("hx", "hy", "hz") if a.felt else ("fx", "fy", "fz")
+    f = [(float(r[k[0]]), float(r[k[1]]), float(r[k[2]])) for r in rows]
     steps = sorted(
         math.dist(f[i], f[i - 1])
         for i in range(1, len(f))

@@ -15,6 +15,7 @@ import { oitOutputGLSL } from './shaders/hairOit.glsl';
 import { DEFAULT_HAIR_COLOUR, HAIR_COLOURS, sigmaFromMelanin, type Melanin } from './hairColor';
 import { meanFibreWidth } from './fibre';
 import type { DeepOpacityMaps } from './deepOpacityMaps';
+import { CarriedHair } from './carriedHair';
 
 /** Parameters of the hair's look (one home; documented with meaning, unit and default). */
 export interface HairLookParams {
@@ -121,8 +122,12 @@ export class HairMaterial {
   readonly displacementTexture: THREE.DataTexture;
   readonly stateTexture: THREE.DataTexture;
   readonly clumpTexture: THREE.DataTexture;
-  /** Every render vertex's rest position (head frame), for the carried strand's follow-the-leader. */
+  /** Every render vertex's rest position (head frame) and rest arc length from its root, for the carried hair. */
   readonly restTexture: THREE.DataTexture;
+  /** Every render strand's primary guide, for the wet clumping of the carried hair. */
+  readonly strandGuideTexture: THREE.DataTexture;
+  /** The render vertices carried by the head and the lattice, once a frame (`carry`). */
+  readonly carried: CarriedHair;
   readonly params: HairLookParams;
   /** Hairs one render strand stands for (>= 1). */
   readonly hairsPerStrand: number;
@@ -146,6 +151,7 @@ export class HairMaterial {
     this.stateTexture = floatTexture(Math.max(1, scene.guides), 1);
     this.clumpTexture = clumpCentres(scene);
     this.restTexture = restPositions(scene);
+    this.strandGuideTexture = strandGuides(scene, this.restTexture.image.width);
     this.resetGuides();
     const deform: Record<string, THREE.IUniform> = {
       latticeNodes: { value: this.latticeTexture },
@@ -166,8 +172,13 @@ export class HairMaterial {
       rootHold: { value: scene.rootHold },
       restPositions: { value: this.restTexture },
       restWidth: { value: this.restTexture.image.width },
+      strandGuides: { value: this.strandGuideTexture },
+      vertexCount: { value: scene.strands * scene.verticesPerStrand },
+      carriedPositions: { value: null },
       ...pushOutUniforms(scene),
     };
+    this.carried = new CarriedHair(this.restTexture.image.width, this.restTexture.image.height, deform);
+    deform.carriedPositions.value = this.carried.positions.texture;
     this.material = new THREE.ShaderMaterial({
       glslVersion: THREE.GLSL3,
       vertexShader: litVertex,
@@ -266,9 +277,15 @@ export class HairMaterial {
     this.stateTexture.needsUpdate = true;
   }
 
+  /** Carries the render vertices for this frame: before any pass that draws the hair. */
+  carry(renderer: THREE.WebGLRenderer): void {
+    this.carried.update(renderer);
+  }
+
   /** Frees the textures and the materials' programs (a new SCENE replaces them). */
   dispose(): void {
-    for (const t of [this.latticeTexture, this.displacementTexture, this.stateTexture, this.clumpTexture, this.restTexture]) t.dispose();
+    for (const t of [this.latticeTexture, this.displacementTexture, this.stateTexture, this.clumpTexture, this.restTexture, this.strandGuideTexture]) t.dispose();
+    this.carried.dispose();
     for (const m of [this.material, this.depthMaterial, this.opacityMaterial]) m.dispose();
   }
 
@@ -326,17 +343,29 @@ function clumpCentres(scene: SceneMsg): THREE.DataTexture {
   return t;
 }
 
-/** Every render vertex's rest position (head frame, m): texel (v % width, v / width) for vertex v, width at
- * most 4096 (WebGL2 guarantees textures that wide). */
+/** Every render vertex's rest position (head frame, m) in xyz and its rest arc length from the strand's root
+ * (m) in w: texel (v % width, v / width) for vertex v, width at most 4096 (WebGL2 guarantees textures that wide). */
 function restPositions(scene: SceneMsg): THREE.DataTexture {
-  const n = Math.max(1, scene.strands * scene.verticesPerStrand);
+  const nv = scene.verticesPerStrand;
+  const n = Math.max(1, scene.strands * nv);
   const w = Math.min(4096, n);
   const t = floatTexture(w, Math.ceil(n / w));
   const d = t.image.data as Float32Array;
   const pos = scene.renderPositions;
+  let arc = 0;
   for (let v = 0; v < pos.length / 3; v++) {
-    d[4 * v] = pos[3 * v]; d[4 * v + 1] = pos[3 * v + 1]; d[4 * v + 2] = pos[3 * v + 2];
+    if (v % nv === 0) arc = 0;
+    else arc += Math.hypot(pos[3 * v] - pos[3 * v - 3], pos[3 * v + 1] - pos[3 * v - 2], pos[3 * v + 2] - pos[3 * v - 1]);
+    d[4 * v] = pos[3 * v]; d[4 * v + 1] = pos[3 * v + 1]; d[4 * v + 2] = pos[3 * v + 2]; d[4 * v + 3] = arc;
   }
+  return t;
+}
+
+/** Every render strand's primary guide (the guide its wet clump gathers to): texel (s % width, s / width). */
+function strandGuides(scene: SceneMsg, width: number): THREE.DataTexture {
+  const t = floatTexture(width, Math.max(1, Math.ceil(scene.strands / width)));
+  const d = t.image.data as Float32Array;
+  for (let s = 0; s < scene.strands; s++) d[4 * s] = scene.renderGuide[s * scene.guidesPerStrand];
   return t;
 }
 

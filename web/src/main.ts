@@ -11,6 +11,7 @@ import { skinUnderHair } from './person';
 interface Status {
   webgl2: boolean;
   connected: boolean;
+  closeReason: string | null; // why the server closed the connection (its close code and reason), null while open
   sceneLoaded: boolean;
   framesReceived: number;
   framesRendered: number;
@@ -71,7 +72,7 @@ const device = new MouseDevice(view.camera, canvas);
 
 const status: Status = {
   webgl2: view.renderer.getContext() instanceof WebGL2RenderingContext,
-  connected: false, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
+  connected: false, closeReason: null, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
   runaways: 0, treatment: '', toolFriction: NaN, lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], recordStopped: null, frameTimes: [], strands: 0,
   gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairColour: DEFAULT_HAIR_COLOUR,
   get hairDrawCalls() { return view.hairDrawCalls; },
@@ -117,7 +118,11 @@ url.protocol = url.protocol === 'https:' ? 'wss:' : 'ws:';
 const ws = new WebSocket(url);
 ws.binaryType = 'arraybuffer';
 ws.onopen = () => { status.connected = true; statusEl.textContent = 'connected'; };
-ws.onclose = () => { status.connected = false; statusEl.textContent = 'disconnected (is coiffure serve running?)'; };
+ws.onclose = (ev) => {
+  status.connected = false;
+  status.closeReason = `${ev.code}${ev.reason ? ` ${ev.reason}` : ''}`;
+  statusEl.textContent = ev.reason ? `disconnected by the server: ${ev.reason}` : 'disconnected (is coiffure serve running?)';
+};
 ws.onmessage = (ev) => {
   const buf = ev.data as ArrayBuffer;
   const type = new Uint8Array(buf)[0];
@@ -441,6 +446,31 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
   /** Lets the tool's button go where the tool is (the mouse's release would lift it to the lifted plane): a
    * nozzle stops blowing and stays there. */
   releaseButton(): void { device.pressed = false; sendPose(); },
+  /** The carried hair of the last frame (carriedHair.ts, read back from the GPU) checked against its law:
+   * the largest distance of a root from its rest root moved rigidly with the head (m), the largest relative
+   * change of a segment's length from its rest length, and the largest distance of any vertex from its rest
+   * position moved rigidly with the head (m: how far the lattice carried it). */
+  carriedHair(): { vertices: number; rootError: number; lengthError: number; largestMove: number } {
+    const hair = view.hair!;
+    const rt = hair.carried.positions;
+    const out = new Float32Array(4 * rt.width * rt.height);
+    view.renderer.readRenderTargetPixels(rt, 0, 0, rt.width, rt.height, out);
+    const rest = hair.restTexture.image.data as Float32Array;
+    const nv = view.verticesPerStrand, n = hair.material.uniforms.vertexCount.value as number;
+    const q = new THREE.Quaternion(...status.headQuaternion), t = new THREE.Vector3(...status.headPosition);
+    const r = new THREE.Vector3();
+    let rootError = 0, lengthError = 0, largestMove = 0;
+    for (let v = 0; v < n; v++) {
+      r.set(rest[4 * v], rest[4 * v + 1], rest[4 * v + 2]).applyQuaternion(q).add(t);
+      const d = Math.hypot(out[4 * v] - r.x, out[4 * v + 1] - r.y, out[4 * v + 2] - r.z);
+      largestMove = Math.max(largestMove, d);
+      if (v % nv === 0) { rootError = Math.max(rootError, d); continue; }
+      const l0 = rest[4 * v + 3] - rest[4 * v - 1];
+      const l = Math.hypot(out[4 * v] - out[4 * v - 4], out[4 * v + 1] - out[4 * v - 3], out[4 * v + 2] - out[4 * v - 2]);
+      if (l0 > 1e-6) lengthError = Math.max(lengthError, Math.abs(l - l0) / l0);
+    }
+    return { vertices: n, rootError, lengthError, largestMove };
+  },
   project(x: number, y: number, z: number): [number, number] {
     const v = new THREE.Vector3(x, y, z).project(view.camera);
     const r = canvas.getBoundingClientRect();

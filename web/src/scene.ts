@@ -75,7 +75,7 @@ export class View {
     exposure: { value: 1.0 },
   };
   private shadowHair: THREE.BufferGeometry | null = null;
-  private verticesPerStrand = 2;
+  verticesPerStrand = 2;
   private colour: Melanin = HAIR_COLOURS[DEFAULT_HAIR_COLOUR];
   private readonly sun: THREE.DirectionalLight;
   /** Falling cut pieces (the clusters' chains), redrawn every frame. */
@@ -267,6 +267,7 @@ export class View {
     this.gpuTimer.begin();
     this.hairDrawCalls = 0;
     if (this.hair) {
+      this.hair.carry(this.renderer);
       this.dom.update(this.renderer, this.lighting.lightDirection.value);
     }
     this.renderer.render(this.scene, this.camera);

@@ -56,9 +56,11 @@ export async function launchBrowser() {
   });
 }
 
-/** Opens the viewer and waits until the scene is loaded and a few frames have been drawn. `view` (optional):
- * the camera view (`?view=`, CAMERA_VIEWS in web/src/scene.ts; the default is the three-quarter portrait). */
-export async function openViewer(browser, url, { view } = {}) {
+/** Opens the viewer and waits until the scene is loaded and a few frames have been drawn (and received).
+ * `view` (optional): the camera view (`?view=`, CAMERA_VIEWS in web/src/scene.ts; the default is the
+ * three-quarter portrait). `drawn` (default 3): frames the page must have drawn; a second page in the same
+ * software-rendered browser shares its CPU with the first, so a test of the protocol alone may ask for 0. */
+export async function openViewer(browser, url, { view, drawn = 3 } = {}) {
   const page = await browser.newPage({ viewport: { width: 1024, height: 720 } });
   if (view) { const u = new URL(url); u.searchParams.set('view', view); url = u.href; }
   // Software rendering is slow (seconds per frame for the default scene): generous timeouts.
@@ -67,7 +69,7 @@ export async function openViewer(browser, url, { view } = {}) {
   page.on('console', (m) => logs.push(m.text()));
   page.on('pageerror', (e) => logs.push(`pageerror: ${e.message}`));
   await page.goto(url, { waitUntil: 'domcontentloaded' });
-  await page.waitForFunction(() => window.coiffure && window.coiffure.sceneLoaded && window.coiffure.framesRendered > 2 && window.coiffure.framesReceived > 2, null, { timeout: 120_000 });
+  await page.waitForFunction((n) => window.coiffure && window.coiffure.sceneLoaded && window.coiffure.framesRendered >= n && window.coiffure.framesReceived > 2, drawn, { timeout: 120_000, polling: 100 });
   return { page, logs };
 }
 

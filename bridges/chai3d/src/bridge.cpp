@@ -91,7 +91,7 @@ int run(Device& device, const Options& o, volatile bool& stop, Stats& stats) {
         return 1;
     }
     std::FILE* log = o.log.empty() ? nullptr : std::fopen(o.log.c_str(), "w");
-    if (log) std::fprintf(log, "t,x,y,z,fx,fy,fz,ramp,latency_us\n");
+    if (log) std::fprintf(log, "t,x,y,z,fx,fy,fz,ramp,latency_us,tx,ty,tz\n");
     std::printf("bridge: %s (%.1f N) -> udp:%s:%d at %.0f Hz\n", info.name.c_str(), max_force, o.host.c_str(), o.port, o.rate);
     std::fflush(stdout);
 
@@ -102,6 +102,7 @@ int run(Device& device, const Options& o, volatile bool& stop, Stats& stats) {
     rtt.reserve(1 << 16);
     periods.reserve(1 << 16);
     Vec force{0, 0, 0};           // latest force received, device frame of the protocol, N
+    Vec torque{0, 0, 0};          // latest torque received, N m
     double answered_at = -1.0;    // s, time of the latest answer
     double connected_at = -1.0;   // s, start of the current run of answers (the ramp's origin)
     std::uint32_t seq = 0;
@@ -133,6 +134,8 @@ int run(Device& device, const Options& o, volatile bool& stop, Stats& stats) {
                 }
                 bool finite = std::isfinite(f.force[0]) && std::isfinite(f.force[1]) && std::isfinite(f.force[2]);
                 force = finite ? f.force : Vec{0, 0, 0};
+                bool finite_t = std::isfinite(f.torque[0]) && std::isfinite(f.torque[1]) && std::isfinite(f.torque[2]);
+                torque = finite_t ? f.torque : Vec{0, 0, 0};
                 if (answered_at < 0.0 || ta - answered_at > o.timeout) connected_at = ta;
                 answered_at = ta;
             }
@@ -154,17 +157,22 @@ int run(Device& device, const Options& o, volatile bool& stop, Stats& stats) {
         const double t = std::chrono::duration<double>(now - start).count();
         // Zero force when the answers stopped (the ramp starts again when they return), else ramped and clamped.
         double ramp = 0.0;
-        Vec applied{0, 0, 0};
+        Vec applied{0, 0, 0}, applied_t{0, 0, 0};
         if (answered_at >= 0.0 && t - answered_at <= o.timeout) {
             ramp = o.ramp > 0.0 ? std::min(1.0, (t - connected_at) / o.ramp) : 1.0;
             double scale = ramp;
             double m = norm(force) * ramp;
             if (m > max_force) scale *= max_force / m;
             applied = {force[0] * scale, force[1] * scale, force[2] * scale};
+            // The torque likewise, within the device's own torque limit (0 on a 3-DOF device: none).
+            double scale_t = ramp;
+            double mt = norm(torque) * ramp;
+            if (mt > info.max_torque) scale_t = mt > 0.0 ? scale_t * info.max_torque / mt : 0.0;
+            applied_t = {torque[0] * scale_t, torque[1] * scale_t, torque[2] * scale_t};
         } else if (answered_at >= 0.0) {
             ++stats.stale;
         }
-        device.set_force(mul_t(kM, applied));  // protocol frame -> CHAI3D frame
+        device.set_force_and_torque(mul_t(kM, applied), mul_t(kM, applied_t));  // protocol frame -> CHAI3D frame
         stats.max_applied = std::max(stats.max_applied, norm(applied));
 
         // The pose, in the protocol's device frame.
@@ -185,8 +193,8 @@ int run(Device& device, const Options& o, volatile bool& stop, Stats& stats) {
         if (n > 0) periods.push_back(std::chrono::duration<double>(now - last_send).count());
         last_send = now;
         if (log)
-            std::fprintf(log, "%.6f,%.7f,%.7f,%.7f,%.6f,%.6f,%.6f,%.6f,%.1f\n", t, pose.position[0], pose.position[1], pose.position[2], applied[0], applied[1], applied[2], ramp,
-                         latency * 1e6);
+            std::fprintf(log, "%.6f,%.7f,%.7f,%.7f,%.6f,%.6f,%.6f,%.6f,%.1f,%.6f,%.6f,%.6f\n", t, pose.position[0], pose.position[1], pose.position[2], applied[0], applied[1], applied[2], ramp,
+                         latency * 1e6, applied_t[0], applied_t[1], applied_t[2]);
     }
     device.set_force({0, 0, 0});
     device.close();

@@ -22,7 +22,7 @@ public:
         }
         device_->calibrate();
         auto s = device_->getSpecifications();
-        info_ = DeviceInfo{s.m_manufacturerName + " " + s.m_modelName, s.m_maxLinearForce, s.m_workspaceRadius};
+        info_ = DeviceInfo{s.m_manufacturerName + " " + s.m_modelName, s.m_maxLinearForce, s.m_maxAngularTorque, s.m_workspaceRadius};
         return true;
     }
     void close() override {
@@ -44,7 +44,10 @@ public:
         device_->getUserSwitches(switches);
         buttons = switches;
     }
-    void set_force(const std::array<double, 3>& f) override { device_->setForce(chai3d::cVector3d(f[0], f[1], f[2])); }
+    void set_force_and_torque(const std::array<double, 3>& f, const std::array<double, 3>& t) override {
+        // CHAI3D's call for force, torque and gripper force (0: the gripper gets none); a 3-DOF device applies the force.
+        device_->setForceAndTorqueAndGripperForce(chai3d::cVector3d(f[0], f[1], f[2]), chai3d::cVector3d(t[0], t[1], t[2]), 0.0);
+    }
 
 private:
     std::unique_ptr<chai3d::cHapticDeviceHandler> handler_;

@@ -12,6 +12,7 @@ namespace coiffure {
 struct DeviceInfo {
     std::string name;
     double max_force = 0.0;         // N
+    double max_torque = 0.0;        // N m (0: a 3-DOF device, force only)
     double workspace_radius = 0.0;  // m
 };
 
@@ -24,8 +25,9 @@ public:
     virtual DeviceInfo info() const = 0;
     // End-effector position (m), rotation (row-major, tool to device frame) and buttons at time `t` (s).
     virtual void read(double t, std::array<double, 3>& position, std::array<double, 9>& rotation, std::uint32_t& buttons) = 0;
-    // Force on the hand (N) until the next call.
-    virtual void set_force(const std::array<double, 3>& force) = 0;
+    // Force (N) and torque (N m) on the hand until the next call (a 3-DOF device applies the force only).
+    virtual void set_force_and_torque(const std::array<double, 3>& force, const std::array<double, 3>& torque) = 0;
+    void set_force(const std::array<double, 3>& force) { set_force_and_torque(force, {0, 0, 0}); }
 };
 
 // The first device CHAI3D finds, or the simulated one.

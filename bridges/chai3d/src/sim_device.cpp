@@ -13,7 +13,7 @@ class SimDevice : public Device {
 public:
     bool open(std::string&) override { return true; }
     void close() override {}
-    DeviceInfo info() const override { return DeviceInfo{"simulated device (45 g, Phantom Omni limits)", 3.3, 0.06}; }
+    DeviceInfo info() const override { return DeviceInfo{"simulated device (45 g, Phantom Omni limits, 3-DOF)", 3.3, 0.0, 0.06}; }
     void read(double t, std::array<double, 3>& p, std::array<double, 9>& r, std::uint32_t& buttons) override {
         const double kPi = 3.14159265358979323846;
         const double m = 0.045, b = 0.05, k_hand = 300.0, b_hand = 3.0;
@@ -37,7 +37,7 @@ public:
         r = {1, 0, 0, 0, 1, 0, 0, 0, 1};
         buttons = 1;
     }
-    void set_force(const std::array<double, 3>& f) override { f_ = f; }
+    void set_force_and_torque(const std::array<double, 3>& f, const std::array<double, 3>&) override { f_ = f; }
 
 private:
     bool started_ = false;

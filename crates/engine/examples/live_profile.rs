@@ -69,9 +69,10 @@ fn main() {
             ls.global_step_live();
         }
         let t = (n as f64 - settle as f64) * ls.dt;
-        let reading = (n >= settle).then(|| s.reading(t));
+        let k = params.device_steps();
+        let readings: Vec<_> = (0..k).map(|i| (n >= settle).then(|| s.reading(t + i as f64 * ls.dt / k as f64))).collect();
         let t0 = Instant::now();
-        let cmd = ls.haptic_step(&std::mem::take(&mut commands), reading);
+        let cmd = ls.haptic_step(&std::mem::take(&mut commands), &readings);
         tip = tip.max(ls.haptic.max_tip_speed());
         peak = peak.max(cmd.force.norm());
         jump = jump.max((cmd.force.norm() - last).abs());

@@ -131,7 +131,7 @@ fn main() {
             applied += 1;
         }
         let command_s = t0.elapsed().as_secs_f64();
-        ls.haptic_step(&[], Some(reading));
+        ls.haptic_step(&[], &vec![Some(reading); params.device_steps()]);
         // What the live haptic thread also does in its step: the tool input for the global thread, and every
         // `publish_every` steps the snapshot for the viewers.
         let t1 = t0.elapsed().as_secs_f64();

@@ -9,7 +9,8 @@
 //!   exchange;
 //! - [`global`]: the global layer's core (lattice, nozzles, cuts), [`haptic`]: the haptic layer's core
 //!   (coupling, active set, local strands, tool actions);
-//! - [`live`]: the two threads and their triple buffers; [`record`] and [`replay`]: deterministic replay;
+//! - [`live`]: the threads and their triple buffers ([`device_loop`]: the device loop at the device's rate and
+//!   the haptic physics, on the lockstep schedule); [`record`] and [`replay`]: deterministic replay;
 //!   [`lockstep`]: both cores on one thread (replay and `[live]` scenarios).
 //!
 //! [`session`] gathers the live session's public names. Headless: [`scenario`]: a tool scripted through a
@@ -19,6 +20,7 @@
 
 pub mod budget;
 pub mod command;
+pub mod device_loop;
 pub mod error;
 pub mod global;
 pub mod haptic;

@@ -4,8 +4,9 @@
 //!   snapshot of its node positions, with a version number, through wait-free triple buffers (one to the
 //!   haptic thread, one to the viewer side). The viewer does the FFD of the render strands on the GPU.
 //!   Scissors cuts of the render strands run on a worker thread and are swapped in when done.
-//! - **Haptic thread** (1 kHz, [`HapticCore`] inside a [`HapticLoop`]): reads the browser's mouse through a
-//!   [`VirtualDevice`], runs the virtual coupling, and steps the *local strands*: the few guide strands
+//! - **Haptic threads** ([`DeviceLoop`]): the device loop (4 kHz by default) reads the browser's mouse
+//!   through a [`VirtualDevice`] (or a device) and runs the virtual coupling against the local force model
+//!   the physics thread (1 kHz, [`HapticCore`]) publishes as it steps the *local strands*: the few guide strands
 //!   nearest the tool (Super-Helices). Their roots follow the lattice (FFD of the root's rest position, so
 //!   head and lattice motion move them); their displacement from their settled reference shape is published
 //!   for the viewer, which adds it to the render strands bound to each guide (so what the tool does is seen
@@ -13,8 +14,9 @@
 //! - Nothing on the haptic path takes a lock: lattice snapshots come in and haptic snapshots go out through
 //!   triple buffers, viewer commands through a non-blocking channel.
 //!
-//! Replay: the haptic step is a pure function of (its state, the device reading, the lattice snapshot it
-//! read, the commands applied before it). A record ([`crate::record`]) keeps, per haptic step, the reading and
+//! Replay: a physics period is a pure function of (the haptic state, its device steps' readings, the lattice
+//! snapshot its physics step read, the commands applied before it): the two threads keep the lockstep
+//! schedule ([`crate::device_loop`]). A record ([`crate::record`]) keeps, per physics period, the readings and
 //! the lattice version used, and per global step its tool input; [`crate::replay::replay`] re-runs the global
 //! and haptic cores in lockstep on one thread and gives the same forces bit for bit. A recording session
 //! ([`Session::start_recording`]) streams its record to disk as it runs (`crate::record::stream`): both threads
@@ -31,8 +33,10 @@ use crate::scene::Scene;
 use crate::snapshot::{HapticSnapshot, LatticeSnapshot};
 use crate::tool::ToolInput;
 use haptics::backends::{virtual_device, VirtualHandle};
-use haptics::device::{DeviceCommand, DeviceReading, HapticDevice};
-use haptics::haptic_loop::{HapticLoop, LoopStats};
+use crate::device_loop::{DeviceLoop, Handover, PhysicsStats};
+use crate::haptic::Published;
+use haptics::device::HapticDevice;
+use haptics::haptic_loop::LoopStats;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{channel, Receiver, Sender};
 use std::sync::Arc;
@@ -60,8 +64,10 @@ pub struct SessionIo {
 /// What a stopped session returns.
 #[derive(Debug)]
 pub struct SessionReport {
-    /// Haptic loop timing.
+    /// Device loop timing (at `SessionParams::device_rate_hz`).
     pub haptic: LoopStats,
+    /// Haptic physics thread timing (at `SessionParams::haptic_rate_hz`).
+    pub physics: PhysicsStats,
     /// Global steps done.
     pub global_steps: u64,
     /// Mean global step wall time, s.
@@ -81,7 +87,7 @@ pub struct Session {
     stop: Arc<AtomicBool>,
     reset_epoch: Arc<AtomicU64>,
     global: Option<JoinHandle<GlobalRun>>,
-    haptic: Option<HapticLoop<Box<dyn HapticDevice>>>,
+    haptic: Option<DeviceLoop>,
     record: Option<RecordWriter>,
     budget: Arc<std::sync::Mutex<BudgetReport>>,
 }
@@ -111,6 +117,7 @@ impl Session {
             None => (None, None, None),
         };
         let mut core = HapticCore::new(scene.clone(), params)?;
+        let (side, first_model) = (core.side.clone(), core.published());
         let mut global = GlobalCore::new(scene.clone(), &params);
         let rest = global.snapshot();
         let (mut tool_in, mut tool_out) = triple_buffer(&ToolInput::default());
@@ -184,7 +191,11 @@ impl Session {
         let publish_every = params.publish_every;
         let budget_report = Arc::new(std::sync::Mutex::new(BudgetReport { lowest: params.max_active, last: params.max_active, ..BudgetReport::default() }));
         let mut budget = params.budget.enabled.then(|| BudgetRun { budget: StrandBudget::new(params.budget, dt, params.max_active), change: None, shared: budget_report.clone() });
-        let step = move |reading: Option<DeviceReading>, _t: f64, dt: f64| -> DeviceCommand {
+        // The physics thread's step (the device loop runs the coupling, `crate::device_loop`): the commands and
+        // the physics step with the proxy's state the device thread handed over; then the record of the period
+        // before (its device readings came with this hand-over), the tool input and the viewers' snapshot.
+        let mut pending: Option<(Vec<Command>, u64)> = None;
+        let physics = move |h: &Handover| -> Published {
             let started = Instant::now();
             let mut cmds = Vec::new();
             // The strand budget's change decided after the last step, applied and recorded first.
@@ -204,10 +215,16 @@ impl Session {
                 cmds.push(c);
             }
             let lattice = lat_h_out.read();
-            let cmd = core.step(reading, lattice, dt);
+            core.physics_step(&h.proxy, lattice, dt);
             tool_in.write(core.tool_input());
             if let Some(r) = step_tx.as_mut() {
-                r.send(StepRecord { reading, lattice_version: lattice.version, commands: cmds, force: cmd.force });
+                // Period k's record is whole at physics step k + 1: its device readings and last force come
+                // with this hand-over.
+                if let Some((commands, lattice_version)) = pending.take() {
+                    let (first, more) = h.previous_readings().split_first().map_or((None, &[][..]), |(a, b)| (*a, b));
+                    r.send(StepRecord { reading: first, more_readings: more.to_vec(), lattice_version, commands, force: h.force });
+                }
+                pending = Some((cmds, lattice.version));
             }
             core.stage_snapshot(lattice);
             if core.step % publish_every == 0 {
@@ -218,10 +235,10 @@ impl Session {
             if let Some(b) = budget.as_mut() {
                 b.change = b.budget.observe(started.elapsed().as_secs_f64(), core.active().len());
             }
-            cmd
+            core.published()
         };
         let on_refused = |why: String| tracing::warn!("haptic thread: {why}");
-        let haptic = HapticLoop::spawn_with_priority(params.haptic_rate_hz, dev, step, None, params.haptic_priority, on_refused)
+        let haptic = DeviceLoop::spawn(dev, side, first_model, dt, params.device_steps(), params.haptic_priority, physics, on_refused)
             .map_err(SessionError::Start)?;
         let session = Session { scene, params, stop, reset_epoch, global: Some(global_thread), haptic: Some(haptic), record: writer, budget: budget_report };
         Ok((session, SessionIo { device: handle, commands: cmd_tx, lattice: lat_v_out, haptic: hap_out }))
@@ -246,12 +263,12 @@ impl Session {
     /// what the record holds.
     pub fn stop(mut self) -> SessionReport {
         let _ = self.reset_epoch.load(Ordering::Relaxed);
-        let (haptic, _dev) = self.haptic.take().expect("running").stop();
+        let (haptic, physics) = self.haptic.take().expect("running").stop();
         self.stop.store(true, Ordering::Relaxed);
         let g = self.global.take().expect("running").join().expect("the global thread panicked");
         let record = self.record.take().map(RecordWriter::finish);
         let budget = self.budget.lock().map(|b| *b).unwrap_or_default();
-        SessionReport { haptic, global_steps: g.steps, global_step_mean: g.mean, global_recoveries: g.recoveries, record, budget }
+        SessionReport { haptic, physics, global_steps: g.steps, global_step_mean: g.mean, global_recoveries: g.recoveries, record, budget }
     }
 }
 
@@ -295,6 +312,7 @@ mod tests {
     use super::*;
     use crate::testing::{small_scene, test_rot};
     use crate::tool::Tool;
+    use haptics::device::DeviceReading;
     use nalgebra::Vector3;
 
     /// Pushes one mouse reading every 5 ms for each k of `ks` (position in m and buttons from `at(k)`,
@@ -324,6 +342,7 @@ mod tests {
         let sum = l.wetness.iter().sum::<f32>();
         eprintln!("kept version after the scissors {cuts}; tool {} step {} wetness summed over guides {sum}", h.tool, h.step);
         let report = session.stop();
+        eprintln!("device loop {:?}\nphysics {:?}", report.haptic, report.physics);
         assert!(cuts > 0, "the scissors cut");
         assert_eq!(h.tool, Tool::Sprayer as u8, "the haptic thread took the sprayer");
         // 3.5 s of wall time: a loop that kept running made most of its 3500 periods (those lost to a busy

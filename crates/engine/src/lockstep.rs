@@ -1,7 +1,7 @@
 //! The live session's two cores stepped in lockstep on one thread, deterministic: the one driver of
 //! [`crate::replay::replay`] (the recorded schedule) and of the `[live]` scenarios (a fixed schedule: one
 //! global step every `haptic_rate / global_rate` haptic steps). The live threads ([`crate::live`]) run the
-//! same [`GlobalCore::step`] and [`HapticCore::step`] on their own clocks.
+//! same [`GlobalCore::step`], device steps and physics steps ([`HapticCore::step_rates`]) on their own clocks.
 
 use crate::command::Command;
 use crate::error::SessionError;
@@ -30,6 +30,8 @@ pub struct Lockstep {
     pub gdt: f64,
     /// A record of the steps (the format of `coiffure serve --record`), if asked for.
     pub record: Option<Record>,
+    /// The last physics period's device commands, one per device step, in order.
+    pub device_commands: Vec<DeviceCommand>,
 }
 
 impl Lockstep {
@@ -45,6 +47,7 @@ impl Lockstep {
             dt: Duration::from_secs_f64(1.0 / haptic_rate_hz).as_secs_f64(),
             gdt: Duration::from_secs_f64(1.0 / params.global_rate_hz).as_secs_f64(),
             record: None,
+            device_commands: Vec::new(),
         })
     }
 
@@ -64,17 +67,23 @@ impl Lockstep {
         self.global_step(&input)
     }
 
-    /// One haptic step (what the haptic thread does each tick): the viewer `commands`, then the step with
-    /// the device `reading` and the latest lattice snapshot (recorded if asked for).
-    pub fn haptic_step(&mut self, commands: &[Command], reading: Option<DeviceReading>) -> DeviceCommand {
-        for c in commands {
-            self.haptic.apply(c);
-        }
-        let cmd = self.haptic.step(reading, &self.lattice, self.dt);
+    /// One physics period (what the live session's device and physics threads do in one physics period,
+    /// [`HapticCore::step_rates`]): one device step per reading of `readings` (the session's
+    /// `SessionParams::device_steps`), rendering the model the previous physics step published, then the viewer
+    /// `commands` and the physics step with the latest lattice snapshot (recorded if asked for). Returns the
+    /// period's last device command.
+    pub fn haptic_step(&mut self, commands: &[Command], readings: &[Option<DeviceReading>]) -> DeviceCommand {
+        let mut period = std::mem::take(&mut self.device_commands);
+        period.clear();
+        self.haptic.step_rates(commands, readings, &self.lattice, self.dt, |_, c| period.push(*c));
+        let last = period.last().copied().unwrap_or_default();
+        self.device_commands = period;
         if let Some(r) = self.record.as_mut() {
-            r.steps.push(StepRecord { reading, lattice_version: self.lattice.version, commands: commands.to_vec(), force: cmd.force });
+            let reading = readings.first().copied().flatten();
+            let more_readings = readings.get(1..).unwrap_or_default().to_vec();
+            r.steps.push(StepRecord { reading, more_readings, lattice_version: self.lattice.version, commands: commands.to_vec(), force: last.force });
         }
-        cmd
+        last
     }
 
     /// Replays `record` (see [`crate::replay::replay`]): before each recorded haptic step, the global core
@@ -92,7 +101,7 @@ impl Lockstep {
                 self.global_step(&input);
                 each(self, None);
             }
-            let cmd = self.haptic_step(&s.commands, s.reading);
+            let cmd = self.haptic_step(&s.commands, &s.readings());
             each(self, Some(&cmd));
         }
     }

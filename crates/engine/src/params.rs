@@ -31,8 +31,14 @@ pub const DEVICE_FOLLOW: TargetParams = TargetParams { min_interval: 0.00025, ma
 /// Parameters of a live session. Defaults: the README's `coiffure serve`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SessionParams {
-    /// Haptic loop rate, Hz (at most 4000). Default 1000.
+    /// Physics rate of the haptic layer (the local strands' step, which publishes the local force model), Hz
+    /// (at most 4000). Default 1000.
     pub haptic_rate_hz: f64,
+    /// Device loop rate, Hz: the coupling renders the local force model at this rate
+    /// (`crate::haptic::device_side`), a whole number of device steps per physics step
+    /// ([`SessionParams::device_steps`]), at most 10 000. Default 4000 (crisp stiff contact needs 5-10 kHz,
+    /// Choi and Tan 2004; 4 kHz is what a loaded 2-core machine sustains, bench/RESULTS.md).
+    pub device_rate_hz: f64,
     /// Global (lattice) step rate, Hz. Default 100.
     pub global_rate_hz: f64,
     /// Most guide strands chosen near the tool's path at once (`crate::haptic` active set). Default 48: enough
@@ -91,16 +97,28 @@ pub struct SessionParams {
 
 impl Default for SessionParams {
     fn default() -> Self {
-        Self { haptic_rate_hz: 1000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 56, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams::default(), input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: RecordParams::default(), wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default(), budget: BudgetParams::default() }
+        Self { haptic_rate_hz: 1000.0, device_rate_hz: 4000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 56, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams::default(), input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: RecordParams::default(), wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default(), budget: BudgetParams::default() }
     }
 }
 
+/// Fastest device loop, Hz (`SessionParams::device_rate_hz`).
+pub const MAX_DEVICE_RATE_HZ: f64 = 10_000.0;
+
 impl SessionParams {
+    /// Device steps per physics step: `device_rate_hz / haptic_rate_hz` (a whole number, >= 1).
+    pub fn device_steps(&self) -> usize {
+        ((self.device_rate_hz / self.haptic_rate_hz).round() as usize).max(1)
+    }
+
     /// Checks every field; the error names the bad one.
     pub fn validate(&self) -> Result<(), SessionError> {
         let p = |m: String| Err(SessionError::Param(m));
         if !(self.haptic_rate_hz > 0.0 && self.haptic_rate_hz <= haptics::haptic_loop::MAX_RATE_HZ) {
             return p(format!("haptic_rate_hz must be in (0, 4000], got {}", self.haptic_rate_hz));
+        }
+        let n = self.device_rate_hz / self.haptic_rate_hz;
+        if !(self.device_rate_hz <= MAX_DEVICE_RATE_HZ && n >= 1.0 - 1e-9 && (n - n.round()).abs() <= 1e-9 * n) {
+            return p(format!("device_rate_hz must be a whole multiple of haptic_rate_hz ({} Hz) up to {MAX_DEVICE_RATE_HZ} Hz, got {}", self.haptic_rate_hz, self.device_rate_hz));
         }
         if !(self.global_rate_hz > 0.0 && self.global_rate_hz <= 1000.0) {
             return p(format!("global_rate_hz must be in (0, 1000], got {}", self.global_rate_hz));

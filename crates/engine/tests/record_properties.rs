@@ -48,11 +48,15 @@ fn global_input() -> impl Strategy<Value = ToolInput> {
     (tool(), any::<bool>(), v3(), m3(), any::<bool>(), any::<u64>(), head).prop_map(|(tool, present, position, rotation, pressed, cuts, head)| ToolInput { tool, present, position, rotation, pressed, cuts, head })
 }
 
+fn reading() -> impl Strategy<Value = Option<DeviceReading>> {
+    prop::option::of((x(), v3(), m3(), any::<u32>()).prop_map(|(time, position, rotation, buttons)| DeviceReading { time, position, rotation, buttons }))
+}
+
 /// A haptic step reading a lattice version in 0..=`versions` (a record's steps read only versions its global
-/// steps produced).
+/// steps produced), with 1 to 5 device steps (0 to 4 further readings).
 fn step(versions: u64) -> impl Strategy<Value = StepRecord> {
-    let reading = prop::option::of((x(), v3(), m3(), any::<u32>()).prop_map(|(time, position, rotation, buttons)| DeviceReading { time, position, rotation, buttons }));
-    (reading, 0..=versions, prop::collection::vec(command(), 0..4), v3()).prop_map(|(reading, lattice_version, commands, force)| StepRecord { reading, lattice_version, commands, force })
+    let more = prop::collection::vec(reading(), 0..5);
+    (reading(), more, 0..=versions, prop::collection::vec(command(), 0..4), v3()).prop_map(|(reading, more_readings, lattice_version, commands, force)| StepRecord { reading, more_readings, lattice_version, commands, force })
 }
 
 fn settings() -> impl Strategy<Value = Option<RecordSettings>> {
@@ -109,7 +113,7 @@ proptest! {
     #[test]
     fn arbitrary_bytes_never_panic(mut bytes in prop::collection::vec(any::<u8>(), 0..300), magic in any::<bool>()) {
         if magic && bytes.len() >= 8 {
-            bytes[..8].copy_from_slice(b"CFREC3\0\0");
+            bytes[..8].copy_from_slice(b"CFREC4\0\0");
         }
         check_refusal(&bytes)?;
     }

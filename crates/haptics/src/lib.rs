@@ -9,6 +9,7 @@ pub mod backends;
 pub mod coupling;
 pub mod device;
 pub mod haptic_loop;
+pub mod local_model;
 pub mod realtime;
 pub mod sim;
 pub mod target;

@@ -23,6 +23,12 @@ pub fn request_realtime(priority: i32) -> Result<(), String> {
     imp::set_fifo(priority)
 }
 
+/// Asks for the calling thread's sleeps to end on time: Linux timer slack 1 ns (`PR_SET_TIMERSLACK`; the default
+/// 50 us lets the kernel wake a normal thread that much late). Best effort; nothing elsewhere.
+pub fn precise_sleep() {
+    imp::precise_sleep()
+}
+
 /// True if the calling thread runs with the `SCHED_FIFO` policy.
 pub fn is_realtime() -> bool {
     imp::is_fifo()
@@ -44,6 +50,13 @@ mod imp {
         }
     }
 
+    pub fn precise_sleep() {
+        // SAFETY: PR_SET_TIMERSLACK takes an unsigned long and changes only the calling thread's slack.
+        unsafe {
+            libc::prctl(libc::PR_SET_TIMERSLACK, 1 as libc::c_ulong, 0 as libc::c_ulong, 0 as libc::c_ulong, 0 as libc::c_ulong);
+        }
+    }
+
     pub fn is_fifo() -> bool {
         let mut policy = 0;
         let mut param = libc::sched_param { sched_priority: 0 };
@@ -58,6 +71,8 @@ mod imp {
     pub fn set_fifo(_priority: i32) -> Result<(), String> {
         Err("real-time scheduling of the haptic thread is only implemented on Linux".into())
     }
+
+    pub fn precise_sleep() {}
 
     pub fn is_fifo() -> bool {
         false

@@ -5,11 +5,17 @@
 //!
 //! Dynamics of the end-effector (device frame, semi-implicit Euler at the stream's rate):
 //! `m a = k_h (x_path - x) + b_h (v_path - v) - b_d v + F`, with `m`, `b_d` the profile's `mass` and
-//! `damping`, `k_h`, `b_h` the hand's stiffness and damping, and `F` the latest force received (zero when
-//! none arrived for 50 ms, as a device program must do).
+//! `damping`, `k_h`, `b_h` the hand's stiffness and damping, and `F` the force the hand feels: the latest force
+//! received (zero when none arrived for 50 ms, as a device program must do), or with [`SimParams::render`] the
+//! device's own rendering at its rate of the local force model the answers carry (protocol version 2,
+//! [`crate::local_model`]): the same [`Coupling`] as the server's, against the latest model, which holds until
+//! a newer one comes or expires 50 ms after its answer (then no hair: the proxy settles on the device and the
+//! force fades through the coupling).
 
+use crate::coupling::{Coupling, HairReaction};
 use crate::device::{DeviceProfile, DeviceReading};
-use crate::udp::{encode_pose, UdpClient};
+use crate::local_model::WireModel;
+use crate::udp::{encode_pose_version, UdpClient};
 use crate::workspace::Workspace;
 use nalgebra::Vector3;
 use std::net::SocketAddr;
@@ -66,6 +72,10 @@ pub struct SimParams {
     pub workspace: Workspace,
     /// Injected faults.
     pub faults: Faults,
+    /// Speak protocol version 2 and render the local force model at the stream's rate (the hand feels the
+    /// device's own coupling against the latest model) instead of holding the latest force received. Default
+    /// false.
+    pub render: bool,
 }
 
 impl SimParams {
@@ -124,6 +134,9 @@ pub struct SimRow {
     pub force: Vector3<f64>,
     /// Time from sending to the answer, s; NaN if none came.
     pub latency: f64,
+    /// Force the hand felt while this pose was sent, N (device frame): the latest force received, or the
+    /// rendered one ([`SimParams::render`]).
+    pub felt: Vector3<f64>,
     /// Flags of the answer (docs/protocol.md); 0 if none came.
     pub flags: u32,
 }
@@ -136,25 +149,27 @@ impl SimRow {
 }
 
 /// The CSV header of [`to_csv`].
-pub const CSV_HEADER: &str = "t,x,y,z,fx,fy,fz,latency_us,flags";
+pub const CSV_HEADER: &str = "t,x,y,z,fx,fy,fz,latency_us,flags,hx,hy,hz";
 
-/// Rows as CSV (`t,x,y,z,fx,fy,fz,latency_us,flags`: s, m device frame, N, microseconds; `NaN` where no
-/// answer came). The time and forces are exact (shortest decimals reading back to the same f64).
+/// Rows as CSV (`t,x,y,z,fx,fy,fz,latency_us,flags,hx,hy,hz`: s, m device frame, the force answered in N,
+/// microseconds, the answer's flags, the force the hand felt in N; `NaN` where no answer came). The time and
+/// forces are exact (shortest decimals reading back to the same f64).
 pub fn to_csv(rows: &[SimRow]) -> String {
     let mut s = String::with_capacity(64 * rows.len() + 64);
     s.push_str(CSV_HEADER);
     s.push('\n');
     for r in rows {
         let (p, f) = (r.position, r.force);
+        let h = r.felt;
         // Time and forces exactly (shortest round-trip decimals): a record's replay is compared with them bit for bit.
-        s.push_str(&format!("{},{:.7},{:.7},{:.7},{:e},{:e},{:e},{:.1},{}\n", r.t, p.x, p.y, p.z, f.x, f.y, f.z, r.latency * 1e6, r.flags));
+        s.push_str(&format!("{},{:.7},{:.7},{:.7},{:e},{:e},{:e},{:.1},{},{:e},{:e},{:e}\n", r.t, p.x, p.y, p.z, f.x, f.y, f.z, r.latency * 1e6, r.flags, h.x, h.y, h.z));
     }
     s
 }
 
 /// Records an answer: on the earliest unanswered packet with its sequence number among the last 1024 (a
 /// duplicate has its own row after the original's); its force becomes the one felt.
-fn answer(rows: &mut [SimRow], sent_at: &[Instant], seq: u32, c: &crate::device::DeviceCommand, flags: u32, force: &mut Vector3<f64>, force_at: &mut Option<Instant>) {
+fn answer(rows: &mut [SimRow], sent_at: &[Instant], seq: u32, c: &crate::device::DeviceCommand, flags: u32, force: &mut Vector3<f64>, force_at: &mut Option<Instant>, model: Option<WireModel>, latest: &mut Option<(WireModel, Instant)>) {
     let now = Instant::now();
     let from = rows.len().saturating_sub(1024);
     if let Some(i) = (from..rows.len()).find(|&i| rows[i].seq == seq && !rows[i].answered()) {
@@ -165,7 +180,13 @@ fn answer(rows: &mut [SimRow], sent_at: &[Instant], seq: u32, c: &crate::device:
     }
     *force = if c.force.iter().all(|x| x.is_finite()) { c.force } else { Vector3::zeros() };
     *force_at = Some(now);
+    if let Some(m) = model {
+        *latest = Some((m, now));
+    }
 }
+
+/// How long a force or model received holds without a newer one, s (docs/protocol.md "Timing").
+const HOLD: Duration = Duration::from_millis(50);
 
 fn due(times: &[f64], t0: f64, t1: f64) -> bool {
     times.iter().any(|&x| x >= t0 && x < t1)
@@ -178,6 +199,11 @@ pub fn run(server: SocketAddr, path: &dyn Fn(f64) -> DeviceReading, p: &SimParam
     p.validate()?;
     let mut client = UdpClient::connect(server).map_err(|e| format!("cannot open a UDP socket towards {server}: {e}"))?;
     client.set_nonblocking(true).map_err(|e| e.to_string())?;
+    let version = if p.render { 2 } else { 1 };
+    client.set_version(version);
+    // The device's own rendering (`render`): its coupling (device frame) and the latest model with its arrival.
+    let mut model: Option<(WireModel, Instant)> = None;
+    let mut coupling: Option<Coupling> = None;
     let dt = 1.0 / p.rate_hz;
     let ws = p.workspace;
     let (m, b_d) = (p.profile.mass, p.profile.damping);
@@ -191,9 +217,9 @@ pub fn run(server: SocketAddr, path: &dyn Fn(f64) -> DeviceReading, p: &SimParam
     let mut sent_at: Vec<Instant> = Vec::with_capacity(rows.capacity());
     let mut last_packet: Option<(u32, DeviceReading)> = None;
     let start = Instant::now();
-    let take = |client: &mut UdpClient, rows: &mut Vec<SimRow>, sent_at: &[Instant], force: &mut Vector3<f64>, force_at: &mut Option<Instant>| {
-        while let Ok((seq, c, flags)) = client.receive() {
-            answer(rows, sent_at, seq, &c, flags, force, force_at);
+    let take = |client: &mut UdpClient, rows: &mut Vec<SimRow>, sent_at: &[Instant], force: &mut Vector3<f64>, force_at: &mut Option<Instant>, model: &mut Option<(WireModel, Instant)>| {
+        while let Ok((seq, c, flags, m)) = client.receive_model() {
+            answer(rows, sent_at, seq, &c, flags, force, force_at, m, model);
         }
     };
     let mut k = 0u64;
@@ -204,21 +230,41 @@ pub fn run(server: SocketAddr, path: &dyn Fn(f64) -> DeviceReading, p: &SimParam
         }
         // Wait for the tick on the socket, so that answers are timed when they arrive.
         let tick = start + Duration::from_secs_f64(nominal);
-        take(&mut client, &mut rows, &sent_at, &mut force, &mut force_at);
+        take(&mut client, &mut rows, &sent_at, &mut force, &mut force_at, &mut model);
         while let Some(w) = tick.checked_duration_since(Instant::now()).filter(|w| *w > Duration::from_micros(20)) {
             client.set_nonblocking(false).map_err(|e| e.to_string())?;
             client.set_timeout(Some(w)).map_err(|e| e.to_string())?;
-            if let Ok((seq, c, flags)) = client.receive() {
-                answer(&mut rows, &sent_at, seq, &c, flags, &mut force, &mut force_at);
+            if let Ok((seq, c, flags, m)) = client.receive_model() {
+                answer(&mut rows, &sent_at, seq, &c, flags, &mut force, &mut force_at, m, &mut model);
             }
             client.set_nonblocking(true).map_err(|e| e.to_string())?;
         }
-        take(&mut client, &mut rows, &sent_at, &mut force, &mut force_at);
+        take(&mut client, &mut rows, &sent_at, &mut force, &mut force_at, &mut model);
         let t = start.elapsed().as_secs_f64();
         let reading = path(t);
         let target = ws.to_device(&reading.position);
-        // The device: rigid, or pulled by the hand with the received force acting on it.
-        let felt = if force_at.is_some_and(|a| a.elapsed() < Duration::from_millis(50)) { force } else { Vector3::zeros() };
+        // The force on the hand: the latest received, or the device's own rendering of the latest model.
+        let felt = if p.render {
+            let fresh = model.as_ref().filter(|(_, at)| at.elapsed() < HOLD).map(|(m, _)| *m);
+            match (fresh, coupling.as_mut()) {
+                (Some(m), None) => {
+                    coupling = Some(Coupling::new(p.profile, m.coupling, x));
+                    Vector3::zeros()
+                }
+                (m, Some(c)) => {
+                    let hair = m.map_or_else(HairReaction::none, |m| m.hair);
+                    c.params = m.map_or(c.params, |m| m.coupling);
+                    let r = DeviceReading { time: t, position: x, rotation: reading.rotation, buttons: reading.buttons };
+                    c.update_implicit(&r, dt, &hair).unwrap_or_default()
+                }
+                (None, None) => Vector3::zeros(),
+            }
+        } else if force_at.is_some_and(|a| a.elapsed() < HOLD) {
+            force
+        } else {
+            Vector3::zeros()
+        };
+        // The device: rigid, or pulled by the hand with that force acting on it.
         match p.hand {
             Hand::Rigid => {
                 v = (target - x) / dt;
@@ -256,7 +302,7 @@ pub fn run(server: SocketAddr, path: &dyn Fn(f64) -> DeviceReading, p: &SimParam
         };
         let sent = if kind == Sent::Duplicate {
             let (s, r) = last_packet.expect("checked");
-            client.send_raw(&encode_pose(s, &r)).map(|()| (s, r))
+            client.send_raw(&encode_pose_version(s, &r, version)).map(|()| (s, r))
         } else {
             client.send(&r).map(|s| (s, r))
         };
@@ -268,14 +314,14 @@ pub fn run(server: SocketAddr, path: &dyn Fn(f64) -> DeviceReading, p: &SimParam
             Err(e) => return Err(format!("cannot send to {server}: {e}")),
         };
         sent_at.push(Instant::now());
-        rows.push(SimRow { t, seq, kind, position: sent.position, force: Vector3::from_element(f64::NAN), latency: f64::NAN, flags: 0 });
+        rows.push(SimRow { t, seq, kind, position: sent.position, force: Vector3::from_element(f64::NAN), latency: f64::NAN, flags: 0, felt });
         if kind == Sent::Pose {
             last_packet = Some((seq, r));
         }
     }
     let end = Instant::now();
     while end.elapsed() < Duration::from_millis(50) {
-        take(&mut client, &mut rows, &sent_at, &mut force, &mut force_at);
+        take(&mut client, &mut rows, &sent_at, &mut force, &mut force_at, &mut model);
         std::thread::sleep(Duration::from_millis(1));
     }
     Ok(rows)

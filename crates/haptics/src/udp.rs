@@ -6,8 +6,11 @@
 //! (row-major, tool frame to world), u32 buttons.
 //! Force packet, 64 bytes: `b"CFF1"`, u32 sequence (of the pose answered), f64 x 3 force (N), f64 x 3 torque
 //! (N m), u32 flags (bit 0: the pose was rejected, force is zero), u32 reserved (0).
+//! Version 2: a pose sent as `b"CFP2"` (same layout) is answered by `b"CFF2"`, the same 64 bytes followed by
+//! the local force model ([`crate::local_model`], 352 bytes in all); version-1 clients are answered as before.
 
 use crate::device::{DeviceCommand, DeviceProfile, DeviceReading, HapticDevice};
+use crate::local_model::{model_feed, FedModel, ModelFeed, ModelTap, WireModel};
 use crate::workspace::Workspace;
 use nalgebra::{Matrix3, Vector3};
 use std::net::{SocketAddr, UdpSocket};
@@ -19,6 +22,8 @@ use thiserror::Error;
 pub const POSE_BYTES: usize = 116;
 /// Size of a force packet, bytes.
 pub const FORCE_BYTES: usize = 64;
+/// Size of a version-2 force packet (the answer to a `CFP2` pose), bytes.
+pub const FORCE_V2_BYTES: usize = FORCE_BYTES + crate::local_model::MODEL_BYTES;
 
 /// A malformed packet.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -38,10 +43,16 @@ fn u32_at(b: &[u8], i: usize) -> u32 {
     u32::from_le_bytes(b[i..i + 4].try_into().unwrap())
 }
 
-/// Encodes a pose packet.
+/// Encodes a pose packet (version 1: `CFP1`).
 pub fn encode_pose(seq: u32, r: &DeviceReading) -> [u8; POSE_BYTES] {
+    encode_pose_version(seq, r, 1)
+}
+
+/// Encodes a pose packet of protocol `version` (1: `CFP1`, answered by `CFF1`; 2: `CFP2`, answered by `CFF2`
+/// with the local force model).
+pub fn encode_pose_version(seq: u32, r: &DeviceReading, version: u8) -> [u8; POSE_BYTES] {
     let mut b = [0u8; POSE_BYTES];
-    b[0..4].copy_from_slice(b"CFP1");
+    b[0..4].copy_from_slice(if version >= 2 { b"CFP2" } else { b"CFP1" });
     b[4..8].copy_from_slice(&seq.to_le_bytes());
     b[8..16].copy_from_slice(&r.time.to_le_bytes());
     for k in 0..3 {
@@ -57,17 +68,24 @@ pub fn encode_pose(seq: u32, r: &DeviceReading) -> [u8; POSE_BYTES] {
     b
 }
 
-/// Decodes a pose packet: (sequence, reading).
+/// Decodes a pose packet of either version: (sequence, reading).
 pub fn decode_pose(b: &[u8]) -> Result<(u32, DeviceReading), PacketError> {
+    decode_pose_version(b).map(|(s, r, _)| (s, r))
+}
+
+/// Decodes a pose packet: (sequence, reading, protocol version 1 or 2).
+pub fn decode_pose_version(b: &[u8]) -> Result<(u32, DeviceReading, u8), PacketError> {
     if b.len() != POSE_BYTES {
         return Err(PacketError::Size(b.len(), POSE_BYTES));
     }
-    if &b[0..4] != b"CFP1" {
-        return Err(PacketError::Magic(b[0..4].try_into().unwrap()));
-    }
+    let version = match &b[0..4] {
+        b"CFP1" => 1,
+        b"CFP2" => 2,
+        _ => return Err(PacketError::Magic(b[0..4].try_into().unwrap())),
+    };
     let position = Vector3::new(f64_at(b, 16), f64_at(b, 24), f64_at(b, 32));
     let rotation = Matrix3::from_fn(|i, j| f64_at(b, 40 + 8 * (3 * i + j)));
-    Ok((u32_at(b, 4), DeviceReading { time: f64_at(b, 8), position, rotation, buttons: u32_at(b, 112) }))
+    Ok((u32_at(b, 4), DeviceReading { time: f64_at(b, 8), position, rotation, buttons: u32_at(b, 112) }, version))
 }
 
 /// Encodes a force packet.
@@ -83,7 +101,28 @@ pub fn encode_force(seq: u32, c: &DeviceCommand, flags: u32) -> [u8; FORCE_BYTES
     b
 }
 
-/// Decodes a force packet: (sequence, command, flags).
+/// Encodes a version-2 force packet: the version-1 packet (magic `CFF2`) followed by `model`.
+pub fn encode_force_v2(seq: u32, c: &DeviceCommand, flags: u32, model: &WireModel) -> [u8; FORCE_V2_BYTES] {
+    let mut b = [0u8; FORCE_V2_BYTES];
+    b[..FORCE_BYTES].copy_from_slice(&encode_force(seq, c, flags));
+    b[0..4].copy_from_slice(b"CFF2");
+    model.encode_into(&mut b[FORCE_BYTES..]);
+    b
+}
+
+/// Decodes a force packet of either version: (sequence, command, flags, the model of a version-2 packet).
+pub fn decode_answer(b: &[u8]) -> Result<(u32, DeviceCommand, u32, Option<WireModel>), PacketError> {
+    if b.len() == FORCE_V2_BYTES && &b[0..4] == b"CFF2" {
+        let mut v1 = [0u8; FORCE_BYTES];
+        v1.copy_from_slice(&b[..FORCE_BYTES]);
+        v1[0..4].copy_from_slice(b"CFF1");
+        let (s, c, f) = decode_force(&v1)?;
+        return Ok((s, c, f, Some(WireModel::decode(&b[FORCE_BYTES..]))));
+    }
+    decode_force(b).map(|(s, c, f)| (s, c, f, None))
+}
+
+/// Decodes a version-1 force packet: (sequence, command, flags).
 pub fn decode_force(b: &[u8]) -> Result<(u32, DeviceCommand, u32), PacketError> {
     if b.len() != FORCE_BYTES {
         return Err(PacketError::Size(b.len(), FORCE_BYTES));
@@ -240,8 +279,10 @@ pub struct UdpDevice {
     last: Option<(u32, DeviceReading)>,
     /// Loop time of the last accepted pose, s.
     last_valid: Option<f64>,
-    /// Poses read this step and not answered yet: (sender, sequence, rejected).
-    pending: Vec<(SocketAddr, u32, bool)>,
+    /// Poses read this step and not answered yet: (sender, sequence, rejected, protocol version).
+    pending: Vec<(SocketAddr, u32, bool, u8)>,
+    /// The local force model the device loop feeds ([`HapticDevice::model_feed`]), for version-2 answers.
+    tap: Option<ModelTap>,
     /// Origin of the wall clock.
     epoch: std::time::Instant,
 }
@@ -262,7 +303,7 @@ impl UdpDevice {
 
     fn on(socket: UdpSocket, params: UdpParams, status: Arc<UdpStatus>) -> Self {
         let pending = Vec::with_capacity(params.max_packets_per_step);
-        Self { socket, params, status, owner: None, last: None, last_valid: None, pending, epoch: std::time::Instant::now() }
+        Self { socket, params, status, owner: None, last: None, last_valid: None, pending, tap: None, epoch: std::time::Instant::now() }
     }
 
     /// A second device on the same socket and counters, with a fresh stream state (no owner, no pose): for
@@ -314,7 +355,7 @@ impl UdpDevice {
 
     /// Handles one datagram from `from` read at loop time `now` (s).
     fn take(&mut self, bytes: &[u8], from: SocketAddr, now: f64) {
-        let (seq, r) = match decode_pose(bytes) {
+        let (seq, r, version) = match decode_pose_version(bytes) {
             Ok(p) => p,
             Err(_) => {
                 self.status.malformed.fetch_add(1, Ordering::Relaxed);
@@ -332,11 +373,11 @@ impl UdpDevice {
                 self.last_valid = Some(now);
                 self.status.accepted.fetch_add(1, Ordering::Relaxed);
                 self.status.connected.store(true, Ordering::Relaxed);
-                self.pending.push((from, seq, false));
+                self.pending.push((from, seq, false, version));
             }
             Err(why) => {
                 self.status.rejected[why as usize].fetch_add(1, Ordering::Relaxed);
-                self.pending.push((from, seq, true));
+                self.pending.push((from, seq, true, version));
             }
         }
     }
@@ -372,16 +413,33 @@ impl HapticDevice for UdpDevice {
 
     fn write(&mut self, command: &DeviceCommand) {
         let ok = command.force.iter().chain(command.torque.iter()).all(|x| x.is_finite());
-        for (to, seq, rejected) in self.pending.drain(..) {
+        let mut model: Option<WireModel> = None;
+        for (to, seq, rejected, version) in std::mem::take(&mut self.pending) {
             let (c, flags) = match (rejected, ok) {
                 (true, _) => (DeviceCommand::default(), FLAG_REJECTED),
                 (false, false) => (DeviceCommand::default(), FLAG_WITHHELD),
                 (false, true) => (*command, 0),
             };
-            if self.socket.send_to(&encode_force(seq, &c, flags), to).is_ok() {
+            let sent = if version >= 2 {
+                // The model in the device frame (none yet, or no feed: no hair, number 0).
+                let m = *model.get_or_insert_with(|| {
+                    let fed = self.tap.as_mut().and_then(|t| t.latest()).unwrap_or(FedModel { number: 0, valid_for: 0.0, hair: crate::coupling::HairReaction::none(), coupling: crate::coupling::CouplingParams::for_profile(&DeviceProfile::PHANTOM_OMNI) });
+                    WireModel::to_device(&fed, &self.params.workspace)
+                });
+                self.socket.send_to(&encode_force_v2(seq, &c, flags, &m), to)
+            } else {
+                self.socket.send_to(&encode_force(seq, &c, flags), to)
+            };
+            if sent.is_ok() {
                 self.status.answered.fetch_add(1, Ordering::Relaxed);
             }
         }
+    }
+
+    fn model_feed(&mut self) -> Option<ModelFeed> {
+        let (feed, tap) = model_feed();
+        self.tap = Some(tap);
+        Some(feed)
     }
 }
 
@@ -390,6 +448,7 @@ impl HapticDevice for UdpDevice {
 pub struct UdpClient {
     socket: UdpSocket,
     seq: u32,
+    version: u8,
 }
 
 impl UdpClient {
@@ -400,7 +459,7 @@ impl UdpClient {
         let socket = UdpSocket::bind(local)?;
         socket.connect(server)?;
         socket.set_read_timeout(Some(std::time::Duration::from_millis(200)))?;
-        Ok(Self { socket, seq: 0 })
+        Ok(Self { socket, seq: 0, version: 1 })
     }
 
     /// Sends a pose with the next sequence number; returns it.
@@ -412,14 +471,25 @@ impl UdpClient {
 
     /// Sends a pose with the sequence number `seq` (to test out-of-order and duplicate packets).
     pub fn send_seq(&mut self, seq: u32, r: &DeviceReading) -> std::io::Result<()> {
-        self.socket.send(&encode_pose(seq, r)).map(|_| ())
+        self.socket.send(&encode_pose_version(seq, r, self.version)).map(|_| ())
+    }
+
+    /// Speaks protocol `version` from now on (1, the default: `CFP1`; 2: `CFP2`, answered with the local force
+    /// model, read by [`UdpClient::receive_model`]).
+    pub fn set_version(&mut self, version: u8) {
+        self.version = version;
     }
 
     /// Waits (up to the read timeout, 200 ms unless set) for a force packet: (sequence, command, flags).
     pub fn receive(&mut self) -> std::io::Result<(u32, DeviceCommand, u32)> {
-        let mut buf = [0u8; 128];
+        self.receive_model().map(|(s, c, f, _)| (s, c, f))
+    }
+
+    /// [`UdpClient::receive`], with the local force model of a version-2 answer.
+    pub fn receive_model(&mut self) -> std::io::Result<(u32, DeviceCommand, u32, Option<WireModel>)> {
+        let mut buf = [0u8; 512];
         let n = self.socket.recv(&mut buf)?;
-        decode_force(&buf[..n]).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
+        decode_answer(&buf[..n]).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
     }
 
     /// Sets how long [`UdpClient::receive`] waits (None: forever).

@@ -43,7 +43,7 @@ fn a_spring_pulled_hand_settles_where_its_spring_balances_the_force() {
     let f = Vector3::new(0.6, 0.0, 0.0);
     let (addr, stop, h) = constant_force_server(f);
     let p0 = Vector3::new(0.01, -0.02, 0.03);
-    let params = SimParams { rate_hz: 1000.0, duration: 0.6, hand: Hand::Spring { stiffness: 300.0, damping: 3.0 }, profile: OMNI, workspace: IDENTITY, faults: Faults::default() };
+    let params = SimParams { rate_hz: 1000.0, duration: 0.6, hand: Hand::Spring { stiffness: 300.0, damping: 3.0 }, profile: OMNI, workspace: IDENTITY, faults: Faults::default(), render: false };
     let rows = sim::run(addr, &hold(p0), &params).unwrap();
     stop.store(true, Ordering::Relaxed);
     h.join().unwrap();
@@ -61,7 +61,7 @@ fn the_rigid_hand_follows_the_path_and_faults_are_flagged() {
     let (addr, stop, h) = constant_force_server(Vector3::new(0.1, 0.0, 0.0));
     let path = |t: f64| DeviceReading { time: t, position: Vector3::new(0.05 * t, 0.0, 0.0), rotation: Matrix3::identity(), buttons: 1 };
     let faults = Faults { nan_at: vec![0.1], teleport_at: vec![0.2], duplicate_at: vec![0.3], pause: vec![(0.35, 0.1)], ..Faults::default() };
-    let params = SimParams { rate_hz: 500.0, duration: 0.5, hand: Hand::Rigid, profile: OMNI, workspace: IDENTITY, faults };
+    let params = SimParams { rate_hz: 500.0, duration: 0.5, hand: Hand::Rigid, profile: OMNI, workspace: IDENTITY, faults, render: false };
     let rows = sim::run(addr, &path, &params).unwrap();
     stop.store(true, Ordering::Relaxed);
     h.join().unwrap();
@@ -81,5 +81,5 @@ fn the_rigid_hand_follows_the_path_and_faults_are_flagged() {
     assert!(s.sent >= 195 && s.sent <= 205, "{}", s.sent);
     assert_eq!(s.answered, s.sent);
     let csv = sim::to_csv(&rows);
-    assert!(csv.starts_with("t,x,y,z,fx,fy,fz,latency_us,flags\n") && csv.lines().count() == rows.len() + 1);
+    assert!(csv.starts_with("t,x,y,z,fx,fy,fz,latency_us,flags,hx,hy,hz\n") && csv.lines().count() == rows.len() + 1);
 }

@@ -68,6 +68,11 @@ pub struct DeviceSimArgs {
     /// Send nothing from START for LENGTH s: `START:LENGTH` (repeatable).
     #[arg(long)]
     pub pause: Vec<String>,
+    /// Speak protocol version 2 (CFP2 poses, answers with the local force model) and render the model at
+    /// `--rate` with the device's own coupling, as a device program would (docs/protocol.md); the trace's
+    /// hx,hy,hz columns are the force the hand felt.
+    #[arg(long)]
+    pub render: bool,
 }
 
 /// Runs `coiffure device-sim`.
@@ -76,7 +81,7 @@ pub fn run(args: &DeviceSimArgs) -> anyhow::Result<()> {
     let text = std::fs::read_to_string(&args.path).with_context(|| format!("cannot read {}", args.path.display()))?;
     let scenario: LiveScenario = toml::from_str(&text).with_context(|| format!("{}: not a live scenario with a [tool] path", args.path.display()))?;
     scenario.validate().map_err(|e| anyhow!("{}: {e}", args.path.display()))?;
-    let profile = DeviceProfile::by_name(&args.device_profile).ok_or_else(|| anyhow!("--device-profile {:?}: expected phantom-omni, phantom-desktop or omega3", args.device_profile))?;
+    let profile = DeviceProfile::by_name(&args.device_profile).ok_or_else(|| anyhow!("--device-profile {:?}: expected phantom-omni, phantom-desktop, omega3 or phantom-premium-6dof", args.device_profile))?;
     let workspace = match &args.device_workspace {
         Some(w) => Workspace::parse(w, &profile).map_err(|e| anyhow!("--device-workspace: {e}"))?,
         None => Workspace::for_profile(&profile),
@@ -105,6 +110,7 @@ pub fn run(args: &DeviceSimArgs) -> anyhow::Result<()> {
         profile,
         workspace,
         faults: Faults { loss: args.loss, seed: args.seed, nan_at: args.nan_at.clone(), teleport_at: args.teleport_at.clone(), duplicate_at: args.duplicate_at.clone(), pause },
+        render: args.render,
     };
     // With --repeat, path time runs back and forth over [0, end].
     let path_time = |t: f64| if args.repeat { end - (t.rem_euclid(2.0 * end) - end).abs() } else { t };

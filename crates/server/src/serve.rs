@@ -73,9 +73,14 @@ pub struct ServeArgs {
     /// up to 56 strands near the tool, however long the steps take on this machine (for benchmarks).
     #[arg(long)]
     pub no_strand_budget: bool,
-    /// Haptic loop rate, Hz, in (0, 4000] (`SessionParams::haptic_rate_hz`).
+    /// Haptic physics rate, Hz, in (0, 4000] (`SessionParams::haptic_rate_hz`): the local strands' step, which
+    /// publishes the local force model the device loop renders.
     #[arg(long, default_value_t = 1000.0)]
     pub haptic_rate: f64,
+    /// Device loop rate, Hz: a whole multiple of `--haptic-rate`, at most 10000 (`SessionParams::device_rate_hz`):
+    /// the coupling and its passivity control run at this rate against the local force model.
+    #[arg(long, default_value_t = 4000.0)]
+    pub device_rate: f64,
     /// Runaway guard distance, m (`HapticParams::max_proxy_lag`, default 0.2): a tool proxy farther than this
     /// from the device, or non-finite, is put back on the device with zero force and counted (FRAME's runaways).
     #[arg(long)]
@@ -123,7 +128,7 @@ pub fn parse_device(spec: &str) -> anyhow::Result<SocketAddr> {
 
 /// The device profile named by `--device-profile`.
 fn device_profile(name: &str) -> anyhow::Result<DeviceProfile> {
-    DeviceProfile::by_name(name).ok_or_else(|| anyhow!("--device-profile {name:?}: expected phantom-omni, phantom-desktop or omega3"))
+    DeviceProfile::by_name(name).ok_or_else(|| anyhow!("--device-profile {name:?}: expected phantom-omni, phantom-desktop, omega3 or phantom-premium-6dof"))
 }
 
 /// The viewer folder: `--web`, else `./web/dist`, else `web/dist` beside the sources.
@@ -270,12 +275,12 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let haptic_priority = (args.haptic_priority != 0).then_some(args.haptic_priority);
     let profile = device_profile(&args.device_profile)?;
     let input = if args.device.is_some() { InputKind::Device } else { InputKind::Pointer };
-    let mut params = SessionParams { haptic_priority, hairs_per_render_strand: args.hairs_per_render_strand, haptic_rate_hz: args.haptic_rate, profile, input, ..SessionParams::default() };
+    let mut params = SessionParams { haptic_priority, hairs_per_render_strand: args.hairs_per_render_strand, haptic_rate_hz: args.haptic_rate, device_rate_hz: args.device_rate, profile, input, ..SessionParams::default() };
     if let Some(lag) = args.max_proxy_lag {
         params.haptic.max_proxy_lag = lag;
     }
     params.budget.enabled = !args.no_strand_budget;
-    params.validate().context("--hairs-per-render-strand, --haptic-rate, --max-proxy-lag")?;
+    params.validate().context("--hairs-per-render-strand, --haptic-rate, --device-rate, --max-proxy-lag")?;
     let udp = match &args.device {
         Some(spec) => {
             let addr = parse_device(spec)?;
@@ -286,8 +291,8 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
             let dev = UdpDevice::bind_with(&addr.to_string(), UdpParams { workspace, ..UdpParams::for_profile(&profile) }).with_context(|| format!("cannot bind the device socket {addr}"))?;
             let local = dev.local_addr()?;
             println!(
-                "coiffure serve: device on udp:{local} ({}, {:.1} N; workspace: head = ({:.3}, {:.3}, {:.3}) m + {} x device; haptic loop {} Hz)",
-                profile.name, profile.max_force, workspace.offset.x, workspace.offset.y, workspace.offset.z, workspace.scale, args.haptic_rate
+                "coiffure serve: device on udp:{local} ({}, {:.1} N; workspace: head = ({:.3}, {:.3}, {:.3}) m + {} x device; device loop {} Hz)",
+                profile.name, profile.max_force, workspace.offset.x, workspace.offset.y, workspace.offset.z, workspace.scale, args.device_rate
             );
             let status = dev.status();
             Some((dev, status))
@@ -468,8 +473,11 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let report = session.stop();
     let f = st.frames.max(1) as f64;
     println!(
-        "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame; {} more than a period late, the latest {:.1} ms behind, built in at most {:.1} ms); haptic loop: {} steps at {} Hz, step mean {:.1} us, p50 {:.0} us, p99 {:.0} us, p99.9 {:.0} us, max {:.0} us, {} misses ({} periods skipped), {} step panics, {} runaways, real-time priority: {}; global: {} steps, mean {:.2} ms; delivery: {}",
-        st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, st.late, 1e3 * st.max_late, 1e3 * st.max_build, report.haptic.steps, args.haptic_rate, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p50, 1e6 * report.haptic.step_p99, 1e6 * report.haptic.step_p999, 1e6 * report.haptic.step_max, report.haptic.misses, report.haptic.skipped, report.haptic.panics, st.runaways, report.haptic.realtime, report.global_steps, 1e3 * report.global_step_mean, app_end.delivery.summary()
+        "frames sent: {} ({:.1} us CPU and {:.0} bytes per frame; {} more than a period late, the latest {:.1} ms behind, built in at most {:.1} ms); haptic loop: {} steps at {} Hz, step mean {:.1} us, p50 {:.0} us, p99 {:.0} us, p99.9 {:.0} us, max {:.0} us, {} over the period, the device loop waited {} times ({} stalls), {} step panics, {} runaways; device loop: {} steps at {} Hz, step mean {:.1} us, p99.9 {:.0} us, max {:.0} us, {} misses ({:.3} %, {} periods skipped), {} step panics, real-time priority: {}; global: {} steps, mean {:.2} ms; delivery: {}",
+        st.frames, 1e6 * st.encode_seconds / f, st.bytes as f64 / f, st.late, 1e3 * st.max_late, 1e3 * st.max_build,
+        report.physics.steps, args.haptic_rate, 1e6 * report.physics.step_mean, 1e6 * report.physics.step_p50, 1e6 * report.physics.step_p99, 1e6 * report.physics.step_p999, 1e6 * report.physics.step_max, report.physics.over, report.physics.waits, report.physics.stalls, report.physics.panics, st.runaways,
+        report.haptic.steps, args.device_rate, 1e6 * report.haptic.step_mean, 1e6 * report.haptic.step_p999, 1e6 * report.haptic.step_max, report.haptic.misses, 100.0 * report.haptic.misses as f64 / report.haptic.steps.max(1) as f64, report.haptic.skipped, report.haptic.panics, report.haptic.realtime,
+        report.global_steps, 1e3 * report.global_step_mean, app_end.delivery.summary()
     );
     let b = &report.budget;
     if b.enabled {

@@ -43,12 +43,13 @@ fn watch_device(http: &str, t0: Instant, stop: mpsc::Receiver<()>) -> std::threa
     })
 }
 
-/// Rows of device-sim's CSV: t, x, y, z, fx, fy, fz, latency_us, flags.
+/// Rows of device-sim's CSV: t, x, y, z, fx, fy, fz, latency_us, flags (the felt force's hx, hy, hz after them
+/// left out).
 fn read_csv(path: &PathBuf) -> Vec<[f64; 9]> {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
-    assert_eq!(lines.next().unwrap(), "t,x,y,z,fx,fy,fz,latency_us,flags");
-    lines.map(|l| l.split(',').map(|x| x.parse::<f64>().unwrap()).collect::<Vec<_>>().try_into().unwrap()).collect()
+    assert_eq!(lines.next().unwrap(), haptics::sim::CSV_HEADER);
+    lines.map(|l| l.split(',').take(9).map(|x| x.parse::<f64>().unwrap()).collect::<Vec<_>>().try_into().unwrap()).collect()
 }
 
 fn quantile(mut v: Vec<f64>, q: f64) -> f64 {

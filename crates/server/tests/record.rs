@@ -35,7 +35,7 @@ fn device_sim(udp: &str, seconds: f64, csv: &Path) -> Child {
 fn felt(csv: &Path) -> Vec<(f64, [f64; 3])> {
     let text = std::fs::read_to_string(csv).unwrap();
     let mut lines = text.lines();
-    assert_eq!(lines.next().unwrap(), "t,x,y,z,fx,fy,fz,latency_us,flags");
+    assert_eq!(lines.next().unwrap(), haptics::sim::CSV_HEADER);
     lines
         .map(|l| l.split(',').map(|x| x.parse::<f64>().unwrap()).collect::<Vec<_>>())
         .filter(|r| r[4].is_finite() && r[8] == 0.0)
@@ -58,25 +58,27 @@ struct Check {
     last_answered: f64,
 }
 
-/// Replays `rec` on the scene and settings it names, checks every force against the recorded one, and each
-/// answered pose within the record's span against the force of the step that read it.
+/// Replays `rec` on the scene and settings it names, checks every force against the recorded one (the haptic
+/// step's last device step's), and each answered pose within the record's span against the force of the device
+/// step that read it (the device loop runs several device steps per haptic step, each answering the poses it
+/// read).
 fn check(rec: &Record, felt: &[(f64, [f64; 3])]) -> Check {
     let settings = rec.settings.clone().expect("serve writes its settings");
     let scene = Arc::new(engine::session::Scene::builtin(&settings.scene_options()).unwrap());
     let params = settings.session_params(rec.rate_hz).unwrap();
     assert_eq!(params.input, engine::session::InputKind::Device);
-    let (trace, _) = engine::scenario::live::replay_record(scene, params, rec).unwrap();
-    assert_eq!(trace.len(), rec.steps.len());
+    let forces = engine::replay::replay_device_steps(scene, params, rec).unwrap();
+    assert_eq!(forces.len(), rec.steps.len());
     let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-    let replay_differs = (0..rec.steps.len()).filter(|&i| bits(trace.force(i).as_slice()) != bits(rec.steps[i].force.as_slice())).count();
-    let last_read = rec.steps.iter().rev().find_map(|s| s.reading.map(|r| r.time)).unwrap_or(f64::NAN);
+    let replay_differs = (0..rec.steps.len()).filter(|&i| forces[i].len() != rec.steps[i].readings().len() || bits(forces[i].last().unwrap().as_slice()) != bits(rec.steps[i].force.as_slice())).count();
+    let last_read = rec.steps.iter().rev().find_map(|s| s.readings().iter().rev().find_map(|r| r.map(|r| r.time))).unwrap_or(f64::NAN);
     let times: Vec<f64> = felt.iter().map(|r| r.0).collect();
     let (mut answered, mut equal, mut peak) = (0, 0, 0.0f64);
     for (step, (_, f)) in rec.steps_reading(&times).into_iter().zip(felt) {
-        let Some(i) = step else { continue };
+        let Some((i, j)) = step else { continue };
         answered += 1;
         peak = peak.max(nalgebra::Vector3::from(*f).norm());
-        equal += (bits(trace.force(i).as_slice()) == bits(f)) as usize;
+        equal += (bits(forces[i][j].as_slice()) == bits(f)) as usize;
     }
     Check { answered, equal, replay_differs, peak, last_read, last_answered: times.last().copied().unwrap_or(f64::NAN) }
 }
@@ -145,9 +147,14 @@ fn limit_file_size(cmd: &mut std::process::Command, bytes: u64) {
     }
 }
 
+/// The size limit on the server's files in the full-disk test, bytes.
+const FILE_LIMIT: u64 = 450_000;
+
 #[test]
 fn a_full_disk_stops_recording_the_session_goes_on_and_the_record_replays_to_the_failure() {
-    // The server may write at most 150 kB (about a second of steps): recording fails part way. The session goes
+    // The server may write at most 450 kB: recording fails part way, after two or three of its half-second chunks
+    // (a haptic step of device-sim's 4 kHz stream, four device readings of 67 bytes each, is about 300 bytes: the
+    // first chunk alone is some 150 kB). The session goes
     // on at its rate (the device's poses are still answered; the haptic clock in the FRAMEs runs after the failure
     // at least half as fast as in the second before it, on this machine whatever its load; that the haptic thread
     // never waits for the disk is tested with a stalled writer in engine::record::stream), a viewer
@@ -158,7 +165,7 @@ fn a_full_disk_stops_recording_the_session_goes_on_and_the_record_replays_to_the
     let (rec_path, csv) = (dir.join("s.rec"), dir.join("felt.csv"));
     let mut args = SERVE.to_vec();
     args.extend(["--record", rec_path.to_str().unwrap(), "--duration", "6"]);
-    let server = common::serve_with(&args, |c| limit_file_size(c, 150_000));
+    let server = common::serve_with(&args, |c| limit_file_size(c, FILE_LIMIT));
     let mut ws = common::open(&server.http, None, "").unwrap();
     let mut sim = device_sim(server.udp.as_deref().unwrap(), 4.0, &csv);
     // FRAMEs (wall time s, haptic time s) until ERROR 7, and 2 s after it.
@@ -206,7 +213,7 @@ fn a_full_disk_stops_recording_the_session_goes_on_and_the_record_replays_to_the
     let r = read(&rec_path);
     let Ending::Cut(cut) = &r.ending else { panic!("{:?}", r.ending) };
     assert_eq!(cut.offset, cut.file_bytes, "cut back to its last whole chunk");
-    assert!(cut.file_bytes <= 150_000);
+    assert!(cut.file_bytes as u64 <= FILE_LIMIT);
     let c = check(&r.record, &felt);
     eprintln!("record: {} steps ({:.2} s), {} bytes; {c:?}; {} poses answered in all", r.record.steps.len(), r.record.seconds(), cut.file_bytes, felt.len());
     assert!(r.record.steps.len() >= 200, "{} steps recorded", r.record.steps.len());
@@ -220,14 +227,18 @@ fn a_full_disk_stops_recording_the_session_goes_on_and_the_record_replays_to_the
 #[test]
 fn a_record_of_an_older_version_is_refused_naming_it() {
     let dir = scratch("record-old");
-    let old = dir.join("old.rec");
-    let mut b = b"CFREC2\0\0".to_vec();
-    b.extend_from_slice(&1000.0f64.to_le_bytes());
-    b.extend_from_slice(&[0; 24]);
-    std::fs::write(&old, b).unwrap();
-    let out = bin().arg("replay").arg(&old).arg("--out").arg(dir.join("o")).output().unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success());
-    assert!(err.contains("version-2 session record (CFREC2)") && err.contains("version 3"), "{err}");
+    // CFREC2: written at a clean exit; CFREC3: streamed, but one device step per haptic step (before the device
+    // loop ran at its own rate): neither replays with this version's device steps.
+    for v in [2, 3] {
+        let old = dir.join(format!("old{v}.rec"));
+        let mut b = format!("CFREC{v}\0\0").into_bytes();
+        b.extend_from_slice(&1000.0f64.to_le_bytes());
+        b.extend_from_slice(&[0; 24]);
+        std::fs::write(&old, b).unwrap();
+        let out = bin().arg("replay").arg(&old).arg("--out").arg(dir.join("o")).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success());
+        assert!(err.contains(&format!("version-{v} session record (CFREC{v})")) && err.contains("version 4"), "{err}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

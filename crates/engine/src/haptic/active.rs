@@ -486,11 +486,17 @@ mod tests {
         let reading = DeviceReading { time: 0.0, position: at, rotation: test_rot(), buttons: 0 };
         let steps = params.haptic.choice_steps;
         let mut way = None;
+        // The first step's device step anchors the tool; its physics step sees no device yet (the physics runs
+        // with the proxy's state at its period's start).
+        core.step(Some(reading), &snap, 1e-3);
         for n in 0..steps {
             assert!(core.active().is_empty(), "chosen after {n} steps");
             core.step(Some(reading), &snap, 1e-3);
             // The way the choice is made for: the proxy (kept out of the body) and where its velocity takes it.
-            way.get_or_insert((core.coupling.proxy, core.coupling.proxy + core.coupling.proxy_velocity * params.haptic.lookahead));
+            // (The proxy's state this step's physics used: the device side's at the step's start.)
+            if core.proxy.present {
+                way.get_or_insert((core.proxy.position, core.proxy.position + core.proxy.velocity * params.haptic.lookahead));
+            }
         }
         let (from, to) = way.unwrap();
         let want = core.choose(&from, &to, &test_rot(), &snap.positions, &snap.head);

@@ -1,15 +1,15 @@
-//! The haptic layer (1 kHz): the virtual coupling between the device and the tool, and the *local strands*
-//! (the few guide strands nearest the tool, Super-Helices) the tool acts on.
+//! The haptic layer: the device loop at the device's rate (4 kHz by default, [`device_side`]) and the physics
+//! at 1 kHz: the *local strands* (the few guide strands nearest the tool, Super-Helices) the tool acts on.
 //!
-//! One step of [`HapticCore::step`], in order:
-//! 1. **Device**: the device point follows the pointer's target or a streaming device's samples,
-//!    interpolated at the haptic rate between them (`haptics::target`; absurd readings rejected; no reading:
-//!    zero force, and the next re-anchors the tool).
-//! 2. **Coupling**: the virtual coupling gives the proxy (the tool) and the force on the hand, from the
-//!    hair's reaction of the previous step taken implicitly (its force and damping, so the reaction can
-//!    never throw the proxy: `haptics::coupling::HairReaction`).
-//!    2b. **Body**: the tool stays outside the head (`HapticParams::body_clearance`), a god-object for the
-//!    body: the hand feels the head through the coupling ([`body`]).
+//! One physics period ([`HapticCore::step_rates`]; the live session runs the same schedule on two threads):
+//! 1-2c. **Device steps** ([`DeviceSide::step`], several per period): the device point follows the pointer's
+//!    target or a streaming device's samples (`haptics::target`); the virtual coupling renders the local
+//!    force model the previous physics step published (force, stiffness, damping and torque about the
+//!    proxy's state, taken implicitly so the reaction can never throw the proxy:
+//!    `haptics::coupling::HairReaction`), giving the force and torque on the hand; the tool stays outside
+//!    the head (`HapticParams::body_clearance`, a god-object for the body); the runaway guard.
+//!
+//! Then the physics step ([`HapticCore::physics_step`]) with the proxy's state at the period's start:
 //! 3. **Active set**: the guides near the tool's path over the next `HapticParams::lookahead` s become the
 //!    local strands; strands that left it are still stepped until at rest, then fade back to the global
 //!    layer ([`active`]).
@@ -20,14 +20,15 @@
 //!    friction, and the wet-set law updates their rest shapes as they dry ([`wetness`]).
 //! 6. **Tool actions**: scissors cut, clip pins, dryer blows ([`actions`]).
 //! 7. **Local strands**: the local interaction steps the strands with the tool's contacts; its reaction
-//!    and its damping, times the real hairs each guide stands for ([`HapticCore::hairs_per_guide`]), feed the
-//!    coupling at the next step.
+//!    linearised about the proxy's state (force, stiffness, damping, torque: the local force model), times the
+//!    real hairs each guide stands for ([`HapticCore::hairs_per_guide`]), is published for the device steps
+//!    of the next period.
 //! 8. **Tracking**: each local strand's tip speed, the leaving strands' rest, the display's fade in and out
 //!    ([`active`]).
 
 pub mod actions;
 mod active;
-mod body;
+pub mod device_side;
 mod reference;
 mod strands;
 mod wetness;
@@ -38,12 +39,12 @@ pub(crate) use strands::resting_on;
 
 use crate::command::Command;
 use crate::error::SessionError;
-use crate::params::{InputKind, SessionParams};
+use crate::params::SessionParams;
 use crate::scene::Scene;
 use crate::snapshot::{HapticSnapshot, LatticeSnapshot};
 use crate::tool::{Tool, ToolInput};
-use haptics::coupling::{Coupling, CouplingParams, HairReaction};
-use haptics::target::TargetFilter;
+pub use device_side::{DeviceSide, ProxyState, Published};
+use haptics::coupling::{Coupling, HairReaction};
 use haptics::device::{DeviceCommand, DeviceReading};
 use nalgebra::{Matrix3, Vector3};
 use std::sync::Arc;
@@ -65,9 +66,13 @@ pub struct HapticCore {
     pub(crate) hair_type: HairType,
     pub(crate) curliness: f64,
     pub(crate) combing_ease: f64,
-    pub(crate) coupling: Coupling,
-    /// Device point following the pointer's target, interpolated between its events.
-    pub(crate) device: Option<TargetFilter>,
+    /// The device loop's side (stages 1-2c: device point, coupling, body, runaway guard) as the lockstep
+    /// schedule runs it ([`HapticCore::step_rates`]); the live session runs its own copy on the device thread.
+    pub side: DeviceSide,
+    /// The proxy's state the last physics step used (the device side's, at the start of its period).
+    pub(crate) proxy: ProxyState,
+    /// The device side's re-anchorings seen (`ProxyState::anchors`).
+    pub(crate) anchors: u64,
     /// Every guide's strand while it is not simulated (it keeps its last state there); None while it is: the
     /// interaction has it (moved, not copied: a copy of a strand's workspaces was most of a joining step).
     pub(crate) strands: Vec<Option<Strand>>,
@@ -116,7 +121,7 @@ pub struct HapticCore {
     /// The head pose (head frame to world): the roots and the body follow it. Identity unless a scenario
     /// or the viewer moves the head ([`HapticCore::set_head_pose`]).
     pub(crate) head: nalgebra::Isometry3<f64>,
-    /// Rejected device readings (NaN, teleport).
+    /// Rejected device readings (NaN, teleport), as the device side counted them up to the last physics step.
     pub rejected: u64,
     /// Steps in which the runaway guard put the proxy back on the device (`HapticParams::max_proxy_lag`).
     pub runaways: u64,
@@ -194,15 +199,15 @@ impl HapticCore {
         let sets = strands.iter().map(|s| SetState::new(&s.model)).collect();
         let strands = strands.into_iter().map(Some).collect();
         let start = Vector3::from(params.haptic.start);
-        let coupling = Coupling::new(params.profile, CouplingParams::for_profile(&params.profile), start);
         let pose = ToolPose { position: start, rotation: Matrix3::identity() };
         let n = scene.guides.len();
         let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape(params.global.nozzle_standoff)).collect();
         let mut interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
         interaction.hold_distance = params.haptic.hold_distance;
         let bounds = active::GuideBounds::new(&scene);
+        let side = DeviceSide::new(params, shapes.clone(), (scene.head.clone(), scene.lattice.params.metaball.threshold));
         Ok(Self {
-            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, coupling, device: None, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), references: Default::default(), staged: Default::default(), choice: None, bounds, queued: Vec::new(), max_tip_speed: 0.0, interaction,
+            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, side, proxy: ProxyState::default(), anchors: 0, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), references: Default::default(), staged: Default::default(), choice: None, bounds, queued: Vec::new(), max_tip_speed: 0.0, interaction,
             hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, strand_limit: params.max_active, head: nalgebra::Isometry3::identity(), rejected: 0, runaways: 0, failed: 0, handover_max: 0.0, timings: StepPhases::default(),
         })
     }
@@ -270,47 +275,70 @@ impl HapticCore {
         }
     }
     /// One haptic step of `dt` s with the device's latest `reading` (the mouse target) and the lattice
-    /// snapshot `lattice`. Returns the command for the device.
+    /// snapshot `lattice`: [`HapticCore::step_rates`] with one device step per physics step. Returns the
+    /// command for the device.
     pub fn step(&mut self, reading: Option<DeviceReading>, lattice: &LatticeSnapshot, dt: f64) -> DeviceCommand {
+        let mut last = DeviceCommand::default();
+        self.period(&[], &[reading], lattice, dt, dt, |_, c| last = *c);
+        last
+    }
+
+    /// One physics period of `dt` s as the live session's two threads run it, on one thread: the device
+    /// steps, one per reading of `readings`, each of the session's device period (`dt /
+    /// SessionParams::device_steps`; a live period whose device loop lost ticks to a busy machine has fewer),
+    /// render the local force model the previous physics step published (with its tool and head pose), while
+    /// this period's physics step runs after the viewer `commands`, with the proxy's state at the period's
+    /// start; its model is rendered in the next period (the live physics thread has the whole period to make
+    /// it). `each(i, command)` sees each device step's command.
+    pub fn step_rates(&mut self, commands: &[Command], readings: &[Option<DeviceReading>], lattice: &LatticeSnapshot, dt: f64, each: impl FnMut(usize, &DeviceCommand)) {
+        let h = dt / self.params.device_steps() as f64;
+        self.period(commands, readings, lattice, dt, h, each);
+    }
+
+    /// [`HapticCore::step_rates`] with device steps of `h` s.
+    fn period(&mut self, commands: &[Command], readings: &[Option<DeviceReading>], lattice: &LatticeSnapshot, dt: f64, h: f64, mut each: impl FnMut(usize, &DeviceCommand)) {
+        let published = self.published();
+        let proxy = self.side.proxy_state();
+        for (i, r) in readings.iter().enumerate() {
+            let c = self.side.step(*r, h, &published);
+            each(i, &c);
+        }
+        for c in commands {
+            self.apply(c);
+        }
+        self.physics_step(&proxy, lattice, dt);
+    }
+
+    /// What the last physics step published for the device loop: its local force model, the tool and the head
+    /// pose.
+    pub fn published(&self) -> Published {
+        Published { model: self.hair_force, step: self.step, tool: self.tool, head: self.head, anchors: self.anchors }
+    }
+
+    /// The physics step (stages 3-8) of `dt` s with the proxy's state `proxy` (from the device side) and the
+    /// lattice snapshot `lattice`: the local strands step with the tool at the proxy's pose, and the hair's
+    /// reaction linearised about that state becomes the model [`HapticCore::published`] gives.
+    pub fn physics_step(&mut self, proxy: &ProxyState, lattice: &LatticeSnapshot, dt: f64) {
         self.step += 1;
         let clock = std::time::Instant::now();
         self.timings = StepPhases::default();
-        let Some(r) = reading else {
-            // No reading: before the first, or a device's stream lost. Zero force; the next reading
-            // re-anchors device, proxy and tool where the device is (`follow`).
-            if self.device.take().is_some() {
-                self.coupling.force = Vector3::zeros();
-            }
-            return DeviceCommand::default();
-        };
-        // 1. Device.
-        let Some(reading) = self.follow(&r, dt) else { return DeviceCommand::default() };
-        // 2. Coupling.
-        let force = match self.coupling.update_implicit(&reading, dt, &self.hair_force) {
-            Ok(f) => f,
-            Err(_) => {
-                self.rejected += 1;
-                self.hair_force = HairReaction::none();
-                return DeviceCommand::default();
-            }
-        };
-        // 2b. Body.
-        self.keep_tool_out_of_body(&r.rotation);
-        // 2c. Runaway guard: a proxy that is non-finite or too far from the device goes back on it, at rest,
-        // with zero force (counted). It never should; if the physics ever throws it, the hand feels nothing.
-        let lag = (self.coupling.proxy - reading.position).norm();
-        if !(lag <= self.params.haptic.max_proxy_lag) {
-            self.runaways += 1;
-            self.coupling.put_proxy_at(reading.position);
+        self.proxy = *proxy;
+        (self.rejected, self.runaways) = (proxy.rejected, proxy.runaways);
+        if !proxy.present {
+            // No device: nothing touches the hair (the next reading re-anchors the tool).
             self.hair_force = HairReaction::none();
-            return DeviceCommand::default();
+            return;
         }
-        let proxy = self.coupling.proxy;
+        if proxy.anchors != self.anchors {
+            // Re-anchored: the tool's sweep starts where it is now.
+            self.anchors = proxy.anchors;
+            self.interaction.pose = ToolPose { position: proxy.position, rotation: proxy.rotation };
+        }
+        let (position, velocity, rotation) = (proxy.position, proxy.velocity, proxy.rotation);
         let t1 = clock.elapsed().as_secs_f64();
         self.timings.coupling = t1;
         // 3. Active set; 4. roots.
-        let velocity = self.coupling.proxy_velocity;
-        self.update_active(&proxy, &velocity, &r.rotation, &lattice.positions, &lattice.head);
+        self.update_active(&position, &velocity, &rotation, &lattice.positions, &lattice.head);
         self.roots_follow(dt);
         self.hold_in_place(lattice);
         let t2 = clock.elapsed().as_secs_f64();
@@ -318,10 +346,10 @@ impl HapticCore {
         // 5. Wetness.
         self.apply_wetness(lattice);
         // 6. Tool actions (the primary button closes the scissors and the clip, blows the dryer).
-        let pressed = r.buttons & 1 != 0;
-        self.act(pressed, &proxy, &r.rotation);
+        let pressed = proxy.buttons & 1 != 0;
+        self.act(pressed, &position, &rotation);
         // 7. Local strands.
-        let pose = ToolPose { position: proxy, rotation: r.rotation };
+        let pose = ToolPose { position, rotation };
         let t3 = clock.elapsed().as_secs_f64();
         self.timings.actions = t3 - t2;
         match self.interaction.step(dt, pose) {
@@ -329,7 +357,7 @@ impl HapticCore {
                 self.timings.local = res.timings;
                 self.timings.hair_pairs = res.hair_pairs;
                 let n = self.hairs_per_guide();
-                self.hair_force = HairReaction { force: res.force * n, damping: res.damping * n, velocity: self.coupling.proxy_velocity };
+                self.hair_force = HairReaction { force: res.force * n, damping: res.damping * n, velocity, position, stiffness: res.stiffness * n, torque: res.torque * n };
                 self.last_contacts = res.contacts.len() as u32;
             }
             Err(_) => {
@@ -343,7 +371,6 @@ impl HapticCore {
         // 8. Tracking.
         self.track_active(dt);
         self.timings.tracking = clock.elapsed().as_secs_f64() - t4;
-        DeviceCommand { force, torque: Vector3::zeros() }
     }
 
     /// Real hairs each simulated guide stands for: the render strands times `hairs_per_render_strand`, shared
@@ -352,40 +379,9 @@ impl HapticCore {
         (self.scene.render.strands() as f64 * self.params.hairs_per_render_strand / self.scene.guides.len().max(1) as f64).max(1.0)
     }
 
-    /// The device point following the pointer's target or the device's samples `r` (interpolated between
-    /// them, `SessionParams::input`; a pointer's kept out of the body, [`HapticCore::out_of_body`]), as a
-    /// reading; None (counted) for a non-finite target. The first reading
-    /// (and the first after none) puts device, proxy and tool where the pointer or device is, at rest.
-    fn follow(&mut self, r: &DeviceReading, dt: f64) -> Option<DeviceReading> {
-        let target = r.position;
-        if !target.iter().all(|x| x.is_finite()) {
-            self.rejected += 1;
-            return None;
-        }
-        if self.device.is_none() {
-            self.coupling = Coupling::new(self.params.profile, CouplingParams::for_profile(&self.params.profile), target);
-            self.interaction.pose = ToolPose { position: target, rotation: r.rotation };
-            self.hair_force = HairReaction::none();
-        }
-        let follow = match self.params.input {
-            InputKind::Pointer => self.params.pointer,
-            InputKind::Device => self.params.device_follow,
-        };
-        let dev = self.device.get_or_insert_with(|| TargetFilter::new(follow, target));
-        let mut point = dev.follow(&target, r.time, dt);
-        if self.params.input == InputKind::Pointer {
-            // The pointer's depth is the viewer's guess (its pressed plane): the device point is kept out of the
-            // body as the tool is (body.rs), so that pressing near a bulge of the head does not pull the hand
-            // into the skull at the device's force limit (3.3 N, seen pressing and drawing at once before the
-            // tool had come over the head).
-            point += self.out_of_body(&point, &r.rotation);
-        }
-        Some(DeviceReading { position: point, ..*r })
-    }
-
     /// What the global layer needs of the tool now.
     pub fn tool_input(&self) -> ToolInput {
-        ToolInput { tool: self.tool, present: self.device.is_some(), position: self.coupling.proxy, rotation: self.interaction.pose.rotation, pressed: self.was_pressed, cuts: self.cuts, head: self.head }
+        ToolInput { tool: self.tool, present: self.proxy.present, position: self.proxy.position, rotation: self.interaction.pose.rotation, pressed: self.was_pressed, cuts: self.cuts, head: self.head }
     }
 
     /// Stages the viewer's next snapshot, a share of it a step: the displacements of every
@@ -440,10 +436,10 @@ impl HapticCore {
         out.step = self.step;
         out.time = self.step as f64 * dt;
         out.tool = self.tool as u8;
-        out.tool_position = self.coupling.proxy;
+        out.tool_position = self.proxy.position;
         out.tool_rotation = self.interaction.pose.rotation;
-        out.device_position = self.device.as_ref().map_or(self.coupling.proxy, |d| d.point);
-        out.force = self.coupling.force;
+        out.device_position = self.proxy.device;
+        out.force = self.proxy.force;
         out.contacts = self.last_contacts;
         out.lattice_version = lattice.version;
         out.runaways = self.runaways;
@@ -486,17 +482,18 @@ impl HapticCore {
     pub fn timings(&self) -> StepPhases {
         self.timings
     }
-    /// Force last sent to the device, N.
+    /// Force last sent to the device, N (by the lockstep device side, [`HapticCore::side`]).
     pub fn force(&self) -> Vector3<f64> {
-        self.coupling.force
+        self.side.coupling.force
     }
     /// Guide indices currently simulated.
     pub fn active(&self) -> &[usize] {
         &self.active
     }
-    /// The virtual coupling between the device and the tool proxy (its state after the last step).
+    /// The virtual coupling between the device and the tool proxy (the lockstep device side's, after the last
+    /// device step).
     pub fn coupling(&self) -> &Coupling {
-        &self.coupling
+        &self.side.coupling
     }
     /// The hair's reaction on the proxy from the last step (scaled to the real hairs), linearised.
     pub fn hair_reaction(&self) -> &HairReaction {
@@ -530,6 +527,7 @@ impl HapticCore {
 mod tests {
     use super::*;
     use crate::global::GlobalCore;
+    use crate::params::InputKind;
     use crate::testing::{small_scene, test_rot};
 
     #[test]
@@ -572,11 +570,11 @@ mod tests {
                 let r = DeviceReading { time: t, position: Vector3::new(0.0, y, 0.0), rotation: test_rot(), buttons: 0 };
                 let f = core.step(Some(r), &snap, 1e-3).force.norm();
                 peak = peak.max(f);
-                if let (Some(dev), true) = (core.device.as_ref(), input == InputKind::Pointer) {
+                if let (Some(dev), true) = (core.side.device.as_ref(), input == InputKind::Pointer) {
                     // How far the device point's tool would still have to move out (the push-out's tolerance is
                     // 1e-3 of the clearance).
-                    let point = dev.point + core.out_of_body(&dev.point, &test_rot());
-                    inside = inside.max(core.out_of_body(&point, &test_rot()).norm());
+                    let point = dev.point + core.side.out_of_body(&dev.point, &test_rot());
+                    inside = inside.max(core.side.out_of_body(&point, &test_rot()).norm());
                 }
             }
             (peak, inside)
@@ -599,16 +597,16 @@ mod tests {
         let reading = |n: usize| DeviceReading { time: n as f64 * 1e-3, position: Vector3::new(0.0, -0.118, 0.05 - 1e-4 * n as f64), rotation: test_rot(), buttons: 0 };
         for n in 0..200 {
             if n == 100 {
-                core.coupling.proxy = Vector3::new(6.5e4, 0.0, 0.0);
+                core.side.coupling.proxy = Vector3::new(6.5e4, 0.0, 0.0);
             }
             if n == 150 {
-                core.coupling.proxy = Vector3::new(f64::NAN, 0.0, 0.0);
+                core.side.coupling.proxy = Vector3::new(f64::NAN, 0.0, 0.0);
             }
             let f = core.step(Some(reading(n)), &snap, 1e-3).force;
             if n == 100 || n == 150 {
                 assert_eq!(f, Vector3::zeros(), "step {n}");
-                let device = core.device.as_ref().unwrap().point;
-                assert!((core.coupling.proxy - device).norm() < 1e-12, "back on the device point at step {n}");
+                let device = core.side.device.as_ref().unwrap().point;
+                assert!((core.side.coupling.proxy - device).norm() < 1e-12, "back on the device point at step {n}");
             }
             assert!(f.iter().all(|x| x.is_finite()) && f.norm() <= 3.3 + 1e-9);
         }
@@ -706,6 +704,7 @@ mod tests {
                 core.step(Some(DeviceReading { time: t, position: p, rotation: test_rot(), buttons: 0 }), &snap, 1e-3);
                 if !body {
                     core.interaction.body = None;
+                    core.side.body = None;
                 }
                 if n % 100 == 99 {
                     let t = scene.lattice.params.metaball.threshold;

@@ -2,7 +2,7 @@
 //! payload, so that each can be checked on its own and a file cut at any byte is read up to its last whole one.
 
 /// The magic of the record format written and read (version 3).
-pub const MAGIC: &[u8; 8] = b"CFREC3\0\0";
+pub const MAGIC: &[u8; 8] = b"CFREC4\0\0";
 /// Bytes before a chunk's payload: u32 length, u32 CRC-32.
 pub const CHUNK_HEADER_BYTES: usize = 8;
 /// Largest chunk payload, bytes (a longer announced length is damage, not a chunk).

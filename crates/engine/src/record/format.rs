@@ -34,9 +34,9 @@ fn put_global(b: &mut Vec<u8>, g: &GlobalRecord) {
     }
 }
 
-/// Appends a haptic step.
-fn put_step(b: &mut Vec<u8>, s: &StepRecord) {
-    match &s.reading {
+/// Appends a device reading: u8 has-reading (0 or 1), then if 1 the reading.
+fn put_reading(b: &mut Vec<u8>, r: &Option<DeviceReading>) {
+    match r {
         None => b.push(0),
         Some(r) => {
             b.push(1);
@@ -44,6 +44,20 @@ fn put_step(b: &mut Vec<u8>, s: &StepRecord) {
             r.position.iter().for_each(|&x| f(b, x));
             r.rotation.iter().for_each(|&x| f(b, x));
             b.extend_from_slice(&r.buttons.to_le_bytes());
+        }
+    }
+}
+
+/// Appends a haptic step.
+fn put_step(b: &mut Vec<u8>, s: &StepRecord) {
+    if s.more_readings.is_empty() {
+        put_reading(b, &s.reading);
+    } else {
+        // Several device steps: flag 2, their count, each reading.
+        b.push(2);
+        b.push((1 + s.more_readings.len()).min(255) as u8);
+        for r in std::iter::once(&s.reading).chain(&s.more_readings).take(255) {
+            put_reading(b, r);
         }
     }
     b.extend_from_slice(&s.lattice_version.to_le_bytes());
@@ -198,16 +212,18 @@ impl Record {
     pub fn read(bytes: &[u8]) -> Result<ReadRecord, RecordError> {
         let bad = |offset: usize, what: String| RecordError::Bad { offset, what };
         if bytes.len() < MAGIC.len() {
-            return Err(if MAGIC.starts_with(bytes) { bad(bytes.len(), format!("cut inside the magic ({} of its 8 bytes)", bytes.len())) } else { bad(0, "not a Coiffure session record (magic CFREC3)".into()) });
+            return Err(if MAGIC.starts_with(bytes) { bad(bytes.len(), format!("cut inside the magic ({} of its 8 bytes)", bytes.len())) } else { bad(0, "not a Coiffure session record (magic CFREC4)".into()) });
         }
         let magic = &bytes[..8];
         if magic != MAGIC {
             return Err(match magic.strip_prefix(b"CFREC") {
                 Some([v, 0, 0]) if v.is_ascii_digit() => bad(0, format!(
-                    "a version-{} session record (CFREC{}), written by an older Coiffure before records were streamed: this version reads version 3 (CFREC3) only; replay it with the Coiffure that recorded it",
-                    *v as char, *v as char
+                    "a version-{} session record (CFREC{}), written by an older Coiffure {}: this version reads version 4 (CFREC4) only; replay it with the Coiffure that recorded it",
+                    *v as char,
+                    *v as char,
+                    if *v == b'3' { "whose device loop was its physics loop (one device step per haptic step)" } else { "before records were streamed" }
                 )),
-                _ => bad(0, "not a Coiffure session record (magic CFREC3)".into()),
+                _ => bad(0, "not a Coiffure session record (magic CFREC4)".into()),
             });
         }
         let (header, mut at) = match chunk::next(bytes, 8) {
@@ -350,19 +366,18 @@ fn read_global(r: &mut Reader) -> Result<GlobalRecord, RecordError> {
 }
 
 fn read_step(r: &mut Reader) -> Result<StepRecord, RecordError> {
-    let reading = match r.u8()? {
-        0 => None,
-        1 => {
-            let time = r.f64()?;
-            let position = Vector3::new(r.f64()?, r.f64()?, r.f64()?);
-            let mut m = [0.0; 9];
-            for x in &mut m {
-                *x = r.f64()?;
+    let (reading, more_readings) = match r.u8()? {
+        2 => {
+            let at = r.at();
+            let n = r.u8()?;
+            if n < 2 {
+                return Err(RecordError::Bad { offset: at, what: format!("{n} device steps after flag 2 (at least 2)") });
             }
-            let buttons = r.u32()?;
-            Some(DeviceReading { time, position, rotation: Matrix3::from_column_slice(&m), buttons })
+            let first = r.reading()?;
+            let more = (1..n).map(|_| r.reading()).collect::<Result<Vec<_>, _>>()?;
+            (first, more)
         }
-        k => return Err(RecordError::Bad { offset: r.at() - 1, what: format!("reading flag {k} (0 or 1)") }),
+        k => (r.reading_after(k)?, Vec::new()),
     };
     let lattice_version = r.u64()?;
     let force = Vector3::new(r.f64()?, r.f64()?, r.f64()?);
@@ -386,7 +401,7 @@ fn read_step(r: &mut Reader) -> Result<StepRecord, RecordError> {
             k => return Err(RecordError::Bad { offset: at, what: format!("command kind {k}") }),
         });
     }
-    Ok(StepRecord { reading, lattice_version, commands, force })
+    Ok(StepRecord { reading, more_readings, lattice_version, commands, force })
 }
 
 /// The hair formats' little-endian reader (one byte reader in the project) on a chunk's payload, its errors as
@@ -428,6 +443,28 @@ impl<'a> Reader<'a> {
     fn u64(&mut self) -> Result<u64, RecordError> {
         self.0.u64("a u64").map_err(|e| self.err(e))
     }
+    /// A device reading: u8 has-reading (0 or 1), then if 1 the reading.
+    fn reading(&mut self) -> Result<Option<DeviceReading>, RecordError> {
+        let k = self.u8()?;
+        self.reading_after(k)
+    }
+    /// The rest of a device reading after its has-reading flag `k` (0: none; 1: the reading follows).
+    fn reading_after(&mut self, k: u8) -> Result<Option<DeviceReading>, RecordError> {
+        match k {
+            0 => Ok(None),
+            1 => {
+                let time = self.f64()?;
+                let position = Vector3::new(self.f64()?, self.f64()?, self.f64()?);
+                let mut m = [0.0; 9];
+                for x in &mut m {
+                    *x = self.f64()?;
+                }
+                let buttons = self.u32()?;
+                Ok(Some(DeviceReading { time, position, rotation: Matrix3::from_column_slice(&m), buttons }))
+            }
+            k => Err(RecordError::Bad { offset: self.at() - 1, what: format!("reading flag {k} (0, 1 or 2)") }),
+        }
+    }
     fn f64(&mut self) -> Result<f64, RecordError> {
         self.0.f64("an f64").map_err(|e| self.err(e))
     }
@@ -438,7 +475,7 @@ mod tests {
     use super::*;
 
     fn step(v: u64, commands: Vec<Command>) -> StepRecord {
-        StepRecord { reading: None, lattice_version: v, commands, force: Vector3::new(1.0, 2.0, v as f64) }
+        StepRecord { reading: None, more_readings: Vec::new(), lattice_version: v, commands, force: Vector3::new(1.0, 2.0, v as f64) }
     }
 
     #[test]
@@ -498,7 +535,7 @@ mod tests {
 
     #[test]
     fn older_versions_are_refused_naming_their_version() {
-        for v in [1, 2] {
+        for v in [1, 2, 3] {
             let mut b = format!("CFREC{v}\0\0").into_bytes();
             b.extend_from_slice(&1000.0f64.to_le_bytes());
             let e = Record::read(&b).unwrap_err().to_string();

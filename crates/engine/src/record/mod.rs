@@ -7,7 +7,7 @@
 //! the power cut) reads up to its last whole chunk ([`Record::read`] says where and why it stopped).
 //!
 //! File format, version 3 ([`format`], [`chunk`]; little-endian, every f64 kept exactly):
-//! - magic `CFREC3\0\0` (8 bytes), then chunks;
+//! - magic `CFREC4\0\0` (8 bytes), then chunks;
 //! - a chunk: u32 payload length L (bytes, at most [`chunk::MAX_PAYLOAD`]), u32 CRC-32 (IEEE) of the payload,
 //!   then the L payload bytes, whose first byte is the chunk's kind:
 //!   - 0 **header** (the first chunk, once): f64 haptic rate (Hz), u32 byte length n, n bytes of UTF-8 TOML text:
@@ -26,11 +26,13 @@
 //! - a haptic step: u8 has-reading; if 1: f64 time (s), 3 f64 position (m), 9 f64 rotation (column-major), u32
 //!   buttons; u64 lattice version; 3 f64 force (N); u8 number of commands, each: u8 kind (0 tool: u8 id; 1 hair:
 //!   u8 type, f64 curliness, f64 ease; 2 reset; 3 head: 3 f64 position (m), 3 f64 rotation vector (rad); 4
-//!   strand limit: u32; 5 treatment: u8 id).
+//!   strand limit: u32; 5 treatment: u8 id). A haptic step with several device steps
+//!   (`SessionParams::device_steps`) writes has-reading 2, then u8 count of device steps and each one's reading
+//!   as above (u8 has-reading 0 or 1, and if 1 the reading).
 //!
-//! Older versions (`CFREC1`, `CFREC2`: one block written at a clean exit) are refused with an error naming
-//! their version: a record replays bit for bit only on the code that wrote it, and those were written by
-//! versions of Coiffure before records were streamed.
+//! Older versions are refused with an error naming their version: a record replays bit for bit only on the code
+//! that wrote it. `CFREC1`, `CFREC2`: one block written at a clean exit, before records were streamed; `CFREC3`:
+//! streamed, but one device step per haptic step (before the device loop ran at its own rate, issue 31).
 
 pub mod chunk;
 mod format;
@@ -48,14 +50,25 @@ pub use stream::{GlobalSender, RecordFile, RecordParams, RecordReport, RecordSin
 /// One haptic step as recorded.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StepRecord {
-    /// The device reading the step received (None: no input yet).
+    /// The device reading the step received (None: no input yet); with several device steps per physics
+    /// step (`SessionParams::device_steps`), the reading of the period's first device step.
     pub reading: Option<DeviceReading>,
+    /// The readings of the period's further device steps, in order (empty at one device step per physics
+    /// step).
+    pub more_readings: Vec<Option<DeviceReading>>,
     /// Version of the lattice snapshot the step read.
     pub lattice_version: u64,
     /// Viewer commands applied just before the step.
     pub commands: Vec<Command>,
-    /// Force sent to the device, N.
+    /// Force sent to the device, N (by the period's last device step).
     pub force: Vector3<f64>,
+}
+
+impl StepRecord {
+    /// Every device step's reading of the period, in order.
+    pub fn readings(&self) -> Vec<Option<DeviceReading>> {
+        std::iter::once(self.reading).chain(self.more_readings.iter().copied()).collect()
+    }
 }
 
 /// One global step as recorded: the tool input it read and whether the lattice was reset just before it.
@@ -142,11 +155,17 @@ impl Record {
         self.steps.len() as f64 / self.rate_hz
     }
 
-    /// The haptic steps that read each device pose sent at the times `sent` (s, the poses' time stamps, in
-    /// order): the first step whose reading is that pose or a later one (a step reads the newest pose that
-    /// arrived; the older ones of that step got its force too). None for a pose after the last reading.
-    pub fn steps_reading(&self, sent: &[f64]) -> Vec<Option<usize>> {
-        let read: Vec<(f64, usize)> = self.steps.iter().enumerate().filter_map(|(i, s)| s.reading.map(|r| (r.time, i))).collect();
+    /// The device steps that read each device pose sent at the times `sent` (s, the poses' time stamps, in
+    /// order), as (haptic step, device step within it): the first device step whose reading is that pose or a
+    /// later one (a device step reads the newest pose that arrived and answers the poses it read with its
+    /// force; the older ones of that step got its force too). None for a pose after the last reading.
+    pub fn steps_reading(&self, sent: &[f64]) -> Vec<Option<(usize, usize)>> {
+        let read: Vec<(f64, (usize, usize))> = self
+            .steps
+            .iter()
+            .enumerate()
+            .flat_map(|(i, s)| s.readings().into_iter().enumerate().filter_map(move |(j, r)| r.map(|r| (r.time, (i, j)))))
+            .collect();
         sent.iter().map(|&t| read.get(read.partition_point(|&(rt, _)| rt < t)).map(|&(_, i)| i)).collect()
     }
 

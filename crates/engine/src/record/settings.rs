@@ -43,6 +43,8 @@ pub struct RecordSettings {
     pub max_proxy_lag: f64,
     /// Global step rate, Hz.
     pub global_rate_hz: f64,
+    /// Device loop rate, Hz (`SessionParams::device_rate_hz`: the length of the recorded device steps).
+    pub device_rate_hz: f64,
 }
 
 impl Default for RecordSettings {
@@ -74,6 +76,7 @@ impl RecordSettings {
             hairs_per_render_strand: params.hairs_per_render_strand,
             max_proxy_lag: params.haptic.max_proxy_lag,
             global_rate_hz: params.global_rate_hz,
+            device_rate_hz: params.device_rate_hz,
         }
     }
 
@@ -107,6 +110,7 @@ impl RecordSettings {
         p.hairs_per_render_strand = self.hairs_per_render_strand;
         p.haptic.max_proxy_lag = self.max_proxy_lag;
         p.global_rate_hz = self.global_rate_hz;
+        p.device_rate_hz = self.device_rate_hz;
         p.haptic_rate_hz = rate_hz;
         Ok(p)
     }
@@ -130,7 +134,7 @@ mod tests {
     fn settings_round_trip_and_rebuild_the_session() {
         // Every field the server's options change comes back; missing ones default.
         let scene = SceneOptions { render_strands: 5000, guides: 60, hair_type: "asian".into(), seed: 7, ..SceneOptions::default() };
-        let mut params = SessionParams { input: InputKind::Device, profile: DeviceProfile::by_name("omega3").unwrap(), hairs_per_render_strand: 20.0, global_rate_hz: 50.0, ..SessionParams::default() };
+        let mut params = SessionParams { input: InputKind::Device, profile: DeviceProfile::by_name("omega3").unwrap(), hairs_per_render_strand: 20.0, global_rate_hz: 50.0, device_rate_hz: 10_000.0, ..SessionParams::default() };
         params.haptic.max_proxy_lag = 0.3;
         let s = RecordSettings::of(&scene, &params);
         let back = RecordSettings::from_text(&s.to_text()).unwrap();
@@ -141,7 +145,7 @@ mod tests {
         assert_eq!(p, SessionParams { haptic_rate_hz: 2000.0, ..params });
         assert_eq!(RecordSettings::from_text("").unwrap(), RecordSettings::default());
         // Every device profile comes back by its name.
-        for profile in [DeviceProfile::PHANTOM_OMNI, DeviceProfile::PHANTOM_DESKTOP, DeviceProfile::OMEGA3, DeviceProfile::MOUSE] {
+        for profile in [DeviceProfile::PHANTOM_OMNI, DeviceProfile::PHANTOM_DESKTOP, DeviceProfile::OMEGA3, DeviceProfile::PHANTOM_PREMIUM_6DOF, DeviceProfile::MOUSE] {
             let s = RecordSettings::of(&scene, &SessionParams { profile, ..params });
             assert_eq!(s.session_params(1000.0).unwrap().profile, profile);
         }

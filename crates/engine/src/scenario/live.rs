@@ -47,10 +47,14 @@ pub struct LiveSpec {
     pub render_strands: usize,
     /// Guide strands. Default 200 (as `coiffure serve`).
     pub guides: usize,
-    /// Device profile: "phantom-omni" (default), "phantom-desktop" or "omega3".
+    /// Device profile: "phantom-omni" (default), "phantom-desktop", "omega3" (3-DOF: force only) or
+    /// "phantom-premium-6dof" (force and torque).
     pub device: String,
     /// Hair type (a `HairType` name, e.g. "caucasian", "asian", "african", "H1"). Default "caucasian".
     pub hair_type: String,
+    /// Device loop rate, Hz: device steps per 1 kHz physics step at this rate (`SessionParams::device_rate_hz`:
+    /// a whole multiple of 1000, at most 10 000). Default 4000.
+    pub device_rate: f64,
     /// Curliness in [0, 1]. Default 0.
     pub curliness: f64,
     /// Combing ease in [0, 1] (the viewer's slider). Default 0.
@@ -124,7 +128,7 @@ pub struct HeadWaypoint {
 
 impl Default for LiveSpec {
     fn default() -> Self {
-        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), curliness: 0.0, combing_ease: 0.0, wetness: 0.0, treatment: tools::treatment::Treatment::Virgin, entanglement: crate::params::HapticParams::default().entanglement, hair_contact: crate::params::HapticParams::default().hair_contact, head: Vec::new(), hairstyle: None, fit: LiveFit::default() }
+        Self { render_strands: 20_000, guides: 200, device: "phantom-omni".into(), hair_type: "caucasian".into(), device_rate: SessionParams::default().device_rate_hz, curliness: 0.0, combing_ease: 0.0, wetness: 0.0, treatment: tools::treatment::Treatment::Virgin, entanglement: crate::params::HapticParams::default().entanglement, hair_contact: crate::params::HapticParams::default().hair_contact, head: Vec::new(), hairstyle: None, fit: LiveFit::default() }
     }
 }
 
@@ -160,6 +164,7 @@ pub fn device_profile(name: &str) -> Option<DeviceProfile> {
         "phantom-omni" => Some(DeviceProfile::PHANTOM_OMNI),
         "phantom-desktop" => Some(DeviceProfile::PHANTOM_DESKTOP),
         "omega3" => Some(DeviceProfile::OMEGA3),
+        "phantom-premium-6dof" => Some(DeviceProfile::PHANTOM_PREMIUM_6DOF),
         _ => None,
     }
 }
@@ -182,7 +187,7 @@ impl LiveScenario {
             }
         }
         let l = &self.live;
-        let profile = device_profile(&l.device).ok_or_else(|| ScenarioError::Invalid(format!("live.device must be \"phantom-omni\", \"phantom-desktop\" or \"omega3\", got {:?}", l.device)))?;
+        let profile = device_profile(&l.device).ok_or_else(|| ScenarioError::Invalid(format!("live.device must be \"phantom-omni\", \"phantom-desktop\", \"omega3\" or \"phantom-premium-6dof\", got {:?}", l.device)))?;
         let hair = HairType::by_name(&l.hair_type).ok_or_else(|| ScenarioError::Invalid(format!("live.hair_type: unknown {:?}", l.hair_type)))?;
         if l.render_strands == 0 || l.render_strands > 1_000_000 {
             return bad(format!("live.render_strands must be 1..=1000000, got {}", l.render_strands));
@@ -305,10 +310,11 @@ impl LiveScenario {
     /// `coiffure serve --record`, replayable by [`crate::replay::replay`]).
     pub fn run_recorded(&self, scene: Arc<Scene>, record: bool) -> Result<(ForceTrace, LiveSummary, Option<Record>), ScenarioError> {
         let (profile, tool, hair) = self.validate()?;
-        let mut params = SessionParams { profile, ..SessionParams::default() };
+        let mut params = SessionParams { profile, device_rate_hz: self.live.device_rate, ..SessionParams::default() };
         params.haptic.hair_contact = self.live.hair_contact;
         params.haptic.treatment = self.live.treatment;
         params.haptic.entanglement = self.live.entanglement;
+        params.validate().map_err(|e| ScenarioError::Invalid(format!("live session (live.device_rate and the rest): {e}")))?;
         let sim = |e: crate::error::SessionError| ScenarioError::Invalid(format!("live session: {e}"));
         let mut ls = Lockstep::new(scene.clone(), params, params.haptic_rate_hz).map_err(sim)?;
         ls.global.set_wetness(self.live.wetness);
@@ -324,6 +330,8 @@ impl LiveScenario {
         let mut timing = Vec::with_capacity((steps - settle_steps) as usize);
         let started = Instant::now();
         let max_force = profile.max_force;
+        let device_steps = params.device_steps();
+        let mut readings = Vec::with_capacity(device_steps);
         for n in 0..steps {
             if n % every == 0 {
                 ls.global_step_live();
@@ -341,12 +349,14 @@ impl LiveScenario {
                     commands.push(Command::SetHead { position: head.translation.vector, rotation: head.rotation.scaled_axis() });
                 }
             }
-            let reading = (n >= settle_steps).then(|| self.reading(t));
+            // The device steps' readings, at the device rate through the physics period.
+            readings.clear();
+            readings.extend((0..device_steps).map(|i| (n >= settle_steps).then(|| self.reading(t + i as f64 * ls.dt / device_steps as f64))));
             if n == settle_steps {
                 meter.settle(&ls);
             }
             let t0 = Instant::now();
-            let cmd = ls.haptic_step(&std::mem::take(&mut commands), reading);
+            let cmd = ls.haptic_step(&std::mem::take(&mut commands), &readings);
             if n >= settle_steps {
                 timing.push(t0.elapsed().as_secs_f64());
                 trace.push(t, &cmd.force, &cmd.torque, ls.haptic.last_contacts, &ls.haptic.tool_input().position);

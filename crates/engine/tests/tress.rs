@@ -1,18 +1,26 @@
 //! The shipped tress scenarios (`examples/scenarios/comb-*.toml`: a comb stroke down a 4.75 g tress of a Table 1
 //! hair type, hair-hair contact on), dry and wet, against what they must keep: the wetness key goes through the
 //! live session's wetness model and the quality figures land in the summary; and issue 12's acceptance against
-//! the tress measurements (J. Soc. Cosmet. Chem. 24, 1973, Table I: about 0.12 N dry, 0.9 N wet).
+//! the tress measurements (J. Soc. Cosmet. Chem. 24, 1973, Table I: about 0.12 N dry, 0.9 N wet), on the figures'
+//! means over tress layouts (`common::LAYOUTS`, the measure converged in the time step; docs/combing.md).
 
+mod common;
+
+use common::{par_map, OverLayouts, LAYOUTS};
 use engine::scenario::{run, ScenarioFile, ScenarioSummary, Summary};
 use strand::HairType;
 use tools::wetness::WetnessModel;
 
-/// Runs `examples/scenarios/NAME.toml` with `[patch] wetness = w` and `[tool] combing_ease = ease`.
-fn tress(name: &str, w: f64, ease: f64) -> Summary {
+/// Runs `examples/scenarios/NAME.toml` with `[patch] wetness = w`, `[tool] combing_ease = ease` and, given a
+/// seed, `[patch] seed = seed` (the tress layout; the file's own otherwise).
+fn tress(name: &str, w: f64, ease: f64, seed: Option<u64>) -> Summary {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/scenarios/");
     let text = std::fs::read_to_string(format!("{path}{name}.toml")).unwrap();
     let mut table: toml::Table = toml::from_str(&text).unwrap();
     table["patch"].as_table_mut().unwrap().insert("wetness".into(), toml::Value::Float(w));
+    if let Some(seed) = seed {
+        table["patch"].as_table_mut().unwrap().insert("seed".into(), toml::Value::Integer(seed as i64));
+    }
     table["tool"].as_table_mut().unwrap().insert("combing_ease".into(), toml::Value::Float(ease));
     let file = ScenarioFile::from_toml(&toml::to_string(&table).unwrap()).unwrap();
     match run(&file).unwrap().summary {
@@ -27,8 +35,8 @@ fn wetness_goes_through_the_live_sessions_wetness_model() {
     // that wetness, for the tool (the hair type's coefficient) and for hair on hair (HairContact's 0.25); the
     // fibre count comes from the dry mass, so it does not change with wetness; wet hair resists the comb more.
     let model = WetnessModel::default();
-    let dry = tress("comb-h1", 0.0, 0.0);
-    let wet = tress("comb-h1", 1.0, 0.0);
+    let dry = tress("comb-h1", 0.0, 0.0, None);
+    let wet = tress("comb-h1", 1.0, 0.0, None);
     println!("dry {:?}\nwet {:?}", dry.stroke, wet.stroke);
     let mu = HairType::H1.friction_coefficient();
     assert_eq!(dry.tool_friction, mu);
@@ -49,45 +57,65 @@ fn wetness_goes_through_the_live_sessions_wetness_model() {
 
 #[test]
 fn the_tresses_meet_the_combing_acceptance() {
-    // Issue 12's acceptance on the four shipped tresses (4.75 g, Table 1 hair, combed at 0.25 m/s), dry and wet:
+    // Issue 12's acceptance on the four shipped tresses (4.75 g, Table 1 hair, combed at 0.25 m/s), dry and wet,
+    // each over the tress layouts (`common::LAYOUTS`), the figures being the layouts' means (the measured ones are
+    // means over repeated combings; one layout's peak is not converged in the time step, docs/combing.md):
     // - dry peak within [0.06, 0.24] N (the measured 0.12 N, within a factor 2);
-    // - wet/dry peak ratio within [4, 10] (measured about 7.5);
-    // - continuous: above 2 % of the peak in at least 70 % of the stroke's steps, no one-step change above 30 % of
-    //   the peak;
+    // - wet/dry peak ratio within [4, 10] (measured 7-8);
+    // - every layout continuous: above 2 % of the peak in at least 70 % of the stroke's steps, no one-step change
+    //   above 30 % of the peak; the strands' safety net (velocity clamp) never acts, dry or wet (the contact
+    //   loads' geometric stiffness taken implicitly, docs/physics.md);
     // - ordering by fibre stiffness and friction kept: H2 above GA1 (dry);
     // - combing ease lowers the force monotonically (H1 dry at ease 0, 0.5, 1: peak and median).
-    // - the strands' safety net (velocity clamp) never acts dry, and in at most 2 % of the strand-steps wet.
-    // Measured 2026-11-24 (docs/scenarios.md): dry 0.083-0.117 N, wet/dry 5.0-6.7, continuity 99-100 %, largest
-    // step 5-24 % of the peak; clamped strand-steps 0 except GC3 wet, 361 of 33,360 (1.1 %; 2-9 % for every
-    // wet tress before the drag). Since issue 29 (docs/combing.md) the law is tools::entanglement with curl
-    // interlocking and capillary adhesion, calibrated on H1 dry alone (the span); the wetness model's friction
-    // ratio is the fibre's 1.5, no longer fitted to these ratios; everything else follows from the hair types.
+    // Since issue 29 (docs/combing.md) the law is tools::entanglement with curl interlocking and capillary
+    // adhesion, calibrated on H1 dry alone (the span); the wetness model's friction ratio is the fibre's 1.5, no
+    // longer fitted to these ratios; everything else follows from the hair types.
+    let names = ["comb-h1", "comb-h2", "comb-ga1", "comb-gc3"];
+    let mut jobs: Vec<(&str, f64, f64, u64)> = Vec::new();
+    for name in names {
+        for w in [0.0, 1.0] {
+            jobs.extend(LAYOUTS.iter().map(|&seed| (name, w, 0.0, seed)));
+        }
+    }
+    for ease in [0.5, 1.0] {
+        jobs.extend(LAYOUTS.iter().map(|&seed| ("comb-h1", 0.0, ease, seed)));
+    }
+    let runs = par_map(&jobs, |&(name, w, ease, seed)| tress(name, w, ease, Some(seed)));
+    let over = |name: &str, w: f64, ease: f64, f: &dyn Fn(&Summary) -> f64| -> Vec<f64> {
+        jobs.iter().zip(&runs).filter(|(j, _)| j.0 == name && j.1 == w && j.2 == ease).map(|(_, r)| f(r)).collect()
+    };
+    let peak = |s: &Summary| s.stroke.peak_n;
+    let median = |s: &Summary| s.stroke.median_n;
+    let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
+    for ((name, w, ease, seed), r) in jobs.iter().zip(&runs) {
+        let m = &r.stroke;
+        let what = format!("{name} {} ease {ease} layout {seed}", if *w > 0.0 { "wet" } else { "dry" });
+        assert!(m.continuity >= 0.7, "{what}: force above 2 % of the peak in {} of the steps", m.continuity);
+        assert!(m.max_step_change_rel <= 0.3, "{what}: one-step change {} of the peak", m.max_step_change_rel);
+        assert_eq!(r.clamped_steps, 0, "{what}: velocities clamped in {} strand-steps", r.clamped_steps);
+    }
+    let worst_cont = jobs.iter().zip(&runs).min_by(|a, b| a.1.stroke.continuity.total_cmp(&b.1.stroke.continuity)).unwrap();
+    let worst_step = jobs.iter().zip(&runs).max_by(|a, b| a.1.stroke.max_step_change_rel.total_cmp(&b.1.stroke.max_step_change_rel)).unwrap();
+    println!("{} runs; worst continuity {:.3} ({:?}), worst one-step change {:.3} of the peak ({:?})", runs.len(), worst_cont.1.stroke.continuity, worst_cont.0, worst_step.1.stroke.max_step_change_rel, worst_step.0);
     let mut dry_peak = std::collections::HashMap::new();
-    for name in ["comb-h1", "comb-h2", "comb-ga1", "comb-gc3"] {
-        let dry = tress(name, 0.0, 0.0);
-        let wet = tress(name, 1.0, 0.0);
-        let ratio = wet.stroke.peak_n / dry.stroke.peak_n;
-        println!("{name}: dry {:?}\n  wet {:?}\n  wet/dry {ratio:.2}", dry.stroke, wet.stroke);
-        assert!((0.06..=0.24).contains(&dry.stroke.peak_n), "{name}: dry peak {} N", dry.stroke.peak_n);
-        // H2's moved below the bound with issue 29's law (4.12 -> 3.06: the fitted wet friction ratio 6.0 replaced by
-        // the fibre's 1.5 and the capillary adhesion of wet fibres; the regularised drag raises H2's dry end peak to
-        // 0.134 N, its median is 0.083 N; docs/combing.md): printed, not asserted.
+    for name in names {
+        let (dry, wet) = (over(name, 0.0, 0.0, &peak), over(name, 1.0, 0.0, &peak));
+        let ratio = mean(&wet) / mean(&dry);
+        let per_layout = OverLayouts::of(&wet.iter().zip(&dry).map(|(a, b)| a / b).collect::<Vec<_>>());
+        println!("{name}: dry peak {}, wet peak {}, wet/dry of the means {ratio:.2} (per layout {per_layout})", OverLayouts::of(&dry), OverLayouts::of(&wet));
+        assert!((0.06..=0.24).contains(&mean(&dry)), "{name}: dry peak {} N (mean over the layouts)", mean(&dry));
+        // H2's wet/dry is below the bound with issue 29's law (the fitted wet friction ratio 6.0 replaced by the
+        // fibre's 1.5 and the capillary adhesion of wet fibres; docs/combing.md): printed, not asserted.
         if name != "comb-h2" {
-            assert!((4.0..=10.0).contains(&ratio), "{name}: wet/dry peak ratio {ratio}");
+            assert!((4.0..=10.0).contains(&ratio), "{name}: wet/dry peak ratio {ratio} (of the means over the layouts)");
         }
-        for (w, run) in [("dry", &dry), ("wet", &wet)] {
-            let m = &run.stroke;
-            assert!(m.continuity >= 0.7, "{name} {w}: force above 2 % of the peak in {} of the steps", m.continuity);
-            assert!(m.max_step_change_rel <= 0.3, "{name} {w}: one-step change {} of the peak", m.max_step_change_rel);
-            let allowed = if w == "dry" { 0.0 } else { 0.02 * (24 * (m.steps + 500)) as f64 };
-            assert!(run.clamped_steps as f64 <= allowed, "{name} {w}: velocities clamped in {} strand-steps", run.clamped_steps);
-        }
-        dry_peak.insert(name, dry.stroke.peak_n);
+        dry_peak.insert(name, mean(&dry));
     }
     assert!(dry_peak["comb-h2"] > dry_peak["comb-ga1"], "H2 {} N not above GA1 {} N", dry_peak["comb-h2"], dry_peak["comb-ga1"]);
-    let eased: Vec<Summary> = [0.0, 0.5, 1.0].iter().map(|&e| tress("comb-h1", 0.0, e)).collect();
+    let eased: Vec<(f64, f64)> = [0.0, 0.5, 1.0].iter().map(|&e| (mean(&over("comb-h1", 0.0, e, &peak)), mean(&over("comb-h1", 0.0, e, &median)))).collect();
+    println!("H1 dry, combing ease 0 / 0.5 / 1, means over the layouts (peak, median): {eased:?}");
     for pair in eased.windows(2) {
-        assert!(pair[1].stroke.peak_n < pair[0].stroke.peak_n, "peak {} then {}", pair[0].stroke.peak_n, pair[1].stroke.peak_n);
-        assert!(pair[1].stroke.median_n < pair[0].stroke.median_n, "median {} then {}", pair[0].stroke.median_n, pair[1].stroke.median_n);
+        assert!(pair[1].0 < pair[0].0, "peak {} then {}", pair[0].0, pair[1].0);
+        assert!(pair[1].1 < pair[0].1, "median {} then {}", pair[0].1, pair[1].1);
     }
 }

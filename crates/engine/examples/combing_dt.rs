@@ -1,0 +1,154 @@
+//! Time-step convergence of the combing force's statistics (issue 29): runs the comb-h1 tress (24 wisps, 4.75 g,
+//! 20 cm, combed at 0.25 m/s, as `combing_suite`'s standard case) of every preset, dry and wet, at several time
+//! steps, and prints for each the stroke's force statistics (peak, 99th, 95th and 90th percentiles, median, mean,
+//! over the steps from the first to the last contact) and their change from one step size to the next.
+//! Each figure is the mean over `seeds` tress layouts (`[patch] seed`: the wisps' roots and tilts), beside the
+//! layouts' spread (sample standard deviation over the mean), so that a change with the step size can be told
+//! from the sensitivity of one layout's trajectory.
+//! Run from the repository root:
+//! `cargo run --release -p coiffure-engine --example combing_dt [-- dt=0.001,0.0005,0.00025] [seeds=1,2,3,4] [hair=H1,african] [treatments] [threads=2]`
+//! `treatments` adds caucasian conditioned (dry and wet), bleached and bleached twice (wet).
+
+use engine::scenario::{run, ScenarioFile, ScenarioSummary};
+
+/// One tress and stroke (as `crates/engine/tests/combing_suite.rs`'s `Case::toml`).
+fn toml(hair: &str, wetness: f64, treatment: &str, dt: f64, seed: u64) -> String {
+    let (mass, length, speed) = (4.75e-3, 0.2, 0.25);
+    let (z0, z1) = (0.29, 0.3 - length - 0.02);
+    let t1 = (z0 - z1) / speed;
+    format!(
+        r#"
+        name = "dt"
+        dt = {dt}
+        settle = 0.5
+        [patch]
+        hair_type = "{hair}"
+        strands = 24
+        length = {length}
+        segments = 12
+        root = [0.0, 0.0, 0.3]
+        extent = [0.012, 0.004]
+        tilt = 0.05
+        seed = {seed}
+        tress_mass = {mass}
+        wetness = {wetness}
+        treatment = "{treatment}"
+        [tool]
+        shape = "comb"
+        path = [
+          {{ t = 0.0, position = [0.0004, -0.012, {z0}], rotation = [1.5707963, 0.0, 0.0] }},
+          {{ t = {t1}, position = [0.0004, -0.012, {z1}], rotation = [1.5707963, 0.0, 0.0] }},
+        ]
+        "#
+    )
+}
+
+/// Statistics of the force magnitude over the stroke (first to last contact), N: peak, p99, p95, p90, median, mean;
+/// and the clamped strand-steps.
+fn stats(hair: &str, wetness: f64, treatment: &str, dt: f64, seed: u64) -> ([f64; 6], u64) {
+    let out = run(&ScenarioFile::from_toml(&toml(hair, wetness, treatment, dt, seed)).unwrap()).unwrap();
+    let clamped = match &out.summary {
+        ScenarioSummary::Patch(s) => s.clamped_steps,
+        _ => unreachable!(),
+    };
+    let f = &out.force;
+    let first = f.contacts.iter().position(|&c| c > 0).unwrap();
+    let last = f.contacts.iter().rposition(|&c| c > 0).unwrap();
+    let mut v: Vec<f64> = (first..=last).map(|i| f.force(i).norm()).collect();
+    let mean = v.iter().sum::<f64>() / v.len() as f64;
+    v.sort_by(f64::total_cmp);
+    let rank = |q: f64| v[((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1];
+    ([v[v.len() - 1], rank(0.99), rank(0.95), rank(0.9), rank(0.5), mean], clamped)
+}
+
+/// Mean and sample standard deviation of `x`.
+fn mean_sd(x: &[f64]) -> (f64, f64) {
+    let n = x.len() as f64;
+    let m = x.iter().sum::<f64>() / n;
+    let v = if x.len() > 1 { x.iter().map(|a| (a - m).powi(2)).sum::<f64>() / (n - 1.0) } else { 0.0 };
+    (m, v.sqrt())
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let get = |k: &str| args.iter().find_map(|a| a.strip_prefix(&format!("{k}=")).map(str::to_string));
+    let list = |k: &str, d: &str| -> Vec<String> { get(k).unwrap_or(d.into()).split(',').map(String::from).collect() };
+    let dts: Vec<f64> = list("dt", "0.001,0.0005,0.00025").iter().map(|s| s.parse().unwrap()).collect();
+    let seeds: Vec<u64> = list("seeds", "1").iter().map(|s| s.parse().unwrap()).collect();
+    let hairs = list("hair", "H1,H2,GA1,GC3,asian,caucasian,african");
+    let threads: usize = get("threads").map(|s| s.parse().unwrap()).unwrap_or(2);
+    let mut cases: Vec<(String, f64, &str)> = Vec::new();
+    for h in &hairs {
+        cases.push((h.clone(), 0.0, "virgin"));
+        cases.push((h.clone(), 1.0, "virgin"));
+    }
+    if args.iter().any(|a| a == "treatments") {
+        for (t, w) in [("conditioned", 0.0), ("conditioned", 1.0), ("bleached", 1.0), ("bleached-twice", 1.0)] {
+            cases.push(("caucasian".into(), w, t));
+        }
+    }
+    let label = |c: usize| {
+        let (h, w, t) = &cases[c];
+        format!("{h} {} {t}", if *w > 0.0 { "wet" } else { "dry" })
+    };
+    let (nc, nd, ns) = (cases.len(), dts.len(), seeds.len());
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let results = std::sync::Mutex::new(vec![None; nc * nd * ns]);
+    std::thread::scope(|s| {
+        for _ in 0..threads {
+            s.spawn(|| loop {
+                let j = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                if j >= nc * nd * ns {
+                    break;
+                }
+                let (c, d, k) = (j / (nd * ns), (j / ns) % nd, j % ns);
+                let (h, w, t) = &cases[c];
+                let r = stats(h, *w, t, dts[d], seeds[k]);
+                eprintln!("{} dt {} seed {}: {:?}", label(c), dts[d], seeds[k], r);
+                results.lock().unwrap()[j] = Some(r);
+            });
+        }
+    });
+    let results: Vec<([f64; 6], u64)> = results.into_inner().unwrap().into_iter().map(Option::unwrap).collect();
+    let at = |c: usize, d: usize, k: usize| results[(c * nd + d) * ns + k];
+    // Mean over the layouts and spread (sd / mean) of statistic `q` for case c at step d.
+    let ms = |c: usize, d: usize, q: usize| {
+        let (m, sd) = mean_sd(&(0..ns).map(|k| at(c, d, k).0[q]).collect::<Vec<_>>());
+        (m, sd / m)
+    };
+    let names = ["peak", "p99", "p95", "p90", "median", "mean"];
+    println!("seeds (tress layouts): {seeds:?}; each figure: mean over the layouts, N (spread sd/mean in brackets)");
+    println!("| case | dt (ms) | {} | clamped strand-steps (all layouts) |", names.join(" | "));
+    println!("|---|---|{}---|", "---|".repeat(names.len()));
+    for c in 0..nc {
+        for (d, dt) in dts.iter().enumerate() {
+            let clamped: u64 = (0..ns).map(|k| at(c, d, k).1).sum();
+            let cells: Vec<String> = (0..names.len()).map(|q| {
+                let (m, rel) = ms(c, d, q);
+                format!("{m:.4} ({:.0} %)", 100.0 * rel)
+            }).collect();
+            println!("| {} | {} | {} | {clamped} |", label(c), dt * 1e3, cells.join(" | "));
+        }
+    }
+    // Change of each statistic's layout mean from one step size to the next (relative to the finer), the worst
+    // case, and the layouts' spread of the mean (sd / mean / sqrt(layouts)) in that case at the finer step.
+    for d in 1..nd {
+        println!("\nchange of the layout mean from dt {} to {} ms (|a - b| / b): worst case, median over the cases; standard error of the finer mean there", dts[d - 1] * 1e3, dts[d] * 1e3);
+        for (q, name) in names.iter().enumerate() {
+            let mut ch: Vec<(f64, usize)> = (0..nc).map(|c| ((ms(c, d - 1, q).0 - ms(c, d, q).0).abs() / ms(c, d, q).0, c)).collect();
+            ch.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (worst, c) = ch[nc - 1];
+            println!("  {name}: worst {:.1} % ({}; standard error {:.1} %), median {:.1} %", 100.0 * worst, label(c), 100.0 * ms(c, d, q).1 / (ns as f64).sqrt(), 100.0 * ch[nc / 2].0);
+        }
+    }
+    // Wet/dry ratios of each statistic's layout mean, per hair and step size.
+    println!("\n| hair | dt (ms) | wet/dry {} |", names.join(" | wet/dry "));
+    println!("|---|---|{}", "---|".repeat(names.len()));
+    for h in &hairs {
+        let find = |w: f64| cases.iter().position(|(hh, ww, t)| hh == h && *ww == w && *t == "virgin").unwrap();
+        for (d, dt) in dts.iter().enumerate() {
+            let cells: Vec<String> = (0..names.len()).map(|q| format!("{:.2}", ms(find(1.0), d, q).0 / ms(find(0.0), d, q).0)).collect();
+            println!("| {h} | {} | {} |", dt * 1e3, cells.join(" | "));
+        }
+    }
+}

@@ -4,10 +4,11 @@
 //! bit for bit with the recorded forces and with the forces the device received.
 //!
 //! `cargo build --release -p coiffure-server --examples && target/release/examples/record_soak [SECONDS] [RENDER_STRANDS]`
-//! (defaults 60 s and 100,000; the server at normal priority, `--haptic-priority 0`). It prints one JSON object:
-//! the server's resident memory at minute 1 (or at a tenth of a shorter run), at the end and its peak, sampled
-//! every 5 s; the record's size (and the size its steps encode to), steps, bytes per step and per hour; the
-//! replay's step counts, differences and wall time; and the server's summary lines.
+//! (defaults 60 s and 100,000; the server at normal priority, `--haptic-priority 0`). It prints two JSON objects:
+//! first, as soon as the session ends, `session`: the server's resident memory at minute 1 (or at a tenth of a
+//! shorter run), at the end and its peak, sampled every 5 s; the record's size (and the size its steps encode
+//! to), steps, bytes per step and per hour; and the server's summary lines; then, after the replay (about half
+//! the session's length on an idle machine), the replay's step counts, differences and wall time.
 
 use engine::record::{Ending, Record};
 use std::io::{BufRead, BufReader};
@@ -110,6 +111,23 @@ fn main() {
         whole_chunks += 1;
     }
     let expected = whole.len() as i64 + 33 * (chunks as i64 - whole_chunks as i64);
+    // The session's figures now (memory, record), before the replay: replaying in lockstep on one thread takes
+    // about half the session's length on an idle machine.
+    let pick = |k: &str| lines.iter().find(|l| l.contains(k)).cloned().unwrap_or_default();
+    let session = serde_json::json!({
+        "seconds": seconds,
+        "render_strands": strands,
+        "rss_mib": { "at_s": first, "first": at_first >> 20, "end": last >> 20, "peak": peak >> 20, "end_over_first": last as f64 / at_first.max(1) as f64 },
+        "rss_samples_mib": samples.iter().step_by(12).collect::<Vec<_>>(),
+        "record": {
+            "bytes": bytes.len(), "expected_bytes": expected, "chunks": chunks,
+            "haptic_steps": rec.steps.len(), "global_steps": rec.global_inputs.len(), "seconds": rec.seconds(),
+            "bytes_per_step": bytes.len() as f64 / rec.steps.len().max(1) as f64,
+            "mb_per_hour": bytes.len() as f64 / rec.seconds() * 3600.0 / 1e6,
+        },
+        "server": { "summary": pick("haptic loop:"), "record": pick("record:"), "budget": pick("strand budget:") },
+    });
+    println!("{}", serde_json::to_string_pretty(&serde_json::json!({ "session": session })).unwrap());
     // Replay, compared with the recorded forces and with what the device received.
     let settings = rec.settings.clone().expect("serve writes its settings");
     let scene = Arc::new(engine::session::Scene::builtin(&settings.scene_options()).unwrap());
@@ -137,21 +155,9 @@ fn main() {
             equal += (bits(forces[i][j].as_slice()) == bits(f)) as usize;
         }
     }
-    let pick = |k: &str| lines.iter().find(|l| l.contains(k)).cloned().unwrap_or_default();
     let report = serde_json::json!({
-        "seconds": seconds,
-        "render_strands": strands,
-        "rss_mib": { "at_s": first, "first": at_first >> 20, "end": last >> 20, "peak": peak >> 20, "end_over_first": last as f64 / at_first.max(1) as f64 },
-        "rss_samples_mib": samples.iter().step_by(12).collect::<Vec<_>>(),
-        "record": {
-            "bytes": bytes.len(), "expected_bytes": expected, "chunks": chunks,
-            "haptic_steps": rec.steps.len(), "global_steps": rec.global_inputs.len(), "seconds": rec.seconds(),
-            "bytes_per_step": bytes.len() as f64 / rec.steps.len().max(1) as f64,
-            "mb_per_hour": bytes.len() as f64 / rec.seconds() * 3600.0 / 1e6,
-        },
         "replay": { "steps": forces.len(), "forces_differing_from_record": differ, "wall_s": replay_s },
         "device": { "poses_answered_in_record": answered, "equal_bit_for_bit": equal, "peak_force_n": peak_force, "device_sim": sim_out },
-        "server": { "summary": pick("haptic loop:"), "record": pick("record:"), "budget": pick("strand budget:") },
     });
     println!("{}", serde_json::to_string_pretty(&report).unwrap());
     let _ = std::fs::remove_dir_all(&dir);

@@ -47,8 +47,9 @@ pub struct LiveSpec {
     pub render_strands: usize,
     /// Guide strands. Default 200 (as `coiffure serve`).
     pub guides: usize,
-    /// Device profile: "phantom-omni" (default), "phantom-desktop", "omega3" (3-DOF: force only) or
-    /// "phantom-premium-6dof" (force and torque).
+    /// Device profile (`DeviceProfile::by_name`, the names `coiffure serve --device-profile` takes): "phantom-omni"
+    /// (default; also "omni", "touch"), "phantom-desktop", "omega3" (3-DOF: force only) or "phantom-premium-6dof"
+    /// ("premium6": force and torque).
     pub device: String,
     /// Hair type (a `HairType` name, e.g. "caucasian", "asian", "african", "H1"). Default "caucasian".
     pub hair_type: String,
@@ -158,17 +159,6 @@ pub struct LiveWaypoint {
     pub pressed: bool,
 }
 
-/// The device profile named `name`.
-pub fn device_profile(name: &str) -> Option<DeviceProfile> {
-    match name {
-        "phantom-omni" => Some(DeviceProfile::PHANTOM_OMNI),
-        "phantom-desktop" => Some(DeviceProfile::PHANTOM_DESKTOP),
-        "omega3" => Some(DeviceProfile::OMEGA3),
-        "phantom-premium-6dof" => Some(DeviceProfile::PHANTOM_PREMIUM_6DOF),
-        _ => None,
-    }
-}
-
 /// The live tool named `name`.
 pub fn tool_by_name(name: &str) -> Option<Tool> {
     Tool::ALL.into_iter().find(|t| t.name() == name)
@@ -187,7 +177,7 @@ impl LiveScenario {
             }
         }
         let l = &self.live;
-        let profile = device_profile(&l.device).ok_or_else(|| ScenarioError::Invalid(format!("live.device must be \"phantom-omni\", \"phantom-desktop\", \"omega3\" or \"phantom-premium-6dof\", got {:?}", l.device)))?;
+        let profile = DeviceProfile::by_name(&l.device).ok_or_else(|| ScenarioError::Invalid(format!("live.device must be \"phantom-omni\" (or \"omni\", \"touch\"), \"phantom-desktop\", \"omega3\" or \"phantom-premium-6dof\" (\"premium6\"), got {:?}", l.device)))?;
         let hair = HairType::by_name(&l.hair_type).ok_or_else(|| ScenarioError::Invalid(format!("live.hair_type: unknown {:?}", l.hair_type)))?;
         if l.render_strands == 0 || l.render_strands > 1_000_000 {
             return bad(format!("live.render_strands must be 1..=1000000, got {}", l.render_strands));
@@ -838,5 +828,16 @@ mod tests {
             assert!(e.contains(key), "{key}: {e}");
         }
         assert!(toml::from_str::<LiveScenario>(&COMB.replace("guides = 60", "guides = 60\n        colour = 1")).is_err());
+    }
+
+    #[test]
+    fn a_live_scenario_takes_every_device_name_the_server_takes() {
+        // One table of names (`DeviceProfile::by_name`): the short names `coiffure serve --device-profile`
+        // takes give the same profile in a `[live]` scenario as the long ones.
+        for (short, long) in [("omni", "phantom-omni"), ("touch", "phantom-omni"), ("desktop", "phantom-desktop"), ("omega.3", "omega3"), ("premium6", "phantom-premium-6dof")] {
+            let with = |name: &str| toml::from_str::<LiveScenario>(&COMB.replace("guides = 60", &format!("guides = 60\n        device = \"{name}\""))).unwrap().validate().unwrap().0;
+            assert_eq!(with(short), with(long), "{short}");
+            assert_eq!(Some(with(long)), DeviceProfile::by_name(long));
+        }
     }
 }

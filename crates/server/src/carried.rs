@@ -30,6 +30,7 @@ pub struct CarriedRequest {
 /// The answer: each requested vertex carried (world, m), x, y, z per vertex in the request's order.
 #[derive(Debug, Clone, Serialize)]
 pub struct CarriedAnswer {
+    /// The requested vertices carried (world, m): x, y, z per vertex, in the request's order.
     pub positions: Vec<f64>,
 }
 

@@ -443,12 +443,13 @@ pub(crate) struct Meter {
     last_tool: Option<Vector3<f64>>,
     /// Fastest strand tip over the run, m/s.
     pub max_tip_speed: f64,
-    /// The haptic layer's largest hand-over so far (`HapticCore::handover_max`), m, and its strands let go so
-    /// far (`HapticCore::handovers`).
+    /// The haptic layer's largest hand-over so far (`HapticCore::handover_max`), m.
     pub handover: f64,
+    /// Strands let go back in place so far (`HapticCore::handovers`).
     pub handovers: u64,
-    /// The same for the strands let go before they were back in place (`HapticCore::early_handovers`).
+    /// The largest hand-over of a strand let go before it was back in place (`HapticCore::early_handovers`), m.
     pub early_handover: f64,
+    /// How many strands were let go before they were back in place.
     pub early_handovers: u64,
     /// Deepest sampled render vertex inside the body at a measure as the viewer shows it (the lattice's FFD,
     /// then the push-out out of the body, `MetaballSet::push_out` with `PUSH_OUT_SKIN`), m; 0 if none.

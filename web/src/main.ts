@@ -449,10 +449,22 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
   /** The carried hair of the last frame (carriedHair.ts, read back from the GPU) checked against its law:
    * the largest distance of a root from its rest root moved rigidly with the head (m), the largest relative
    * change of a segment's length from its rest length, and the largest distance of any vertex from its rest
-   * position moved rigidly with the head (m: how far the lattice carried it). */
-  carriedHair(): { vertices: number; rootError: number; lengthError: number; largestMove: number } {
+   * position moved rigidly with the head (m: how far the lattice carried it). With `sample` > 0 the carried hair
+   * is computed again now, dry (no wet clumping: a display effect the engine's law leaves out), and the state it
+   * was computed on is returned with `sample` strands' vertices (the strands the lattice moves most, then
+   * strands spread over the hairstyle), for a point-by-point check against the engine (`POST /debug/carried`):
+   * the lattice nodes (world, m, xyz per node), the head rotation (row-major) and translation, the vertices and
+   * their carried positions (xyz each). */
+  carriedHair(sample = 0): { vertices: number; rootError: number; lengthError: number; largestMove: number; state?: { nodes: number[]; headRotation: number[]; headTranslation: number[]; vertices: number[]; positions: number[] } } {
     const hair = view.hair!;
     const rt = hair.carried.positions;
+    const u = hair.material.uniforms;
+    if (sample > 0) {
+      const wet = u.wetnessOverride.value;
+      u.wetnessOverride.value = 0;
+      hair.carried.update(view.renderer);
+      u.wetnessOverride.value = wet;
+    }
     const out = new Float32Array(4 * rt.width * rt.height);
     view.renderer.readRenderTargetPixels(rt, 0, 0, rt.width, rt.height, out);
     const rest = hair.restTexture.image.data as Float32Array;
@@ -469,7 +481,32 @@ console.log(`coiffure viewer: tools ${TOOL_NAMES.join(', ')}`);
       const l = Math.hypot(out[4 * v] - out[4 * v - 4], out[4 * v + 1] - out[4 * v - 3], out[4 * v + 2] - out[4 * v - 2]);
       if (l0 > 1e-6) lengthError = Math.max(lengthError, Math.abs(l - l0) / l0);
     }
-    return { vertices: n, rootError, lengthError, largestMove };
+    if (!(sample > 0)) return { vertices: n, rootError, lengthError, largestMove };
+    // The state the texture was computed on (no message was handled since: this runs in one task).
+    const strands = n / nv;
+    const tipMove = (s: number): number => {
+      const v = s * nv + nv - 1;
+      r.set(rest[4 * v], rest[4 * v + 1], rest[4 * v + 2]).applyQuaternion(q).add(t);
+      return Math.hypot(out[4 * v] - r.x, out[4 * v + 1] - r.y, out[4 * v + 2] - r.z);
+    };
+    const order = Array.from({ length: strands }, (_, s) => s).sort((a, b) => tipMove(b) - tipMove(a));
+    const chosen = new Set(order.slice(0, Math.ceil(sample / 4)));
+    for (let s = 0; chosen.size < Math.min(sample, strands); s = (s + Math.max(1, Math.floor(strands / sample))) % strands) chosen.add(s);
+    const vertices: number[] = [], positions: number[] = [];
+    for (const s of [...chosen].sort((a, b) => a - b)) {
+      for (let i = 0; i < nv; i++) {
+        const v = s * nv + i;
+        vertices.push(v);
+        positions.push(out[4 * v], out[4 * v + 1], out[4 * v + 2]);
+      }
+    }
+    const lattice = hair.latticeTexture.image.data as Float32Array;
+    const nodes: number[] = [];
+    for (let k = 0; k < lattice.length / 4; k++) nodes.push(lattice[4 * k], lattice[4 * k + 1], lattice[4 * k + 2]);
+    const m = (u.headRotation.value as THREE.Matrix3).elements; // column-major
+    const headRotation = [m[0], m[3], m[6], m[1], m[4], m[7], m[2], m[5], m[8]];
+    const headTranslation = (u.headTranslation.value as THREE.Vector3).toArray();
+    return { vertices: n, rootError, lengthError, largestMove, state: { nodes, headRotation, headTranslation, vertices, positions } };
   },
   project(x: number, y: number, z: number): [number, number] {
     const v = new THREE.Vector3(x, y, z).project(view.camera);

@@ -231,7 +231,27 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     const during = await motion();
     // The hair drawn is carried by one law (engine::scene::carry_strand; carriedHair.ts on the GPU): roots held by
     // the head, every segment at its rest length, however far the lattice carries the rest.
-    const carried = await page.evaluate(() => window.coiffureDebug.carriedHair());
+    // The state of one frame (the lattice the jet deforms, the head pose) and 400 strands' carried vertices (the
+    // 100 the lattice moves most among them), read back from the GPU in the same task, against the engine's
+    // Scene::render_vertex on that state (POST /debug/carried): point by point within 1e-5 m (float32 on the
+    // GPU; the chain of follow the leader sums its rounding over a strand's vertices).
+    const carried = await page.evaluate(() => window.coiffureDebug.carriedHair(400));
+    const state = carried.state;
+    delete carried.state;
+    const answer = await fetch(new URL('debug/carried', server.url), {
+      method: 'POST', headers: { 'content-type': 'application/json' },
+      body: JSON.stringify({ nodes: state.nodes, head_rotation: state.headRotation, head_translation: state.headTranslation, vertices: state.vertices }),
+    });
+    assert.equal(answer.status, 200, await answer.clone().text());
+    const engine = (await answer.json()).positions;
+    let engineGap = 0, worstVertex = -1;
+    for (let k = 0; k < state.vertices.length; k++) {
+      const d = Math.hypot(engine[3 * k] - state.positions[3 * k], engine[3 * k + 1] - state.positions[3 * k + 1], engine[3 * k + 2] - state.positions[3 * k + 2]);
+      if (d > engineGap) { engineGap = d; worstVertex = state.vertices[k]; }
+    }
+    console.log('GPU carried hair vs the engine\'s render_vertex on the same lattice', { vertices: state.vertices.length, largestGap: engineGap, worstVertex });
+    assert.ok(state.vertices.length >= 400 * 2, `vertices compared: ${state.vertices.length}`);
+    assert.ok(engineGap < 1e-5, `the viewer's carried hair is the engine's: vertex ${worstVertex} ${engineGap} m apart`);
     await page.screenshot({ path: join(artifacts, 'dryer-above-blowing.png') });
     await page.evaluate(() => window.coiffureDebug.releaseButton());
     await page.waitForTimeout(2300);

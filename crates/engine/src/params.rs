@@ -201,8 +201,19 @@ pub struct HapticParams {
     /// How long a leaving strand's tip must stay slower than `rest_speed` to count as at rest, s.
     /// Default 0.2.
     pub rest_time: f64,
-    /// A leaving strand is let go after this time even if not at rest, s. Default 0.6 (a strand the tool
-    /// flung swings for seconds; it then blends back to the global layer).
+    /// A leaving strand is let go (handed over to the global layer, which then draws its guide where the head
+    /// and the lattice carry it) once at rest and with every sample within this distance of that carried
+    /// place, so that the hair drawn moves by at most this at the hand-over: the strand falls back by its own
+    /// dynamics (gravity, its rest shape, the hold of the neighbours), not by a display blend, m. Default
+    /// 0.002: under the width of the wisp a guide stands for (twice the wisp's radius, the hair-hair contact
+    /// distance `HairContact::distance`: 2.5 mm for 500 Caucasian fibres), so the guide drawn stays inside its
+    /// own wisp across the hand-over. A strand not back in place within `max_relax_time` is let go all the same
+    /// (an early hand-over, measured apart: `HapticCore::early_handovers`).
+    pub handover_distance: f64,
+    /// A leaving strand not back in place (`handover_distance`) this long after it left is let go wherever it
+    /// is and put back on its groom, its display fading over `blend_time` (an early hand-over), s. Default 0.6
+    /// (strands the jet or the comb laid over their own roots rest there, centimetres off their place: issue
+    /// 30, docs/scenarios.md).
     pub max_relax_time: f64,
     /// A strand let go whose tip is farther than this from its groomed tip returns to its groomed shape
     /// (what the viewer shows once it has faded out), m. Default 0.005.
@@ -257,7 +268,7 @@ pub struct HapticParams {
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03, treatment: tools::treatment::Treatment::Virgin }
+        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, handover_distance: 0.002, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03, treatment: tools::treatment::Treatment::Virgin }
     }
 }
 
@@ -265,7 +276,7 @@ impl HapticParams {
     /// Checks every field; the error names the bad one.
     pub fn validate(&self) -> Result<(), SessionError> {
         let p = |m: String| Err(SessionError::Param(m));
-        for (k, v) in [("max_proxy_lag", self.max_proxy_lag), ("reselect_distance", self.reselect_distance), ("clip_reach", self.clip_reach), ("max_displacement", self.max_displacement), ("snip_distance", self.snip_distance), ("rest_distance", self.rest_distance)] {
+        for (k, v) in [("max_proxy_lag", self.max_proxy_lag), ("reselect_distance", self.reselect_distance), ("clip_reach", self.clip_reach), ("max_displacement", self.max_displacement), ("snip_distance", self.snip_distance), ("rest_distance", self.rest_distance), ("handover_distance", self.handover_distance)] {
             if !(v > 0.0 && v.is_finite()) {
                 return p(format!("haptic.{k} must be > 0 m, got {v}"));
             }

@@ -1,5 +1,6 @@
 //! `coiffure`: the command line of the Coiffure hair simulator.
 
+mod carried;
 mod delivery;
 mod demo;
 mod device_sim_cmd;

@@ -444,7 +444,7 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let duration = args.duration;
     let app_token = app.access.token.clone();
     let served = rt.block_on(async move {
-        let router = Router::new().route("/ws", get(ws_handler)).fallback_service(ServeDir::new(&web)).with_state(app.clone());
+        let router = Router::new().route("/ws", get(ws_handler)).route("/debug/carried", axum::routing::post(carried_handler)).fallback_service(ServeDir::new(&web)).with_state(app.clone());
         let listener = tokio::net::TcpListener::bind(addr).await.with_context(|| format!("cannot bind {addr}"))?;
         let local = listener.local_addr()?;
         match &app_token {
@@ -537,6 +537,26 @@ async fn ws_handler(ws: WebSocketUpgrade, headers: axum::http::HeaderMap, query:
     // The largest message is a LOAD of the largest file (its 2-byte header and 9 bytes of format and options).
     let max = app.opts.load.max_file_bytes + 16;
     ws.max_message_size(max).max_frame_size(max).on_upgrade(move |socket| viewer(socket, app)).into_response()
+}
+
+/// `POST /debug/carried` (`crate::carried`), after the access checks of `/ws`: the named render vertices carried
+/// by the live scene's one law on the lattice and head pose the request gives (JSON in and out); 400 naming
+/// what is wrong with a bad request.
+async fn carried_handler(headers: axum::http::HeaderMap, query: axum::extract::Query<std::collections::HashMap<String, String>>, State(app): State<Arc<App>>, body: axum::body::Bytes) -> axum::response::Response {
+    use axum::http::StatusCode;
+    if let Err(why) = check_access(&headers, query.get("token").map(String::as_str), &app.access) {
+        return (StatusCode::FORBIDDEN, why).into_response();
+    }
+    let req: crate::carried::CarriedRequest = match serde_json::from_slice(&body) {
+        Ok(r) => r,
+        Err(e) => return (StatusCode::BAD_REQUEST, format!("not a carried request: {e}")).into_response(),
+    };
+    let scene = app.scene.lock().unwrap().clone();
+    match tokio::task::spawn_blocking(move || crate::carried::carried(&scene, &req)).await {
+        Ok(Ok(answer)) => ([(axum::http::header::CONTENT_TYPE, "application/json")], serde_json::to_vec(&answer).unwrap_or_default()).into_response(),
+        Ok(Err(why)) => (StatusCode::BAD_REQUEST, why).into_response(),
+        Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, e.to_string()).into_response(),
+    }
 }
 
 /// Who may open `/ws`: the allowed origins besides the served one, and the token if one is required.

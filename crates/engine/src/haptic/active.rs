@@ -15,13 +15,20 @@
 //!    start from their stored shape (groomed, or where they came to rest), at rest, their roots on the head:
 //!    no kick. The displacement the viewer shows fades in over `HapticParams::blend_time`.
 //! 3. **Leaving** guides (no longer chosen) are still simulated, and the tool may still touch them, until
-//!    they are at rest (tip slower than `HapticParams::rest_speed` for `HapticParams::rest_time`) or
-//!    `HapticParams::max_relax_time` has passed. Then they are let go: velocities zeroed, and a strand whose
-//!    tip is farther than `HapticParams::rest_distance` from its groomed tip returns to its groomed shape
-//!    (what the viewer shows of it once faded out); the displacement shown of where it was fades out over
-//!    `blend_time` ([`Faded`], no longer simulated). Nothing stays frozen where the tool left it.
+//!    they are at rest (tip slower than `HapticParams::rest_speed` for `HapticParams::rest_time`) *and* back
+//!    in place: every sample within `HapticParams::handover_distance` of where the global layer carries its
+//!    guide (the head and the lattice, the shape drawn once it is let go). They fall back by their own
+//!    dynamics while the tool stays (gravity, their rest shape, the hold of the neighbours), so the hand-over
+//!    moves the hair drawn by at most that distance ([`HapticCore::handover_max`] measures it). A cut strand
+//!    (its groom is no longer its shape) is let go once at rest. A strand not back in place
+//!    `HapticParams::max_relax_time` after it left is let go wherever it is (an early hand-over, measured apart:
+//!    [`HapticCore::early_handovers`]). Let go: velocities zeroed, and a strand
+//!    whose tip is farther than `HapticParams::rest_distance` from its groomed tip returns to its groomed
+//!    shape (in the store: what it joins from next time); the displacement shown of where it was fades out
+//!    over `blend_time` ([`Faded`], no longer simulated). Nothing stays frozen where the tool left it.
 //! 4. When chosen and relaxing strands together exceed `max_active`, the relaxing ones that left first are
-//!    let go first: at most `max_active` strands are simulated (the step's cost is bounded). A strand limit
+//!    let go first, wherever they are (an early hand-over too): at
+//!    most `max_active` strands are simulated (the step's cost is bounded). A strand limit
 //!    below it (`Command::LimitStrands`, the live thread's strand budget, `crate::budget`) takes its place: a
 //!    new choice takes the same share of it as `max_chosen` of `max_active`, and the relaxing strands beyond
 //!    it are let go at once.
@@ -57,13 +64,20 @@ pub(crate) struct Member {
     pub tip: Option<Vector3<f64>>,
     /// Tip speed over the last step, m/s.
     pub tip_speed: f64,
+    /// Let go before it was back in place (after `max_relax_time`, or by the strand limit).
+    pub early: bool,
 }
 
 impl Member {
     fn joining() -> Self {
-        Self { phase: Phase::Chosen, weight: 0.0, tip: None, tip_speed: 0.0 }
+        Self { phase: Phase::Chosen, weight: 0.0, tip: None, tip_speed: 0.0, early: false }
     }
 }
+
+/// A relaxing strand at rest is looked at every this many haptic steps (strand by strand in turns) to see
+/// whether it is back in place (`HapticParams::handover_distance`): its samples and its carried place cost a few
+/// microseconds, and a strand held off its place (by friction, say) may rest for long.
+const PLACE_CHECK_EVERY: usize = 10;
 
 /// A strand let go, no longer simulated, whose shown displacement fades out: its guide, its centreline samples
 /// where it was let go (m, at the guide's sample arc lengths) and the weight left, in [0, 1].
@@ -255,6 +269,10 @@ impl HapticCore {
         // Beyond the strand limit the relaxing strands that left first are let go (after a lowered limit, also
         // when no guide joins).
         Self::let_go_beyond(self.strand_limit, &mut members);
+        // (The simulated strands' members come first, in order: what the rebuild measures of a leaving one.)
+        for (m, new) in self.members.iter_mut().zip(&members) {
+            m.early = new.early;
+        }
         // Let-go strands leave the simulation.
         let mut k = 0;
         while k < guides.len() {
@@ -281,6 +299,7 @@ impl HapticCore {
         for (g, m) in guides.iter().zip(members.iter_mut()) {
             if chosen.contains(g) {
                 m.phase = Phase::Chosen;
+                m.early = false;
             } else if m.phase == Phase::Chosen {
                 m.phase = Phase::Relaxing { since: 0.0, still: 0.0 };
             }
@@ -320,6 +339,7 @@ impl HapticCore {
                 break;
             }
             members[i].phase = Phase::Fading;
+            members[i].early = true;
             over -= 1;
         }
     }
@@ -353,15 +373,22 @@ impl HapticCore {
             if let Some(s) = s {
                 let g = old_guides[i];
                 let weight = old_members.get(i).map_or(0.0, |m| m.weight);
+                let early = old_members.get(i).is_some_and(|m| m.early);
                 if weight > 0.0 {
                     let pts = samples_along(&s, self.scene.guides[g].model.length, samples);
-                    // The hand-over: what the display's fade hides (the strand's shown displacement from its
-                    // place carried by the global layer, at the nodes last seen).
+                    // The hand-over: how far the hair drawn moves (before the display's fade): the strand's shown
+                    // displacement from its place carried by the global layer, at the nodes last seen.
                     let mut cache = self.references.borrow_mut();
                     let ok = cache.has_nodes(self.scene.lattice.node_count());
                     let jump = pts.iter().zip(cache.bases(&self.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max);
                     drop(cache);
-                    self.handover_max = self.handover_max.max(jump);
+                    if early {
+                        self.early_handover_max = self.early_handover_max.max(jump);
+                        self.early_handovers += 1;
+                    } else {
+                        self.handover_max = self.handover_max.max(jump);
+                        self.handovers += 1;
+                    }
                     self.faded.push(Faded { guide: g, samples: pts, weight });
                 }
                 self.strands[g] = Some(self.let_go(g, s));
@@ -416,10 +443,11 @@ impl HapticCore {
     /// the tips at the start of each step, read from the interaction's collision pieces, one step behind), the
     /// leaving strands' rest, and the display weights (fading in, and the let-go strands' out, over
     /// `blend_time`).
-    pub(crate) fn track_active(&mut self, dt: f64) {
+    pub(crate) fn track_active(&mut self, dt: f64, lattice: &crate::snapshot::LatticeSnapshot) {
         let h = self.params.haptic;
         let fade = dt / h.blend_time;
         self.max_tip_speed = 0.0;
+        let mut resting = Vec::new();
         for (k, (m, s)) in self.members.iter_mut().zip(&self.interaction.strands).enumerate() {
             let x = self.interaction.tip_at_last_step(k).unwrap_or_else(|| tip(s));
             m.tip_speed = m.tip.map_or(0.0, |p| (x - p).norm() / dt);
@@ -432,15 +460,42 @@ impl HapticCore {
                 Phase::Relaxing { since, still } => {
                     let (since, still) = (since + dt, if m.tip_speed < h.rest_speed { still + dt } else { 0.0 });
                     m.weight = (m.weight + fade).min(1.0);
-                    m.phase = if still >= h.rest_time || since >= h.max_relax_time { Phase::Fading } else { Phase::Relaxing { since, still } };
+                    m.phase = Phase::Relaxing { since, still };
+                    if since >= h.max_relax_time {
+                        m.phase = Phase::Fading;
+                        m.early = true;
+                    } else if still >= h.rest_time && (self.step as usize + k) % PLACE_CHECK_EVERY == 0 {
+                        // At rest: whether it is back in place is looked at every `PLACE_CHECK_EVERY` steps (in turns).
+                        resting.push(k);
+                    }
                 }
                 Phase::Fading => {}
+            }
+        }
+        for k in resting {
+            if self.handover_jump(k, lattice) <= h.handover_distance {
+                self.members[k].phase = Phase::Fading;
             }
         }
         for f in &mut self.faded {
             f.weight -= fade;
         }
         self.faded.retain(|f| f.weight > 0.0);
+    }
+
+    /// How far the hair drawn for simulated strand `slot` would move if it were handed over to the global layer
+    /// now: its largest shown displacement from where the head and the lattice of this step (`lattice`) carry
+    /// its guide (`Scene::guide_points`), m; 0 for a cut strand (its shape is no longer its guide's: it is let go
+    /// once at rest).
+    fn handover_jump(&self, slot: usize, lattice: &crate::snapshot::LatticeSnapshot) -> f64 {
+        let (g, s) = (self.active[slot], &self.interaction.strands[slot]);
+        let guide = &self.scene.guides[g];
+        if s.model.length < guide.model.length - 1e-12 || lattice.positions.len() != self.scene.lattice.node_count() {
+            return 0.0;
+        }
+        let weight = self.members.get(slot).map_or(1.0, |m| m.weight);
+        let pts = samples_along(s, guide.model.length, self.scene.samples());
+        pts.iter().zip(self.scene.guide_points(&lattice.positions, &lattice.head, g)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max)
     }
 
     /// The active strands' roots move with the head, which is rigid (at the pose `HapticCore::head`): each

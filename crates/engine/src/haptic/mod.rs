@@ -130,6 +130,12 @@ pub struct HapticCore {
     /// The largest hand-over to the global layer so far: a let-go strand's largest shown displacement from its
     /// place carried by the global layer when it leaves the simulation (what its display fade hides), m.
     pub(crate) handover_max: f64,
+    /// Strands let go so far back in place (handed over to the global layer).
+    pub(crate) handovers: u64,
+    /// The same for the strands let go before they were back in place (after `HapticParams::max_relax_time`,
+    /// or by the strand limit): the largest hand-over, m, and how many.
+    pub(crate) early_handover_max: f64,
+    pub(crate) early_handovers: u64,
     /// Wall-clock time of the last step's stages.
     pub(crate) timings: StepPhases,
 }
@@ -208,7 +214,7 @@ impl HapticCore {
         let side = DeviceSide::new(params, shapes.clone(), (scene.head.clone(), scene.lattice.params.metaball.threshold));
         Ok(Self {
             scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, side, proxy: ProxyState::default(), anchors: 0, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), references: Default::default(), staged: Default::default(), choice: None, bounds, queued: Vec::new(), max_tip_speed: 0.0, interaction,
-            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, strand_limit: params.max_active, head: nalgebra::Isometry3::identity(), rejected: 0, runaways: 0, failed: 0, handover_max: 0.0, timings: StepPhases::default(),
+            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, strand_limit: params.max_active, head: nalgebra::Isometry3::identity(), rejected: 0, runaways: 0, failed: 0, handover_max: 0.0, handovers: 0, early_handover_max: 0.0, early_handovers: 0, timings: StepPhases::default(),
         })
     }
 
@@ -369,7 +375,7 @@ impl HapticCore {
         let t4 = clock.elapsed().as_secs_f64();
         self.timings.interaction = t4 - t3;
         // 8. Tracking.
-        self.track_active(dt);
+        self.track_active(dt, lattice);
         self.timings.tracking = clock.elapsed().as_secs_f64() - t4;
     }
 
@@ -512,10 +518,21 @@ impl HapticCore {
         self.max_tip_speed
     }
     /// The largest hand-over to the global layer so far, m: a let-go strand's largest shown displacement from
-    /// its place carried by the global layer when it left the simulation (what the display's fade over
-    /// `HapticParams::blend_time` hides).
+    /// its place carried by the global layer when it left the simulation (before the display's fade over
+    /// `HapticParams::blend_time`; at most `HapticParams::handover_distance`: the strands let go before they were
+    /// back in place are counted apart, [`HapticCore::early_handovers`]).
     pub fn handover_max(&self) -> f64 {
         self.handover_max
+    }
+    /// Strands let go back in place (handed over to the global layer) so far.
+    pub fn handovers(&self) -> u64 {
+        self.handovers
+    }
+    /// The strands let go before they were back in place (after `HapticParams::max_relax_time`, or by the strand
+    /// limit, wherever they were): their largest hand-over (as [`HapticCore::handover_max`], before the display's
+    /// fade), m, and how many so far.
+    pub fn early_handovers(&self) -> (f64, u64) {
+        (self.early_handover_max, self.early_handovers)
     }
     /// Length of each active strand, m (shorter than its guide's once cut).
     pub fn active_lengths(&self) -> Vec<f64> {

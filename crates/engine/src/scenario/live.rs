@@ -299,11 +299,18 @@ impl LiveScenario {
     /// [`LiveScenario::run_on`], also giving the run's record (`record`: the format of
     /// `coiffure serve --record`, replayable by [`crate::replay::replay`]).
     pub fn run_recorded(&self, scene: Arc<Scene>, record: bool) -> Result<(ForceTrace, LiveSummary, Option<Record>), ScenarioError> {
+        self.run_with(scene, record, |_| {})
+    }
+
+    /// [`LiveScenario::run_recorded`] with the session's parameters changed by `change` (tests: a law switched
+    /// off to show what it does).
+    pub(crate) fn run_with(&self, scene: Arc<Scene>, record: bool, change: impl FnOnce(&mut SessionParams)) -> Result<(ForceTrace, LiveSummary, Option<Record>), ScenarioError> {
         let (profile, tool, hair) = self.validate()?;
         let mut params = SessionParams { profile, device_rate_hz: self.live.device_rate, ..SessionParams::default() };
         params.haptic.hair_contact = self.live.hair_contact;
         params.haptic.treatment = self.live.treatment;
         params.haptic.entanglement = self.live.entanglement;
+        change(&mut params);
         params.validate().map_err(|e| ScenarioError::Invalid(format!("live session (live.device_rate and the rest): {e}")))?;
         let sim = |e: crate::error::SessionError| ScenarioError::Invalid(format!("live session: {e}"));
         let mut ls = Lockstep::new(scene.clone(), params, params.haptic_rate_hz).map_err(sim)?;
@@ -438,6 +445,12 @@ pub(crate) struct Meter {
     pub max_tip_speed: f64,
     /// The haptic layer's largest hand-over so far (`HapticCore::handover_max`), m.
     pub handover: f64,
+    /// Strands let go back in place so far (`HapticCore::handovers`).
+    pub handovers: u64,
+    /// The largest hand-over of a strand let go before it was back in place (`HapticCore::early_handovers`), m.
+    pub early_handover: f64,
+    /// How many strands were let go before they were back in place.
+    pub early_handovers: u64,
     /// Deepest sampled render vertex inside the body at a measure as the viewer shows it (the lattice's FFD,
     /// then the push-out out of the body, `MetaballSet::push_out` with `PUSH_OUT_SKIN`), m; 0 if none.
     pub max_depth: f64,
@@ -450,7 +463,7 @@ const DEPTH_SAMPLE_EVERY: usize = 25;
 
 impl Meter {
     fn new(scene: &Arc<Scene>) -> Self {
-        Self { scene: scene.clone(), settled: Vec::new(), params: ContinuityParams::default(), max: 0.0, last: 0.0, stroke_max: 0.0, in_hair: Vec::new(), in_hair_path: 0.0, moving: Vec::new(), moving_path: 0.0, last_tool: None, max_tip_speed: 0.0, handover: 0.0, max_depth: 0.0, max_depth_raw: 0.0 }
+        Self { scene: scene.clone(), settled: Vec::new(), params: ContinuityParams::default(), max: 0.0, last: 0.0, stroke_max: 0.0, in_hair: Vec::new(), in_hair_path: 0.0, moving: Vec::new(), moving_path: 0.0, last_tool: None, max_tip_speed: 0.0, handover: 0.0, handovers: 0, early_handover: 0.0, early_handovers: 0, max_depth: 0.0, max_depth_raw: 0.0 }
     }
     /// Guide points as shown, in the head frame (relative to the head), m.
     fn points(&self, ls: &Lockstep) -> Vec<Vector3<f64>> {
@@ -539,6 +552,8 @@ impl Meter {
         self.last_tool = input.present.then_some(input.position);
         self.max_tip_speed = self.max_tip_speed.max(ls.haptic.max_tip_speed());
         self.handover = ls.haptic.handover_max();
+        self.handovers = ls.haptic.handovers();
+        (self.early_handover, self.early_handovers) = ls.haptic.early_handovers();
     }
 }
 
@@ -704,16 +719,20 @@ mod tests {
         // least 10 guide samples where the jet's weight is above 0.25 at rest: the face has none) and is back
         // within 1 cm of its settled place 2.3 s after the jet stops, with the dryer still there. Nothing solid
         // is at the aim point: no tool contact at any step (the nozzle's body is at the nozzle, away from the
-        // hair). When the jet stops the nozzle's local strands leave the simulation (its choice follows the jet
-        // only while it blows), relax for at most `max_relax_time` and are let go back to their groom, their
-        // display fading out: the 1 cm at 2.3 s is met through that hand-over, not by the strands' own return.
-        // Reported, not asserted (issue 30 asks for a few mm; not met): the largest hand-over of a local strand
-        // to the global layer (`max_handover_m`, what the fade hides), up to 72 mm measured: blown strands on top
-        // and at the sides of the head come to rest 4-7 cm off their groom, held by gravity against the hold of
-        // the neighbours (not by friction: the same with the body's and the hair-hair friction off).
+        // hair). When the jet stops the nozzle's local strands leave the choice (it follows the jet only while it
+        // blows) and fall back by their own dynamics; a strand is handed over to the global layer once at rest
+        // and within `handover_distance` (2 mm) of where the global layer carries its guide: those hand-overs
+        // (`max_handover_m`, the hair drawn moving at a let-go, before any fade) are asserted under it.
+        // Reported, not asserted (issue 30 asks for a few mm; not met from every direction): the early hand-overs
+        // (`max_early_handover_m`) of strands not back in place 0.6 s after they left, let go there and put back
+        // on their groom (the display fades it over 0.3 s): from the front-top and the sides some guides on the
+        // crown were blown over their own roots (the first segment turned 50-90 degrees to the other side of its
+        // groomed direction) and rest there, 2-7 cm off. Neither friction (the same with the body's and the
+        // hair-hair friction off) nor the hold of the neighbours (at 1 cm and at 2 mm instead of 3 cm: still 4.9
+        // and 1.8 cm off) brings them back; kept simulated, they stay there (7.1 cm 2.3 s after, from [0, 1, 1]).
         let dirs: [[f64; 3]; 10] = [[0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 1.0], [-1.0, -1.0, 1.0], [1.0, -1.0, 0.0], [-1.0, 1.0, 0.3], [1.0, 0.0, 1.0]];
         let scene = Arc::new(Scene::builtin(&dryer_held([0.0, 0.0, 1.0], 0.1, 2.0, 4.3, &[], 2000).scene_options()).unwrap());
-        let (mut least_moved, mut worst_back, mut worst_handover) = ((f64::INFINITY, [0.0; 3]), (0.0f64, [0.0; 3]), 0.0f64);
+        let (mut least_moved, mut worst_back, mut worst_handover, mut worst_early, mut handovers, mut early) = ((f64::INFINITY, [0.0; 3]), (0.0f64, [0.0; 3]), 0.0f64, 0.0f64, 0, 0);
         for (k, d) in dirs.iter().enumerate() {
             let gap = 0.08 + 0.12 * k as f64 / (dirs.len() - 1) as f64;
             let s = dryer_held(*d, gap, 2.0, 4.3, &[], 2000);
@@ -721,10 +740,13 @@ mod tests {
             let cone = crate::tool::ToolInput { position: r.position, rotation: r.rotation, ..Default::default() }.cone(tools::dryer::HairDryer::default().cone, crate::params::GlobalParams::default().nozzle_standoff);
             let in_jet = scene.guides.iter().flat_map(|g| &g.reference).filter(|p| cone.weight(p).0 > 0.25).count();
             let (_, m) = s.run_on(scene.clone()).unwrap();
-            eprintln!("dryer from {d:?}, nozzle {gap:.2} m from the head, {in_jet} guide samples in the jet: moved {:.1} mm, 2.3 s after {:.1} mm; hand-over {:.1} mm; contact steps {}, wall {:.1} s", m.max_displacement_m * 1e3, m.final_max_displacement_m * 1e3, m.max_handover_m * 1e3, m.contact_steps, m.wall_time_s);
+            eprintln!("dryer from {d:?}, nozzle {gap:.2} m from the head, {in_jet} guide samples in the jet: moved {:.1} mm, 2.3 s after {:.1} mm; hand-over {:.2} mm ({} strands), early {:.1} mm ({} strands); contact steps {}, wall {:.1} s", m.max_displacement_m * 1e3, m.final_max_displacement_m * 1e3, m.max_handover_m * 1e3, m.handovers, m.max_early_handover_m * 1e3, m.early_handovers, m.contact_steps, m.wall_time_s);
             assert_eq!((m.rejected_readings, m.failed_steps), (0, 0));
             assert_eq!(m.contact_steps, 0, "dryer from {d:?}: something solid met the hair");
+            assert!(m.max_handover_m <= crate::params::HapticParams::default().handover_distance + 1e-12, "dryer from {d:?}: a hand-over moved the hair drawn by {} m", m.max_handover_m);
             worst_handover = worst_handover.max(m.max_handover_m);
+            worst_early = worst_early.max(m.max_early_handover_m);
+            (handovers, early) = (handovers + m.handovers, early + m.early_handovers);
             if in_jet >= 10 && m.max_displacement_m < least_moved.0 {
                 least_moved = (m.max_displacement_m, *d);
             }
@@ -732,9 +754,72 @@ mod tests {
                 worst_back = (m.final_max_displacement_m, *d);
             }
         }
-        eprintln!("worst: least moved {:.1} mm (from {:?}, hair in the jet), farthest 2.3 s after {:.1} mm (from {:?}); largest hand-over {:.1} mm", least_moved.0 * 1e3, least_moved.1, worst_back.0 * 1e3, worst_back.1, worst_handover * 1e3);
+        eprintln!("worst: least moved {:.1} mm (from {:?}, hair in the jet), farthest 2.3 s after {:.1} mm (from {:?}); largest hand-over {:.2} mm ({handovers} strands), early {:.1} mm ({early} strands)", least_moved.0 * 1e3, least_moved.1, worst_back.0 * 1e3, worst_back.1, worst_handover * 1e3, worst_early * 1e3);
         assert!(least_moved.0 >= 0.02, "the jet moves the hair: {} m from {:?}", least_moved.0, least_moved.1);
         assert!(worst_back.0 <= 0.01, "the hair falls back: {} m 2.3 s after, from {:?}", worst_back.0, worst_back.1);
+    }
+
+    /// A `[live]` comb or brush stroke (`shape`) as examples/scenarios/live-comb.toml's (in from behind, drawn
+    /// 11 cm down through the hair at 0.15 m/s, pulled out, then 1.2 s of rest), turned about the head's
+    /// vertical axis by `yaw` (rad: 0 the back, positive towards the head's left), on hair type `hair`, 2000
+    /// render strands.
+    fn stroke_turned(shape: &str, yaw: f64, hair: &str) -> LiveScenario {
+        let mut s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-comb.toml")).unwrap();
+        let turn = Rotation3::from_axis_angle(&Vector3::z_axis(), yaw);
+        for w in &mut s.tool.path {
+            w.position = (turn * Vector3::from(w.position)).into();
+            w.rotation = (turn * Rotation3::new(Vector3::from(w.rotation))).scaled_axis().into();
+        }
+        s.tool.shape = shape.into();
+        s.live.hair_type = hair.into();
+        s.live.render_strands = 2000;
+        s
+    }
+
+    #[test]
+    fn no_hand_over_moves_the_hair_drawn_by_more_than_the_handover_distance() {
+        // Issue 30: a local strand leaves the simulation only once its own dynamics has brought it back within
+        // `handover_distance` (2 mm) of where the global layer carries its guide, so the hair drawn never jumps at
+        // the hand-over (`max_handover_m`: the largest change of a guide point drawn at a let-go, before the
+        // display's fade). Generated over every hair preset: for each, a comb and a brush stroke down the hair
+        // at a placement turned about the head (8 placements from one side over the back to the other, over the
+        // 7 presets' two strokes), and the dryer held still from one of the 10 directions of
+        // `a_dryer_held_anywhere_blows_the_hair_and_it_falls_back_while_it_stays`, blowing 1 s then not for
+        // 1.3 s. Asserted in every case: the hand-over bound, strands handed over (else the bound says nothing),
+        // no failed step. Reported: the worst case, and how far the hair drawn is from its settled place at the
+        // end.
+        use strand::HairType;
+        let bound = crate::params::HapticParams::default().handover_distance;
+        let dirs: [[f64; 3]; 7] = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [-1.0, -1.0, 1.0], [1.0, -1.0, 0.0], [-1.0, 1.0, 0.3]];
+        let (mut worst, mut worst_early, mut cases, mut handed) = ((0.0f64, String::new()), (0.0f64, String::new()), 0, 0);
+        for (k, h) in HairType::ALL.iter().enumerate() {
+            let name = h.name.to_lowercase();
+            let mut runs: Vec<(String, LiveScenario)> = Vec::new();
+            for (j, shape) in ["comb", "brush"].iter().enumerate() {
+                // Over the back half of the head, from one side (-90 degrees) to the other (+90): the hair.
+                let yaw = std::f64::consts::PI * (((2 * k + j) % 8) as f64 / 7.0 - 0.5);
+                runs.push((format!("{name} {shape} at {:.0} deg", yaw.to_degrees()), stroke_turned(shape, yaw, &name)));
+            }
+            let mut dryer = dryer_held(dirs[k], 0.08 + 0.02 * k as f64, 1.0, 2.3, &[], 2000);
+            dryer.live.hair_type = name.clone();
+            runs.push((format!("{name} dryer from {:?}", dirs[k]), dryer));
+            for (what, s) in runs {
+                let (_, m) = s.run().unwrap();
+                eprintln!("{what}: hand-over {:.2} mm ({} strands), early (not back in place after 0.6 s, or the strand limit) {:.1} mm ({} strands); moved {:.1} mm, at the end {:.1} mm", m.max_handover_m * 1e3, m.handovers, m.max_early_handover_m * 1e3, m.early_handovers, m.max_displacement_m * 1e3, m.final_max_displacement_m * 1e3);
+                if m.max_early_handover_m >= worst_early.0 {
+                    worst_early = (m.max_early_handover_m, what.clone());
+                }
+                assert_eq!((m.rejected_readings, m.failed_steps), (0, 0), "{what}");
+                assert!(m.max_handover_m <= bound + 1e-12, "{what}: a hand-over moved the hair drawn by {} m", m.max_handover_m);
+                cases += 1;
+                handed += (m.handovers > 0) as usize;
+                if m.max_handover_m >= worst.0 {
+                    worst = (m.max_handover_m, what);
+                }
+            }
+        }
+        eprintln!("{cases} cases, {handed} with strands let go; largest hand-over {:.2} mm ({}); largest early hand-over (not bounded; faded) {:.1} mm ({})", worst.0 * 1e3, worst.1, worst_early.0 * 1e3, worst_early.1);
+        assert!(handed * 2 > cases, "strands were let go in only {handed} of {cases} cases");
     }
 
     #[test]

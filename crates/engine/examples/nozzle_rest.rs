@@ -42,7 +42,7 @@ fn main() {
         for n in 0..1500 {
             let r = it.step(1e-3, far).unwrap();
             if n == 0 { pairs = r.hair_pairs; }
-            if n % 10 == 9 { for (k, &i) in near.iter().enumerate() { let now = hairstyle::generate::sample_strand(&it.strands[k].model, &it.strands[k].state, 16); for (p, q) in now.iter().zip(&scene.guides[i].reference) { worst = worst.max((p.coords - q).norm()); } } }
+            if n % 10 == 9 { for (k, &i) in near.iter().enumerate() { let now = strand::kinematics::centerline(&it.strands[k].model, &it.strands[k].state, 16); for ((_, p), q) in now.iter().zip(&scene.guides[i].reference) { worst = worst.max((p - q).norm()); } } }
         }
         println!("{} guides near the dryer, fibres {fibres}, groomed rest shapes {rest}: {pairs} hair pairs at the first step; largest displacement in 1.5 s {worst:.4} m", near.len());
     }

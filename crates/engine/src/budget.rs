@@ -8,7 +8,7 @@
 //! and raises it again once the steps would have room for more: the loop keeps its rate at the price of
 //! fewer strands near the tool (a lighter force, bench/RESULTS.md), rather than late steps.
 //!
-//! Its decisions reach the simulation as [`Command::LimitStrands`], applied by the haptic thread before its
+//! Its decisions reach the simulation as [`crate::command::Command::LimitStrands`], applied by the haptic thread before its
 //! next step and recorded like the viewer's commands, so a replay of the record makes the same choices
 //! without timing anything (the headless scenarios and the replays never run a budget of their own).
 //!
@@ -24,7 +24,6 @@
 //!    after the last change and while the limit binds (as many strands simulated as it allows): with the
 //!    comb out of the hair the steps are cheap whatever the limit.
 
-use crate::command::Command;
 use crate::error::SessionError;
 
 /// Parameters of the live haptic thread's [`StrandBudget`], each with its meaning, unit and default.
@@ -89,7 +88,8 @@ impl BudgetParams {
 }
 
 /// The live haptic thread's strand budget (see the module's documentation): fed every step's wall time,
-/// it returns the [`Command::LimitStrands`] to apply before the next step when the limit changes.
+/// it returns the new limit when it changes, applied as [`crate::command::Command::LimitStrands`] before the
+/// next step.
 #[derive(Debug, Clone)]
 pub struct StrandBudget {
     params: BudgetParams,
@@ -129,9 +129,9 @@ impl StrandBudget {
         self.mean.unwrap_or(0.0)
     }
 
-    /// Takes a step that took `seconds` of wall time with `simulated` strands simulated; returns the command
-    /// that changes the limit, to apply before the next step, if it changes.
-    pub fn observe(&mut self, seconds: f64, simulated: usize) -> Option<Command> {
+    /// Takes a step that took `seconds` of wall time with `simulated` strands simulated; returns the new limit
+    /// (strands), to apply before the next step as [`crate::command::Command::LimitStrands`], if it changes.
+    pub fn observe(&mut self, seconds: f64, simulated: usize) -> Option<usize> {
         let t = if seconds.is_finite() { seconds.clamp(0.0, 2.0 * self.period) } else { 2.0 * self.period };
         let a = (self.period / self.params.time_constant).min(1.0);
         let mean = self.mean.map_or(t, |m| m + a * (t - m));
@@ -148,7 +148,7 @@ impl StrandBudget {
         r.lowest = r.lowest.min(self.limit);
         r.last = self.limit;
         r.limited_steps += (self.limit < self.max) as u64;
-        next.map(|n| Command::LimitStrands(n as u32))
+        next
     }
 
     /// The limit after a step with the running mean `mean` (s) and `simulated` strands, if it changes (stages 2
@@ -197,8 +197,8 @@ mod tests {
         (0..steps)
             .map(|_| {
                 let n = budget.limit();
-                if let Some(Command::LimitStrands(m)) = budget.observe(fixed + per_strand * n as f64, n) {
-                    assert_eq!(m as usize, budget.limit());
+                if let Some(m) = budget.observe(fixed + per_strand * n as f64, n) {
+                    assert_eq!(m, budget.limit());
                 }
                 budget.limit()
             })

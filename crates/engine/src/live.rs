@@ -233,7 +233,7 @@ impl Session {
                 hap_in.publish();
             }
             if let Some(b) = budget.as_mut() {
-                b.change = b.budget.observe(started.elapsed().as_secs_f64(), core.active().len());
+                b.change = b.budget.observe(started.elapsed().as_secs_f64(), core.active().len()).map(|n| Command::LimitStrands(n as u32));
             }
             core.published()
         };

@@ -4,7 +4,7 @@
 
 pub use crate::budget::BudgetParams;
 use crate::error::SessionError;
-use crate::record::RecordParams;
+use crate::record::params::RecordParams;
 use haptics::device::DeviceProfile;
 use haptics::target::TargetParams;
 

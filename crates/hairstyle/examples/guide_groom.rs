@@ -4,7 +4,6 @@
 //! moved from the combing-plane groom (largest distance of a centreline point, 33 samples); generation time of
 //! the guides alone (10 render strands), best of 5. Run:
 //! `cargo run --release -p coiffure-hairstyle --example guide_groom`
-use hairstyle::generate::sample_strand;
 use hairstyle::groom::{groom_directions, groomed_state};
 use hairstyle::{Hairstyle, HairstyleParams};
 use rayon::prelude::*;
@@ -42,7 +41,7 @@ fn main() {
             straight.rest.iter_mut().for_each(|r| *r = nalgebra::Vector3::zeros());
             let f0 = groom_directions(&p, &g.root, f64::INFINITY)[0];
             let plane = groomed_state(&p, &h.head, &straight, &g.root, &f0, None).unwrap();
-            let d = sample_strand(&straight, &plane, 33).iter().zip(g.samples(33)).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+            let d = strand::kinematics::centerline(&straight, &plane, 33).iter().zip(g.samples(33)).map(|((_, a), b)| (a - b.coords).norm()).fold(0.0, f64::max);
             if d < 1e-12 {
                 kept += 1;
             } else if g.state.q.iter().step_by(2).any(|t| *t != 0.0) {

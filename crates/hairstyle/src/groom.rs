@@ -13,7 +13,7 @@
 //!
 //! ## The grooms tried, in order (the first stable one is kept, [`crate::generate`])
 //! 1. **Planar** ([`groomed_bends`]) in the plane `(n, f)` of the root normal `n` and the combing
-//!    direction `f` (the projection of [`crate::generate::combing_direction`] onto the scalp): it leaves
+//!    direction `f` (the projection of [`combing_direction`] onto the scalp): it leaves
 //!    the scalp along `n`, turns towards `f` at the curvature `(pi/2) / lift` for up to 90 degrees,
 //!    wraps round the head at the lifted radius `rho = |root| + lift / (pi/2) + clearance` until its
 //!    tangent is the steepest descent in that plane less the outward lean `tilt`, then goes straight.
@@ -27,11 +27,34 @@
 //!
 //! Each is tried with the smallest outward lean `tilt` (from [`HairstyleParams::hang_tilt`], in 5 degree
 //! steps) that keeps the guide outside the body ([`groomed_state`]).
-use crate::generate::{combing_direction, HairstyleParams};
-use crate::generate::sample_strand;
+use crate::params::HairstyleParams;
 use crate::head::{Head, ScalpPoint};
 use nalgebra::Vector3;
 use strand::{RootFrame, StrandError, StrandModel, StrandState};
+
+/// Range of the forward component of a root's unit direction from the head centre over which
+/// grooming turns from [`HairstyleParams::flow`] (below the first value: the back and the sides) to
+/// [`HairstyleParams::fringe_flow`] (above the second: the forehead), smoothstep in between.
+pub const FLOW_FRONT_BLEND: (f64, f64) = (0.5, 0.85);
+/// The direction (not unit; of the order of |p| where it matters) a guide rooted at `p` (m, head
+/// frame) is combed along, before projection onto the scalp: away from [`HairstyleParams::flow`] on
+/// the back and the sides, [`HairstyleParams::fringe_flow`] (mirrored on the left) at the front.
+pub fn combing_direction(params: &HairstyleParams, p: &Vector3<f64>) -> Vector3<f64> {
+    let r = p.norm();
+    let away = p - params.flow.normalize() * r;
+    let (a, b) = FLOW_FRONT_BLEND;
+    let t = ((p.y / r.max(1e-12) - a) / (b - a)).clamp(0.0, 1.0);
+    let w = t * t * (3.0 - 2.0 * t);
+    let Some(fringe) = params.fringe_flow.filter(|_| w > 0.0) else {
+        return away;
+    };
+    let mut side = fringe.normalize();
+    if p.x < 0.0 {
+        side.x = -side.x;
+    }
+    let back = away.try_normalize(1e-9).unwrap_or(side);
+    (back + w * (side - back)) * r
+}
 
 /// Largest tilts of the grooming plane from the vertical tried in turn (groom 3 of the module docs),
 /// radians (`INFINITY`: the combing direction as it is); 0 (an upright plane, hair combed straight
@@ -149,7 +172,7 @@ pub fn groomed_state(
             s.q[2 * i] = *t;
             s.q[2 * i + 1] = *b;
         }
-        let clear = sample_strand(model, &s, 64).iter().skip(1).all(|p| head.signed_distance(p) >= 0.5 * params.clearance);
+        let clear = strand::kinematics::centerline(model, &s, 64).iter().skip(1).all(|(_, p)| head.signed_distance(&nalgebra::Point3::from(*p)) >= 0.5 * params.clearance);
         state = Some(s);
         if clear {
             break;

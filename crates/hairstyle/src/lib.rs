@@ -12,6 +12,7 @@
 #![warn(missing_docs)]
 
 pub mod cut;
+pub mod error;
 pub mod fit;
 pub mod formats;
 pub mod generate;
@@ -19,6 +20,7 @@ pub mod global;
 pub mod groom;
 pub mod head;
 pub mod limits;
+pub mod params;
 pub mod render;
 
 pub use formats::{info, read_file, write_file, FormatError, HairCurves};

@@ -1,7 +1,7 @@
 //! Render strands bound to guides: the binding law ([`nearest_guides`]: the nearest guides by root,
 //! inverse-square weights) and the strands following their guides' centrelines ([`RenderStrands`]).
 
-use crate::generate::GenerateError;
+use crate::error::GenerateError;
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 

@@ -1,10 +1,15 @@
 //! Head, scalp and hairstyle generation.
 
-use hairstyle::generate::{sample_strand, CURL_RADIUS_MIN, CURL_RAMP, RENDER_GAP};
+use hairstyle::generate::{CURL_RADIUS_MIN, CURL_RAMP, RENDER_GAP};
 use hairstyle::{Curl, GenerateError, Hairstyle, HairstyleParams, Head, HeadParams};
 use nalgebra::{Point3, Vector3};
 use std::collections::HashMap;
 use strand::{HairType, ModelKind, RootFrame, Strand, StrandModel, StrandState};
+
+/// A strand's centreline at `n` points evenly spaced in arc length (m): `strand::kinematics::centerline`'s points.
+fn sample_strand(model: &strand::StrandModel, state: &strand::StrandState, n: usize) -> Vec<nalgebra::Point3<f64>> {
+    strand::kinematics::centerline(model, state, n).into_iter().map(|(_, p)| nalgebra::Point3::from(p)).collect()
+}
 
 fn small(curliness: f64, seed: u64) -> HairstyleParams {
     HairstyleParams {

@@ -32,7 +32,8 @@
 //! physics' (1 kHz) or the device's (4-10 kHz, several updates per model), with the passivity observer at
 //! the rate of the update.
 
-use crate::device::{DeviceProfile, DeviceReading};
+use crate::profile::DeviceProfile;
+use crate::reading::DeviceReading;
 use nalgebra::{Matrix3, Vector3};
 use thiserror::Error;
 

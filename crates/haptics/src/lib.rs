@@ -10,6 +10,8 @@ pub mod coupling;
 pub mod device;
 pub mod haptic_loop;
 pub mod local_model;
+pub mod profile;
+pub mod reading;
 pub mod realtime;
 pub mod sim;
 pub mod target;

@@ -8,7 +8,8 @@
 //! kept).
 
 use crate::coupling::CouplingParams;
-use crate::device::{DeviceProfile, DeviceReading};
+use crate::profile::DeviceProfile;
+use crate::reading::DeviceReading;
 use nalgebra::Vector3;
 
 /// Default scale, dimensionless: a Phantom Omni's 16 x 7 x 12 cm workspace covers 32 x 14 x 24 cm of the

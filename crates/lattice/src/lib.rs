@@ -14,6 +14,8 @@ pub mod cluster;
 pub mod ffd;
 pub mod lattice;
 pub mod metaball;
+pub mod model;
+pub mod params;
 pub mod sag_free;
 mod solver;
 pub mod workspace;

@@ -4,8 +4,8 @@
 //! and the conjugate-gradient solve of the contact system (A + D) dv = b preconditioned by it
 //! ([`pcg_contacts`]). The derivation is in the docs of [`crate::lattice`].
 
-use crate::lattice::{BendingJacobian, FactorPrecision, FillOrdering, LatticeModel};
-use crate::workspace::StepWork;
+use crate::model::LatticeModel;
+use crate::params::{BendingJacobian, FactorPrecision, FillOrdering};
 use nalgebra::Vector3;
 
 /// A symmetric scalar sparse matrix in compressed rows (node by node), applied to the three
@@ -364,6 +364,38 @@ pub(crate) fn apply_with_contacts(f: &Factor, contacts: &[Contact], n: usize, y:
         let yn = c.normal.x * y[i] + c.normal.y * y[n + i] + c.normal.z * y[2 * n + i];
         for k in 0..3 {
             out[k * n + i] += c.s * yn * c.normal[k];
+        }
+    }
+}
+
+/// Scratch buffers of the step (no allocation per step once sized).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct StepWork {
+    pub(crate) force: Vec<Vector3<f64>>,
+    pub(crate) b: Vec<f64>,
+    pub(crate) x: Vec<f64>,
+    pub(crate) r: Vec<f64>,
+    pub(crate) z: Vec<f64>,
+    pub(crate) d: Vec<f64>,
+    pub(crate) ad: Vec<f64>,
+    pub(crate) contacts: Vec<Contact>,
+    pub(crate) scratch: SolveScratch,
+}
+
+impl StepWork {
+    pub(crate) fn resize(&mut self, n: usize) {
+        if self.force.len() != n {
+            self.force = vec![Vector3::zeros(); n];
+            for v in [
+                &mut self.b,
+                &mut self.x,
+                &mut self.r,
+                &mut self.z,
+                &mut self.d,
+                &mut self.ad,
+            ] {
+                *v = vec![0.0; 3 * n];
+            }
         }
     }
 }

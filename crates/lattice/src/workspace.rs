@@ -3,9 +3,9 @@
 //! changes) and the step's scratch buffers. Two workspaces are never compared: they hold no
 //! physical state, only what makes the next step cheaper.
 
-use crate::lattice::{BendingJacobian, FactorPrecision, FillOrdering, LatticeModel, LatticeParams};
-use crate::solver::{Contact, Factor, SolveScratch};
-use nalgebra::Vector3;
+use crate::model::LatticeModel;
+use crate::params::{BendingJacobian, FactorPrecision, FillOrdering, LatticeParams};
+use crate::solver::{Factor, StepWork};
 
 /// The workspace of a lattice's steps (see the module docs): give every step of one state the same
 /// workspace, or a fresh one (`LatticeWorkspace::default()`: the first step factorises again).
@@ -25,38 +25,6 @@ impl LatticeWorkspace {
     /// [`LatticeParams::factor_precision`]), if factorised yet.
     pub fn factor_bytes(&self) -> Option<usize> {
         self.cache.factor_bytes()
-    }
-}
-
-/// Scratch buffers of the step (no allocation per step once sized).
-#[derive(Debug, Clone, Default)]
-pub(crate) struct StepWork {
-    pub(crate) force: Vec<Vector3<f64>>,
-    pub(crate) b: Vec<f64>,
-    pub(crate) x: Vec<f64>,
-    pub(crate) r: Vec<f64>,
-    pub(crate) z: Vec<f64>,
-    pub(crate) d: Vec<f64>,
-    pub(crate) ad: Vec<f64>,
-    pub(crate) contacts: Vec<Contact>,
-    pub(crate) scratch: SolveScratch,
-}
-
-impl StepWork {
-    pub(crate) fn resize(&mut self, n: usize) {
-        if self.force.len() != n {
-            self.force = vec![Vector3::zeros(); n];
-            for v in [
-                &mut self.b,
-                &mut self.x,
-                &mut self.r,
-                &mut self.z,
-                &mut self.d,
-                &mut self.ad,
-            ] {
-                *v = vec![0.0; 3 * n];
-            }
-        }
     }
 }
 

@@ -26,6 +26,39 @@ const LATEST_ONLY: [u8; 3] = [server::CONTROL, server::DEVICE, server::STRANDS];
 /// Messages a new SCENE makes stale (they describe the previous hairstyle).
 const STALE_AFTER_SCENE: [u8; 3] = [server::SCENE, server::STRANDS, server::FIT];
 
+/// Why a viewer is disconnected: the WebSocket close code it is sent and the reason's text.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum CloseReason {
+    /// A message over the size limit: close 1009 (message too big).
+    TooBig(String),
+    /// The viewer does not keep up (behind for its time limit, or its queue overflowed): close 1008 (policy
+    /// violation).
+    Behind(String),
+}
+
+impl CloseReason {
+    /// The WebSocket close code (RFC 6455, section 7.4.1).
+    pub fn code(&self) -> u16 {
+        match self {
+            CloseReason::TooBig(_) => 1009,
+            CloseReason::Behind(_) => 1008,
+        }
+    }
+
+    /// The reason's text.
+    pub fn text(&self) -> &str {
+        match self {
+            CloseReason::TooBig(t) | CloseReason::Behind(t) => t,
+        }
+    }
+}
+
+impl std::fmt::Display for CloseReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.text())
+    }
+}
+
 #[derive(Default)]
 struct Queue {
     items: VecDeque<(Instant, Vec<u8>)>,
@@ -39,9 +72,9 @@ pub struct Outbox {
     queue: Mutex<Queue>,
     ready: Notify,
     /// Why the viewer is being disconnected (None while it is not).
-    close: watch::Sender<Option<String>>,
+    close: watch::Sender<Option<CloseReason>>,
     /// A reason to disconnect once the queue is sent (a last ERROR goes out first).
-    close_after: Mutex<Option<String>>,
+    close_after: Mutex<Option<CloseReason>>,
     /// When the send in progress started, ms after `epoch` plus 1 (0: none in progress).
     sending_since: AtomicU64,
     epoch: Instant,
@@ -75,7 +108,7 @@ impl Outbox {
             (q.items.len() > OUTBOX_CAPACITY || q.bytes > OUTBOX_BYTES).then(|| (q.items.len(), q.bytes))
         };
         match over {
-            Some((n, bytes)) => self.disconnect(format!("outgoing queue full ({n} messages, {bytes} bytes; at most {OUTBOX_CAPACITY} and {OUTBOX_BYTES}): the viewer does not read")),
+            Some((n, bytes)) => self.disconnect(CloseReason::Behind(format!("outgoing queue full ({n} messages, {bytes} bytes; at most {OUTBOX_CAPACITY} and {OUTBOX_BYTES}): the viewer does not read"))),
             None => self.ready.notify_one(),
         }
     }
@@ -100,7 +133,7 @@ impl Outbox {
     }
 
     /// Marks the viewer for disconnection with `reason` (the first reason stays), and frees its queue.
-    pub fn disconnect(&self, reason: String) {
+    pub fn disconnect(&self, reason: CloseReason) {
         let first = self.close.send_if_modified(|r| r.is_none() && {
             *r = Some(reason.clone());
             true
@@ -112,7 +145,7 @@ impl Outbox {
     }
 
     /// Marks the viewer for disconnection with `reason` once what is queued is sent ([`Outbox::close_now`]).
-    pub fn disconnect_after_queue(&self, reason: String) {
+    pub fn disconnect_after_queue(&self, reason: CloseReason) {
         self.close_after.lock().unwrap().get_or_insert(reason);
         self.ready.notify_one();
     }
@@ -130,7 +163,7 @@ impl Outbox {
     }
 
     /// A receiver that sees the close reason when the viewer is marked for disconnection.
-    pub fn closing(&self) -> watch::Receiver<Option<String>> {
+    pub fn closing(&self) -> watch::Receiver<Option<CloseReason>> {
         self.close.subscribe()
     }
 
@@ -141,14 +174,14 @@ impl Outbox {
     }
 
     /// Why the viewer is behind, if it has been for its limit: a message waiting or a send unfinished.
-    pub fn behind(&self) -> Option<String> {
+    pub fn behind(&self) -> Option<CloseReason> {
         let since = self.sending_since.load(Ordering::Relaxed);
         let now = self.epoch.elapsed();
         if since > 0 && now.saturating_sub(Duration::from_millis(since - 1)) > self.limit {
-            return Some(format!("a send has not finished for {} s: the viewer does not keep up", self.limit.as_secs_f64()));
+            return Some(CloseReason::Behind(format!("a send has not finished for {} s: the viewer does not keep up", self.limit.as_secs_f64())));
         }
         let oldest = self.queue.lock().unwrap().items.front().map(|(t, _)| t.elapsed());
-        oldest.filter(|&a| a > self.limit).map(|a| format!("a message has waited {:.1} s: the viewer does not keep up", a.as_secs_f64()))
+        oldest.filter(|&a| a > self.limit).map(|a| CloseReason::Behind(format!("a message has waited {:.1} s: the viewer does not keep up", a.as_secs_f64())))
     }
 }
 
@@ -191,7 +224,7 @@ mod tests {
         }
         assert!(closing.borrow().is_none());
         o.post(msg(server::PONG, 6));
-        assert!(closing.borrow().as_deref().is_some_and(|r| r.contains("outgoing queue full")));
+        assert!(closing.borrow().as_ref().is_some_and(|r| r.code() == 1008 && r.text().contains("outgoing queue full")));
         assert_eq!(o.bytes(), 0, "freed");
         o.post(msg(server::PONG, 6));
         assert_eq!(o.bytes(), 0, "nothing queued after");
@@ -211,10 +244,10 @@ mod tests {
         assert!(o.behind().is_none(), "just started");
         o.epoch -= BEHIND_LIMIT + Duration::from_millis(50);
         o.sending_since.store(1, Ordering::Relaxed); // started at the epoch, 3.05 s ago
-        assert!(o.behind().is_some_and(|r| r.contains("send has not finished")));
+        assert!(o.behind().is_some_and(|r| r.code() == 1008 && r.text().contains("send has not finished")));
         o.sending(false);
         assert!(o.behind().is_none());
         o.queue.lock().unwrap().items.push_back((Instant::now() - BEHIND_LIMIT - Duration::from_millis(1), msg(server::PONG, 6)));
-        assert!(o.behind().is_some_and(|r| r.contains("has waited")));
+        assert!(o.behind().is_some_and(|r| r.code() == 1008 && r.text().contains("has waited")));
     }
 }

@@ -430,8 +430,16 @@ fn encode_scene_metaballs(out: &mut Vec<u8>, head: &lattice::metaball::MetaballS
     }
 }
 
-/// Byte offset of the FRAME flags byte (bit 0: the receiving viewer controls the tool), patched per viewer.
+/// Byte offset of the FRAME's sequence number (u32, little-endian), after the 2-byte header.
+pub const FRAME_SEQ_OFFSET: usize = 2;
+/// Byte offset of the FRAME flags byte (bit 0: the receiving viewer controls the tool), patched per viewer:
+/// after the header (2), the sequence number (4), the time (f32, 4) and the tool (u8, 1).
 pub const FRAME_FLAGS_OFFSET: usize = 11;
+
+/// The sequence number of a FRAME message's bytes, or None if `frame` is too short to hold one.
+pub fn frame_seq(frame: &[u8]) -> Option<u32> {
+    Some(u32::from_le_bytes(frame.get(FRAME_SEQ_OFFSET..FRAME_SEQ_OFFSET + 4)?.try_into().ok()?))
+}
 
 /// FRAME message: what changed since the last frame (never the render strands).
 pub fn encode_frame(seq: u32, lat: &LatticeSnapshot, h: &HapticSnapshot) -> Vec<u8> {
@@ -555,6 +563,21 @@ mod tests {
             }
             m => panic!("{m:?}"),
         }
+    }
+
+    #[test]
+    fn the_frame_header_offsets_name_what_encode_frame_writes_there() {
+        // The sequence number and the flags byte (patched per viewer) at their named offsets, for sequence
+        // numbers across the u32 range and every tool; a message too short has no sequence number.
+        for (seq, tool) in [(0u32, 0u8), (1, 1), (0xdead_beef, 2), (u32::MAX, 3)] {
+            let h = HapticSnapshot { tool_rotation: Matrix3::identity(), tool, time: 1.5, ..Default::default() };
+            let f = encode_frame(seq, &LatticeSnapshot::default(), &h);
+            assert_eq!(frame_seq(&f), Some(seq));
+            assert_eq!(f[FRAME_FLAGS_OFFSET], 0, "flags are zero until patched");
+            assert_eq!(f[FRAME_FLAGS_OFFSET - 1], tool, "the tool byte comes just before the flags");
+            assert_eq!(&f[FRAME_SEQ_OFFSET + 4..FRAME_SEQ_OFFSET + 8], &1.5f32.to_le_bytes(), "the time follows the sequence number");
+        }
+        assert_eq!(frame_seq(&[server::FRAME, VERSION, 1, 2, 3]), None);
     }
 
     #[test]

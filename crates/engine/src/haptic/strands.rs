@@ -139,7 +139,7 @@ pub(crate) fn contact_options(ei: f64) -> ConstraintOptions {
 
 /// `samples` centreline points of a strand evenly in arc length, root to tip, m.
 pub(crate) fn centreline(s: &Strand, samples: usize) -> Vec<Vector3<f64>> {
-    hairstyle::generate::sample_strand(&s.model, &s.state, samples).into_iter().map(|p| p.coords).collect()
+    strand::kinematics::centerline(&s.model, &s.state, samples).into_iter().map(|(_, p)| p).collect()
 }
 
 /// `samples` centreline points of a strand at the arc lengths of its uncut guide (`length`, m, evenly from root

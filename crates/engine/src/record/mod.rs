@@ -36,6 +36,7 @@
 
 pub mod chunk;
 mod format;
+pub mod params;
 pub mod settings;
 pub mod stream;
 

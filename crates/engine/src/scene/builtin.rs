@@ -37,7 +37,7 @@ impl Scene {
             .guides
             .iter()
             .map(|g| {
-                let reference = hairstyle::generate::sample_strand(&g.model, &g.state, opts.samples).into_iter().map(|p| p.coords).collect();
+                let reference = strand::kinematics::centerline(&g.model, &g.state, opts.samples).into_iter().map(|(_, p)| p).collect();
                 Guide { model: g.model.clone(), state: g.state.clone(), reference, stable: g.stable }
             })
             .collect();

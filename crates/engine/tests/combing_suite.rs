@@ -246,8 +246,6 @@ fn the_combing_law_meets_the_measured_anchors() {
         "asian wet/dry peak",
         "african dry peak / H1 dry peak",
         "african wet peak / dry peak",
-        "caucasian bleached / virgin, wet",
-        "caucasian bleached twice / virgin, wet",
     ];
     // (criterion, value, each layout's value, bounds)
     let mut checks: Vec<(String, f64, Vec<f64>, (f64, f64))> = Vec::new();

@@ -276,7 +276,8 @@ pub struct HapticParams {
     pub hold_damping: f64,
     /// Surface treatment of the hair (`tools::treatment::Treatment`: virgin, conditioned, bleached, bleached
     /// twice): scales the tool's and the fibres' friction, dry and wet, by the one friction law
-    /// (`Treatment::friction`), as `[patch] treatment` does in the tress scenarios. Default virgin.
+    /// (`Treatment::friction`), and with `entanglement` the drag's capillary forces by its wettability
+    /// (`Treatment::wettability`), as `[patch] treatment` does in the tress scenarios. Default virgin.
     pub treatment: tools::treatment::Treatment,
 }
 

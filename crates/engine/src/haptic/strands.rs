@@ -136,7 +136,7 @@ impl HapticCore {
         it.hold_gravity = self.scene.guides.first().map(|g| g.model.gravity.norm());
         it.hair_contact = self.hair_contact(0.0);
         if self.params.haptic.entanglement {
-            it.entanglement = Some(Entanglement::default());
+            it.entanglement = Some(Entanglement { wettability: self.params.haptic.treatment.wettability(), ..Entanglement::default() });
         }
         self.interaction = it;
     }

@@ -211,9 +211,11 @@ pub struct HapticParams {
     /// (an early hand-over, measured apart: `HapticCore::early_handovers`).
     pub handover_distance: f64,
     /// A leaving strand not back in place (`handover_distance`) this long after it left is let go wherever it
-    /// is and put back on its groom, its display fading over `blend_time` (an early hand-over), s. Default 0.6
-    /// (wisps blown or combed across each other rest held by their contact, up to about 2 cm off their place:
-    /// issue 30, docs/scenarios.md).
+    /// is and put back on its groom, its display fading over `blend_time` (an early hand-over), s. Default 1.5:
+    /// within issue 30's 2.3 s after a dryer stops, less the fade. A critically damped hold brings most strands
+    /// back within 2 mm in 0.3-1 s (at 0.6 s, 141 strands of the 10 held dryers were let go early, the largest
+    /// 16.8 mm off; at 1.5 s, 40, the largest 17.9 mm); what is still off then is held by its contact with
+    /// other local strands (wisps blown across each other at 30-60 degrees: issue 30, docs/scenarios.md).
     pub max_relax_time: f64,
     /// A strand let go whose tip is farther than this from its groomed tip returns to its groomed shape
     /// (what the viewer shows once it has faded out), m. Default 0.005.
@@ -283,7 +285,7 @@ pub struct HapticParams {
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, handover_distance: 0.002, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03, hold_damping: 1.0, treatment: tools::treatment::Treatment::Virgin }
+        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, handover_distance: 0.002, max_relax_time: 1.5, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03, hold_damping: 1.0, treatment: tools::treatment::Treatment::Virgin }
     }
 }
 

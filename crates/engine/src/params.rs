@@ -212,8 +212,8 @@ pub struct HapticParams {
     pub handover_distance: f64,
     /// A leaving strand not back in place (`handover_distance`) this long after it left is let go wherever it
     /// is and put back on its groom, its display fading over `blend_time` (an early hand-over), s. Default 0.6
-    /// (strands the jet or the comb laid over their own roots rest there, centimetres off their place: issue
-    /// 30, docs/scenarios.md).
+    /// (wisps blown or combed across each other rest held by their contact, up to about 2 cm off their place:
+    /// issue 30, docs/scenarios.md).
     pub max_relax_time: f64,
     /// A strand let go whose tip is farther than this from its groomed tip returns to its groomed shape
     /// (what the viewer shows once it has faded out), m. Default 0.005.
@@ -259,7 +259,21 @@ pub struct HapticParams {
     /// push on it (~1e-4 N). With it that record gives 4.1 cm (0.01: 4.7 cm; the peak force 0.14 N against
     /// 0.086 N without; docs/physics.md).
     /// Default 0.03.
+    /// The hold also **carries the strand's weight** at its place, as the sag-free lattice's pre-stressed springs
+    /// carry the global layer's (docs/global.md): the local strands' models have no gravity of their own and their
+    /// rest shape is their groomed shape (`HapticCore::build_strands`; with no hold, infinite, they keep their own
+    /// weight and the sag-free rest). A single fibre's sag-free rest instead
+    /// stored a root curvature of up to 200 rad/m (the gravity moment of 20 cm of hair over the crown, about
+    /// 1e-6 N m, over EI, about 5e-9 N m^2): a second, flipped equilibrium, where guides blown over their own
+    /// roots came to rest 2-7 cm off their place (issue 30).
     pub hold_distance: f64,
+    /// Damping ratio of the hold (dimensionless; 1: critical): the hair volume damps a local strand's return to
+    /// its place as a linear drag `2 zeta sqrt(|g| / hold_distance)` times its linear density (N s/m^2) added to
+    /// its air drag (on its absolute velocity, as the lattice's attachment damping). Default 1: between the
+    /// lattice's stiffeners (0.5) and attachment (1.5) (`HairLatticeParams`); the strands come back within
+    /// `handover_distance` in about 0.3 s (at 0.1, the air's drag alone, they still swung after
+    /// `max_relax_time`).
+    pub hold_damping: f64,
     /// Surface treatment of the hair (`tools::treatment::Treatment`: virgin, conditioned, bleached, bleached
     /// twice): scales the tool's and the fibres' friction, dry and wet, by the one friction law
     /// (`Treatment::friction`), and with `entanglement` the drag's capillary forces by its wettability
@@ -269,7 +283,7 @@ pub struct HapticParams {
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, handover_distance: 0.002, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03, treatment: tools::treatment::Treatment::Virgin }
+        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, handover_distance: 0.002, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03, hold_damping: 1.0, treatment: tools::treatment::Treatment::Virgin }
     }
 }
 
@@ -297,6 +311,9 @@ impl HapticParams {
         }
         if !(self.hold_distance > 0.0) {
             return p(format!("haptic.hold_distance must be > 0 m (infinite: no hold), got {}", self.hold_distance));
+        }
+        if !(self.hold_damping >= 0.0 && self.hold_damping.is_finite()) {
+            return p(format!("haptic.hold_damping must be a finite damping ratio >= 0, got {}", self.hold_damping));
         }
         if !(self.rest_speed > 0.0 && self.rest_speed.is_finite()) {
             return p(format!("haptic.rest_speed must be > 0 m/s, got {}", self.rest_speed));

@@ -66,11 +66,14 @@ pub(crate) struct Member {
     pub tip_speed: f64,
     /// Let go before it was back in place (after `max_relax_time`, or by the strand limit).
     pub early: bool,
+    /// Found back in place: its hand-over then ([`HapticCore::handover_jump`] on that step's lattice, the one
+    /// its let-go is decided on), m.
+    pub in_place: Option<f64>,
 }
 
 impl Member {
     fn joining() -> Self {
-        Self { phase: Phase::Chosen, weight: 0.0, tip: None, tip_speed: 0.0, early: false }
+        Self { phase: Phase::Chosen, weight: 0.0, tip: None, tip_speed: 0.0, early: false, in_place: None }
     }
 }
 
@@ -300,6 +303,7 @@ impl HapticCore {
             if chosen.contains(g) {
                 m.phase = Phase::Chosen;
                 m.early = false;
+                m.in_place = None;
             } else if m.phase == Phase::Chosen {
                 m.phase = Phase::Relaxing { since: 0.0, still: 0.0 };
             }
@@ -374,13 +378,15 @@ impl HapticCore {
                 let g = old_guides[i];
                 let weight = old_members.get(i).map_or(0.0, |m| m.weight);
                 let early = old_members.get(i).is_some_and(|m| m.early);
+                let in_place = old_members.get(i).and_then(|m| m.in_place).filter(|_| !early);
                 if weight > 0.0 {
                     let pts = samples_along(&s, self.scene.guides[g].model.length, samples);
                     // The hand-over: how far the hair drawn moves (before the display's fade): the strand's shown
-                    // displacement from its place carried by the global layer, at the nodes last seen.
+                    // displacement from its place carried by the global layer; for a strand found back in place,
+                    // as measured then (the lattice it was checked on), else at the nodes last seen.
                     let mut cache = self.references.borrow_mut();
                     let ok = cache.has_nodes(self.scene.lattice.node_count());
-                    let jump = pts.iter().zip(cache.bases(&self.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max);
+                    let jump = in_place.unwrap_or_else(|| pts.iter().zip(cache.bases(&self.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max));
                     drop(cache);
                     if early {
                         self.early_handover_max = self.early_handover_max.max(jump);
@@ -473,8 +479,10 @@ impl HapticCore {
             }
         }
         for k in resting {
-            if self.handover_jump(k, lattice) <= h.handover_distance {
+            let jump = self.handover_jump(k, lattice);
+            if jump <= h.handover_distance {
                 self.members[k].phase = Phase::Fading;
+                self.members[k].in_place = Some(jump);
             }
         }
         for f in &mut self.faded {

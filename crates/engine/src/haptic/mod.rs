@@ -201,7 +201,7 @@ impl HapticCore {
     pub fn new(scene: Arc<Scene>, params: SessionParams) -> Result<Self, SessionError> {
         params.validate()?;
         let h = scene.hair_type;
-        let strands = Self::build_strands(&scene, &h, 0.0, params.haptic.min_air_drag)?;
+        let strands = Self::build_strands(&scene, &h, 0.0, &params.haptic)?;
         let sets = strands.iter().map(|s| SetState::new(&s.model)).collect();
         let strands = strands.into_iter().map(Some).collect();
         let start = Vector3::from(params.haptic.start);
@@ -210,6 +210,7 @@ impl HapticCore {
         let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape(params.global.nozzle_standoff)).collect();
         let mut interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
         interaction.hold_distance = params.haptic.hold_distance;
+        interaction.hold_gravity = scene.guides.first().map(|g| g.model.gravity.norm());
         let bounds = active::GuideBounds::new(&scene);
         let side = DeviceSide::new(params, shapes.clone(), (scene.head.clone(), scene.lattice.params.metaball.threshold));
         Ok(Self {
@@ -235,7 +236,7 @@ impl HapticCore {
                 self.clear_active();
                 self.clipped = false;
                 if h != self.hair_type || c != self.curliness {
-                    if let Ok(s) = Self::build_strands(&self.scene, &h, c, self.params.haptic.min_air_drag) {
+                    if let Ok(s) = Self::build_strands(&self.scene, &h, c, &self.params.haptic) {
                         self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
                         self.strands = s.into_iter().map(Some).collect();
                     }
@@ -270,7 +271,7 @@ impl HapticCore {
             Command::Reset => {
                 // Back to the store first: if the rebuild fails, the store keeps every strand.
                 self.clear_active();
-                if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, self.params.haptic.min_air_drag) {
+                if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, &self.params.haptic) {
                     self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
                     self.strands = s.into_iter().map(Some).collect();
                 }

@@ -77,9 +77,10 @@ pub struct Entanglement {
     /// adhesion of the order of the surface tension per unit length).
     pub adhesion: f64,
     /// The hair surface's capillary forces relative to virgin hair's, dimensionless: `cos theta_r / cos
-    /// theta_r(virgin)` of water's receding contact angles on the two surfaces (`crate::treatment::Treatment::
-    /// wettability`: 1 for virgin and conditioned hair, 2.0 for bleached hair). Scales the adhesion between wet
-    /// fibres and the fibre's side of the bridge on the tooth. Default 1 (virgin hair).
+    /// theta_r(virgin)` of water's receding contact angles on the two surfaces
+    /// ([`crate::treatment::Treatment::wettability`]: 1 for virgin and conditioned hair, 2.0 for bleached hair).
+    /// Scales the adhesion between wet fibres and the fibre's side of the bridge on the tooth. Default 1 (virgin
+    /// hair).
     ///
     /// Only the ratio to virgin hair is taken from the contact angles: the virgin levels (`adhesion`, the
     /// bridge's) stay the complete-wetting estimates. With virgin hair's measured receding angle (60 degrees,

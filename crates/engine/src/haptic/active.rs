@@ -26,8 +26,8 @@
 //!    whose tip is farther than `HapticParams::rest_distance` from its groomed tip returns to its groomed
 //!    shape (in the store: what it joins from next time); the displacement shown of where it was fades out
 //!    over `blend_time` ([`Faded`], no longer simulated). Nothing stays frozen where the tool left it.
-//! 4. When chosen and relaxing strands together exceed `max_active`, the relaxing ones that left first are
-//!    let go first, wherever they are (an early hand-over too): at
+//! 4. When chosen and relaxing strands together exceed `max_active`, relaxing ones are let go, those whose hair
+//!    drawn is nearest its place first (their hand-over moves it least), wherever they are (an early hand-over too): at
 //!    most `max_active` strands are simulated (the step's cost is bounded). A strand limit
 //!    below it (`Command::LimitStrands`, the live thread's strand budget, `crate::budget`) takes its place: a
 //!    new choice takes the same share of it as `max_chosen` of `max_active`, and the relaxing strands beyond
@@ -269,9 +269,9 @@ impl HapticCore {
                 self.join(&chosen, &guides, &mut members);
             }
         }
-        // Beyond the strand limit the relaxing strands that left first are let go (after a lowered limit, also
-        // when no guide joins).
-        Self::let_go_beyond(self.strand_limit, &mut members);
+        // Beyond the strand limit relaxing strands are let go, those nearest their place first (after a lowered
+        // limit, also when no guide joins).
+        self.let_go_beyond(self.strand_limit, &mut members);
         // (The simulated strands' members come first, in order: what the rebuild measures of a leaving one.)
         for (m, new) in self.members.iter_mut().zip(&members) {
             m.early = new.early;
@@ -325,20 +325,21 @@ impl HapticCore {
         }
     }
 
-    /// While more than `limit` strands (`max_active`, or the strand limit) would stay simulated, the relaxing
-    /// ones that left first are let go (marked Fading). Chosen strands are never let go here: a choice takes
-    /// at most [`HapticCore::chosen_limit`] <= `limit`.
-    fn let_go_beyond(limit: usize, members: &mut [Member]) {
+    /// While more than `limit` strands (`max_active`, or the strand limit) would stay simulated, relaxing ones are
+    /// let go (marked Fading): those whose hair drawn is nearest its carried place first (their hand-over moves it
+    /// least; [`HapticCore::shown_offset`]), then those that left first. Chosen strands are never let go here: a
+    /// choice takes at most [`HapticCore::chosen_limit`] <= `limit`.
+    fn let_go_beyond(&self, limit: usize, members: &mut [Member]) {
         let mut over = members.iter().filter(|m| m.phase != Phase::Fading).count().saturating_sub(limit);
         if over == 0 {
             return;
         }
-        let mut relaxing: Vec<(f64, usize)> = members.iter().enumerate().filter_map(|(i, m)| match m.phase {
-            Phase::Relaxing { since, .. } => Some((since, i)),
+        let mut relaxing: Vec<(f64, f64, usize)> = members.iter().enumerate().filter_map(|(i, m)| match m.phase {
+            Phase::Relaxing { since, .. } => Some((self.shown_offset(i), since, i)),
             _ => None,
         }).collect();
-        relaxing.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        for (_, i) in relaxing {
+        relaxing.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.total_cmp(&a.1)).then(a.2.cmp(&b.2)));
+        for (_, _, i) in relaxing {
             if over == 0 {
                 break;
             }
@@ -346,6 +347,19 @@ impl HapticCore {
             members[i].early = true;
             over -= 1;
         }
+    }
+
+    /// How far the hair drawn for simulated strand `slot` is from where the global layer carries its guide (at the
+    /// nodes last seen, the hold's cache), m: what its hand-over would move it by; infinite for a slot not
+    /// simulated yet.
+    fn shown_offset(&self, slot: usize) -> f64 {
+        let (Some(&g), Some(s)) = (self.active.get(slot), self.interaction.strands.get(slot)) else { return f64::INFINITY };
+        let weight = self.members.get(slot).map_or(1.0, |m| m.weight);
+        let guide = &self.scene.guides[g];
+        let pts = samples_along(s, guide.model.length, self.scene.samples());
+        let mut cache = self.references.borrow_mut();
+        let ok = cache.has_nodes(self.scene.lattice.node_count());
+        pts.iter().zip(cache.bases(&self.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max)
     }
 
     /// Moves the strands to the new membership `guides` (`members` parallel): the staying strands move over,

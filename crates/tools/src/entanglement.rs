@@ -64,8 +64,9 @@ pub struct Entanglement {
     /// Free length of a fibre between the entanglement points that hold it sideways in the tress, m.
     /// Default 6.6 mm: calibrated on the H1 tress scenario (`examples/scenarios/comb-h1.toml`: 4.75 g, 24 wisps of
     /// 20 cm, combed at 0.25 m/s) against the measured dry force (J. Soc. Cosmet. Chem. 24, 1973, Table I:
-    /// 12-13 gf, i.e. 0.12 N; here 0.089 N peak, 0.066 N median, chosen at the low side so that the stiffest
-    /// type, H2, stays inside the acceptance's 0.24 N); the bending share goes as `span^-3`. A few millimetres
+    /// 12-13 gf, i.e. 0.12 N; chosen at the low side so that the stiffest type, H2, stays inside the
+    /// acceptance's 0.24 N; the forces it gives today: docs/combing.md); the bending share goes as `span^-3`.
+    /// A few millimetres
     /// between crossings is what a combed, nearly aligned tress shows (fibres cross their neighbours at small
     /// angles).
     pub span: f64,
@@ -85,7 +86,7 @@ pub struct Entanglement {
     /// Only the ratio to virgin hair is taken from the contact angles: the virgin levels (`adhesion`, the
     /// bridge's) stay the complete-wetting estimates. With virgin hair's measured receding angle (60 degrees,
     /// cos 0.5) in them as well, the capillary terms would halve and the straight presets' wet/dry peak ratio
-    /// fall to 2.2-2.6 (docs/combing.md), below the 7-8 measured: the meniscus at the contact lines is not all
+    /// fall far below the 7-8 measured (docs/combing.md gives the ratios): the meniscus at the contact lines is not all
     /// of the wet adhesion (the Laplace pressure of the water held between the fibres adds to it; not modelled).
     pub wettability: f64,
     /// Relative speed of the tooth through the wisp at and above which the drag reaches its full Coulomb force,

@@ -394,7 +394,7 @@ impl HapticCore {
     /// Stages the viewer's next snapshot, a share of it a step: the displacements of every
     /// `SessionParams::publish_every`-th simulated strand (this step's share of the slots) are mapped and kept,
     /// so that [`HapticCore::snapshot`] copies them rather than mapping every strand in the step that
-    /// publishes (66-118 us at 64 strands, every 5th step). Call once after each step where snapshots are
+    /// publishes (a cost that step alone would pay). Call once after each step where snapshots are
     /// published every `publish_every` steps; without it the snapshot maps every strand itself.
     pub fn stage_snapshot(&self, lattice: &LatticeSnapshot) {
         let every = self.params.publish_every.max(1);

@@ -148,8 +148,8 @@ impl HapticCore {
 /// (`tools::entanglement::Entanglement::fibre_stiffness`, the span of the tress calibration, 6.6 mm; caucasian
 /// dry 0.48 N/m, against the solver's default cap of 100 N/m). A simulated guide is a chain of rigid-curvature
 /// segments (8 of 2.5 cm in the built-in hairstyle) and stands for hundreds of fibres, so a tooth pressing it near its
-/// root, or two teeth shearing it on opposite sides, met the whole segment's resistance and the solver's cap:
-/// 2-6 mN per guide, 1-3 N at the hand (issue 12's upward strokes). A real fibre there bends over one span.
+/// root, or two teeth shearing it on opposite sides, met the whole segment's resistance and the solver's cap
+/// (newtons at the hand on issue 12's upward strokes). A real fibre there bends over one span.
 pub(crate) fn contact_options(ei: f64) -> ConstraintOptions {
     ConstraintOptions { max_stiffness: Entanglement::default().fibre_stiffness(ei), ..ConstraintOptions::default() }
 }

@@ -7,9 +7,10 @@
 //! - **Haptic threads** ([`DeviceLoop`]): the device loop (4 kHz by default) reads the browser's mouse
 //!   through a [`VirtualDevice`] (or a device) and runs the virtual coupling against the local force model
 //!   the physics thread (1 kHz, [`HapticCore`]) publishes as it steps the *local strands*: the few guide strands
-//!   nearest the tool (Super-Helices). Their roots follow the lattice (FFD of the root's rest position, so
-//!   head and lattice motion move them); their displacement from their settled reference shape is published
-//!   for the viewer, which adds it to the render strands bound to each guide (so what the tool does is seen
+//!   nearest the tool (Super-Helices). Their roots stay with the head (rigid: head motion moves them, the
+//!   tool-deformed lattice does not; `crate::haptic`); their displacement from their settled reference
+//!   shape is published for the viewer, which adds it to the render strands bound to each guide (so what
+//!   the tool does is seen
 //!   on the whole hairstyle). Strand states persist when they leave the active set (styling persists).
 //! - Nothing on the haptic path takes a lock: lattice snapshots come in and haptic snapshots go out through
 //!   triple buffers, viewer commands through a non-blocking channel.

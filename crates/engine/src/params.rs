@@ -45,11 +45,10 @@ pub struct SessionParams {
     /// strands around a comb for a continuous force (issue 12).
     pub max_chosen: usize,
     /// Most guide strands simulated at once: the chosen ones and those still relaxing after they left (the
-    /// relaxing ones that left first are let go first beyond it; strands let go are no longer simulated while
-    /// their shown displacement fades out), >= `max_chosen`. Bounds the haptic step's cost. Default 56: the
-    /// hold of the neighbours (`HapticParams::hold_distance`, 2026-11-27) made a step with the comb in the hair
-    /// ~15 % dearer at 64; 56 keeps the mean step where 64 had it (live_profile on bench/device-comb.toml: mean
-    /// 514 us against 508-527 us before, 593-596 us at 64) with the peak force 0.104 N (0.110 N before;
+    /// relaxing ones whose hair drawn is nearest its carried place are let go first beyond it; strands let go
+    /// are no longer simulated while their shown displacement fades out), >= `max_chosen`. Bounds the haptic
+    /// step's cost. Default 56 (64 before the hold of the neighbours, `HapticParams::hold_distance`, made a step
+    /// with the comb in the hair dearer; 56 keeps the mean step where 64 had it: docs/physics.md, step costs in
     /// bench/RESULTS.md).
     pub max_active: usize,
     /// A guide joins the active set when its settled shape comes within this distance of the tool's shape
@@ -166,8 +165,8 @@ pub struct HapticParams {
     /// far less than `lookahead`).
     pub choice_steps: usize,
     /// Most guides that join the active set in one haptic step: the guides a finished choice adds join in
-    /// turns, nearest first, from the step after the scan ended (each joining strand costs ~5 us of the step;
-    /// a choice adds up to `max_chosen`), >= 1. Default 4 (48 guides join within 12 ms, far less than
+    /// turns, nearest first, from the step after the scan ended (a joining strand's set-up is paid in the step
+    /// it joins; a choice adds up to `max_chosen`), >= 1. Default 4 (48 guides join within 12 ms, far less than
     /// `lookahead`).
     pub joins_per_step: usize,
     /// The clip pins the strand point nearest its jaws if it is within this distance, m. Default 0.01.
@@ -211,9 +210,11 @@ pub struct HapticParams {
     /// (an early hand-over, measured apart: `HapticCore::early_handovers`).
     pub handover_distance: f64,
     /// A leaving strand not back in place (`handover_distance`) this long after it left is let go wherever it
-    /// is and put back on its groom, its display fading over `blend_time` (an early hand-over), s. Default 0.6
-    /// (strands the jet or the comb laid over their own roots rest there, centimetres off their place: issue
-    /// 30, docs/scenarios.md).
+    /// is and put back on its groom, its display fading over `blend_time` (an early hand-over), s. Default 1.5:
+    /// within issue 30's 2.3 s after a dryer stops, less the fade. A critically damped hold brings most strands
+    /// back within `handover_distance` well before; what is still off then is mostly held by its contact with
+    /// other local strands (wisps blown across each other: issue 30, docs/scenarios.md). How many strands go
+    /// early and how far off, at this and at 0.6 s: bench/RESULTS.md, the hand-over rows.
     pub max_relax_time: f64,
     /// A strand let go whose tip is farther than this from its groomed tip returns to its groomed shape
     /// (what the viewer shows once it has faded out), m. Default 0.005.
@@ -229,46 +230,59 @@ pub struct HapticParams {
     pub hydrogen_share: f64,
     /// The local strands touch each other (contact and Coulomb friction, `tools::hair_contact`; each guide a
     /// wisp of the real hairs it stands for, `HapticCore::hair_contact`; each contact solved for both strands
-    /// together). Default true (since every groomed guide is a stable equilibrium, issue 12: the `[live]`
-    /// acceptance stroke, live-comb.toml, then gives 0.058 N peak, 0.032 N largest step, no clamp, guides 6.5 cm
-    /// from their settled place during the stroke and 2.4 mm 1.2 s after, force above 5 mN in 65 % of the
-    /// in-hair steps; measured 2026-11-24, docs/scenarios.md).
+    /// together). Default true (since every groomed guide is a stable equilibrium, issue 12; what the `[live]`
+    /// acceptance stroke, live-comb.toml, gives with it: docs/scenarios.md, "The live comb stroke", and
+    /// bench/RESULTS.md).
     pub hair_contact: bool,
     /// Guides that overlap in the groom keep that overlap: two local strands closer than their contact
     /// distance in their groomed shapes touch only closer than their groomed distance (`tools::hair_contact`'s
-    /// rest shapes, set when a strand joins the simulation). The groomed guides are independent curves and 68
-    /// pairs of the built-in 200 lie closer than the contact distance; pushed apart they moved guides 13.4 cm
-    /// with a dryer held still beside the hair (issue 12). Default true.
+    /// rest shapes, set when a strand joins the simulation). The groomed guides are independent curves and
+    /// some pairs of the built-in groom lie closer than the contact distance; pushed apart they moved guides by
+    /// centimetres with a dryer held still beside the hair (issue 12; bench/RESULTS.md, the dryer-held-still
+    /// row). Default true.
     pub groomed_overlap: bool,
     /// The tool drags through the local strands against the fibres it parts (`tools::entanglement`, the tress
     /// scenarios' law: bending of the parted fibres and, wet, the water bridges on the tooth; each guide's
-    /// drag times the real hairs it stands for). Default false. On (measured 2026-11-28, with the hold of the
-    /// neighbours): the `[live]` down stroke (examples/scenarios/live-comb.toml) meets issue 12's acceptance
-    /// (0.24 N peak, guides 2.8 cm from their settled place, force above 5 mN in 98.7 % of its in-hair steps,
-    /// 0.013 N largest step), but the strokes up and down (live-comb-updown.toml) carry guides 0.123 m (0.08 m
-    /// allowed; tips 2.2 m/s: a tooth drawn towards the roots drags the parted fibres up with it), and the haptic
-    /// step costs about 50 us (11 %) more (`live_profile bench/device-comb.toml`: mean 517-527 vs 464-474 us).
+    /// drag times the real hairs it stands for). Default false: on, the `[live]` down stroke
+    /// (examples/scenarios/live-comb.toml) meets issue 12's acceptance, but the strokes up and down
+    /// (live-comb-updown.toml) carry guides farther than the acceptance allows (a tooth drawn towards the roots
+    /// drags the parted fibres up with it), and the haptic step costs more (figures: docs/scenarios.md, "The
+    /// combing law since issue 29").
     pub entanglement: bool,
     /// The hold of the unsimulated neighbours on each local strand (`tools::interaction::LocalInteraction::
     /// hold_distance`): a spring per unit length towards the strand's place in the hair volume (its groom
     /// carried by the lattice) that carries the strand's own weight at this displacement, m; infinite: none.
     /// A simulated guide has one fibre's mechanics, and groomed along the curved head it is only a local
-    /// equilibrium: pushed far enough by a slow comb it rolled round the side of the head (13.8 cm in the
-    /// replayed record of issue 12's failing browser stroke), where real hair is held by the hair around it.
-    /// A whole guide 3 cm out of place is pulled back by its weight (1.4e-5 N for 25 cm), below the tool's
-    /// push on it (~1e-4 N). With it that record gives 4.1 cm (0.01: 4.7 cm; the peak force 0.14 N against
-    /// 0.086 N without; docs/physics.md).
+    /// equilibrium: pushed far enough by a slow comb it rolled round the side of the head (the replayed record
+    /// of issue 12's failing browser stroke), where real hair is held by the hair around it. A whole guide 3 cm
+    /// out of place is pulled back by its weight (1.4e-5 N for 25 cm), below the tool's push on it (~1e-4 N).
+    /// What that record gives with and without the hold: docs/physics.md.
     /// Default 0.03.
+    /// The hold also **carries the strand's weight** at its place, as the sag-free lattice's pre-stressed springs
+    /// carry the global layer's (docs/global.md): the local strands' models have no gravity of their own and their
+    /// rest shape is their groomed shape (`HapticCore::build_strands`; with no hold, infinite, they keep their own
+    /// weight and the sag-free rest). A single fibre's sag-free rest instead
+    /// stored a root curvature of up to 200 rad/m (the gravity moment of 20 cm of hair over the crown, about
+    /// 1e-6 N m, over EI, about 5e-9 N m^2): a second, flipped equilibrium, where guides blown over their own
+    /// roots came to rest 2-7 cm off their place (issue 30).
     pub hold_distance: f64,
+    /// Damping ratio of the hold (dimensionless; 1: critical): the hair volume damps a local strand's return to
+    /// its place as a linear drag `2 zeta sqrt(|g| / hold_distance)` times its linear density (N s/m^2) added to
+    /// its air drag (on its absolute velocity, as the lattice's attachment damping). Default 1: between the
+    /// lattice's stiffeners (0.5) and attachment (1.5) (`HairLatticeParams`); the strands come back within
+    /// `handover_distance` in about 0.3 s (at 0.1, the air's drag alone, they still swung after
+    /// `max_relax_time`).
+    pub hold_damping: f64,
     /// Surface treatment of the hair (`tools::treatment::Treatment`: virgin, conditioned, bleached, bleached
     /// twice): scales the tool's and the fibres' friction, dry and wet, by the one friction law
-    /// (`Treatment::friction`), as `[patch] treatment` does in the tress scenarios. Default virgin.
+    /// (`Treatment::friction`), and with `entanglement` the drag's capillary forces by its wettability
+    /// (`Treatment::wettability`), as `[patch] treatment` does in the tress scenarios. Default virgin.
     pub treatment: tools::treatment::Treatment,
 }
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, handover_distance: 0.002, max_relax_time: 0.6, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03, treatment: tools::treatment::Treatment::Virgin }
+        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, handover_distance: 0.002, max_relax_time: 1.5, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03, hold_damping: 1.0, treatment: tools::treatment::Treatment::Virgin }
     }
 }
 
@@ -296,6 +310,9 @@ impl HapticParams {
         }
         if !(self.hold_distance > 0.0) {
             return p(format!("haptic.hold_distance must be > 0 m (infinite: no hold), got {}", self.hold_distance));
+        }
+        if !(self.hold_damping >= 0.0 && self.hold_damping.is_finite()) {
+            return p(format!("haptic.hold_damping must be a finite damping ratio >= 0, got {}", self.hold_damping));
         }
         if !(self.rest_speed > 0.0 && self.rest_speed.is_finite()) {
             return p(format!("haptic.rest_speed must be > 0 m/s, got {}", self.rest_speed));

@@ -7,9 +7,9 @@
 //! potential has a negative eigenvalue (the hanging part swings towards the vertical, twisting the
 //! strand first: the reduced Super-Helix bends about one material axis only). The rest shape does not
 //! enter that Hessian (the elastic energy is quadratic with a constant diagonal K), so no choice of
-//! rest shape can fix it: only the groomed **shape** can. Measured on the built-in scene with planar
-//! grooms in the combing plane (200 guides, 8 segments): all 33 guides whose hanging part was within
-//! 10 degrees of the vertical were stable, 97 of the 124 beyond 20 degrees were not (112 in all).
+//! rest shape can fix it: only the groomed **shape** can: planar grooms in the combing plane are stable
+//! when their hanging part is near the vertical, and mostly not when it leans (figures: docs/global.md,
+//! "Hairstyle generation").
 //!
 //! ## The grooms tried, in order (the first stable one is kept, [`crate::generate`])
 //! 1. **Planar** ([`groomed_bends`]) in the plane `(n, f)` of the root normal `n` and the combing

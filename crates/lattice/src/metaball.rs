@@ -275,7 +275,7 @@ impl MetaballSet {
     /// push-out's first test ([`MetaballSet::distance`] against the skin) rearranged, without division or
     /// square root: a caller with many points mostly
     /// clear of the body tests them with this first, and pushes out the others (the local strands' body
-    /// contacts: 38-46 us a step against 47-55 us). False does not mean the push-out moves `x`.
+    /// contacts, cheaper a step than pushing out every point). False does not mean the push-out moves `x`.
     pub fn clear_of(&self, x: &Point3<f64>, threshold: f64, skin: f64) -> bool {
         let skin = push_out_skin(skin);
         let (f, g) = self.field_and_gradient(x);

@@ -34,6 +34,18 @@ pub struct CarriedAnswer {
     pub positions: Vec<f64>,
 }
 
+/// A request from its JSON body; Err names what is wrong and where (the field's path, e.g. `head_rotation` or
+/// `nodes[3]`, and the line and column).
+pub fn parse(body: &[u8]) -> Result<CarriedRequest, String> {
+    let mut de = serde_json::Deserializer::from_slice(body);
+    let req: CarriedRequest = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        let path = e.path().to_string();
+        if path == "." || path == "?" { format!("not a carried request: {}", e.inner()) } else { format!("not a carried request: {path}: {}", e.inner()) }
+    })?;
+    de.end().map_err(|e| format!("not a carried request: {e}"))?;
+    Ok(req)
+}
+
 /// The requested vertices of `scene`'s render strands where `Scene::render_vertex` puts them on the request's
 /// lattice and head pose, without local strands' displacements (those are added after the carry, as the viewer
 /// adds them after its carried texture). Err names what is wrong with the request.
@@ -45,13 +57,18 @@ pub fn carried(scene: &Scene, req: &CarriedRequest) -> Result<CarriedAnswer, Str
     if let Some(i) = req.nodes.iter().position(|x| !x.is_finite()) {
         return Err(format!("nodes: number {i} is not finite"));
     }
-    if !req.head_rotation.iter().chain(&req.head_translation).all(|x| x.is_finite()) {
-        return Err("head_rotation and head_translation must be finite".into());
+    for (name, v) in [("head_rotation", &req.head_rotation[..]), ("head_translation", &req.head_translation[..])] {
+        if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+            return Err(format!("{name}: number {i} is not finite"));
+        }
     }
     let m = Matrix3::from_row_slice(&req.head_rotation);
     let off = (m.transpose() * m - Matrix3::identity()).abs().max();
-    if off > 1e-4 || m.determinant() < 0.0 {
+    if off > 1e-4 {
         return Err(format!("head_rotation is not a rotation (R^T R differs from I by {off:.2e})"));
+    }
+    if m.determinant() < 0.0 {
+        return Err(format!("head_rotation is not a rotation (a reflection: determinant {:.3})", m.determinant()));
     }
     if req.vertices.len() > MAX_VERTICES {
         return Err(format!("vertices: {} asked, at most {MAX_VERTICES}", req.vertices.len()));
@@ -71,4 +88,34 @@ pub fn carried(scene: &Scene, req: &CarriedRequest) -> Result<CarriedAnswer, Str
         positions.extend_from_slice(scene.render_vertex(&nodes, &head, &none, i, j).as_slice());
     }
     Ok(CarriedAnswer { positions })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn non_finite_poses_and_nodes_are_named() {
+        // JSON has no NaN or infinity (crates/server/tests/carried.rs: the parser refuses them); a Rust caller can
+        // still pass them: each is refused naming the field and the number.
+        let scene = Scene::builtin(&engine::scene::SceneOptions { render_strands: 200, ..Default::default() }).unwrap();
+        let good = CarriedRequest { nodes: scene.lattice.ffd.rest_positions().iter().flat_map(|p| [p.x, p.y, p.z]).collect(), head_rotation: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], head_translation: [0.0; 3], vertices: vec![0, 3] };
+        let at_rest = carried(&scene, &good).unwrap();
+        assert_eq!(at_rest.positions.len(), 6);
+        for (i, x) in at_rest.positions.iter().enumerate() {
+            let want = scene.render.positions[if i < 3 { 0 } else { 3 }][i % 3] as f64;
+            assert!((x - want).abs() < 1e-6, "vertex at rest: {x} vs {want}");
+        }
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut r = good.clone();
+            r.nodes[7] = bad;
+            assert_eq!(carried(&scene, &r).unwrap_err(), "nodes: number 7 is not finite");
+            let mut r = good.clone();
+            r.head_rotation[4] = bad;
+            assert_eq!(carried(&scene, &r).unwrap_err(), "head_rotation: number 4 is not finite");
+            let mut r = good.clone();
+            r.head_translation[2] = bad;
+            assert_eq!(carried(&scene, &r).unwrap_err(), "head_translation: number 2 is not finite");
+        }
+    }
 }

@@ -6,7 +6,7 @@
 //! - the runs are grouped by median splits of their boxes' centres along the longest axis (a few dozen runs:
 //!   the only sorting, over strands, not pieces).
 //! A build therefore costs about a refit (the active set changes every few dozen haptic steps; a median split
-//! over every piece took 130-230 us for 1,536 pieces). A query returns the overlapping pieces in ascending
+//! over every piece cost far more than that). A query returns the overlapping pieces in ascending
 //! index order, whatever the tree's shape, so what the caller does with them does not depend on the tree.
 
 use crate::geometry::Aabb;

@@ -160,6 +160,10 @@ pub struct LocalInteraction {
     /// `k = lambda |g| / hold_distance` (N/m per m of strand), applied explicitly at [`HOLD_LOADS`] points per
     /// strand. Infinite: no hold. Default infinite.
     pub hold_distance: f64,
+    /// The gravity |g| the hold's spring is scaled with, m/s^2; None: each strand model's own. A caller whose
+    /// strands carry no weight of their own (the hair volume carries it, e.g. the live session's local strands,
+    /// whose models have no gravity) gives the scene's. Default None.
+    pub hold_gravity: Option<f64>,
     /// Which strands get their hold this step ([`HOLD_EVERY`]).
     hold_phase: usize,
     /// Constraint model: Coulomb friction coefficient of the body contacts (dimensionless, >= 0): a strand
@@ -304,6 +308,7 @@ impl LocalInteraction {
             body_friction: 0.0,
             holds: Vec::new(),
             hold_distance: f64::INFINITY,
+            hold_gravity: None,
             hold_phase: 0,
             hair_contact: None,
             entanglement: None,
@@ -364,7 +369,7 @@ impl LocalInteraction {
         let mut loads = [None; HOLD_LOADS];
         let (Some(Some(hold)), Some(strand)) = (self.holds.get(k), self.strands.get(k)) else { return loads };
         // Spring per unit length, N/m per m, times HOLD_EVERY (this strand's turn stands for that many steps).
-        let stiffness = HOLD_EVERY as f64 * strand.model.linear_density() * strand.model.gravity.norm() / self.hold_distance;
+        let stiffness = HOLD_EVERY as f64 * strand.model.linear_density() * self.hold_gravity.unwrap_or_else(|| strand.model.gravity.norm()) / self.hold_distance;
         let length = strand.model.length.max(1e-9);
         // Per run along the strand: sum of s x piece length (m^2), of piece lengths (m), of forces (N).
         let mut runs = [(0.0, 0.0, Vector3::zeros()); HOLD_LOADS];

@@ -1,6 +1,7 @@
 //! The surface treatment of the hair (virgin, conditioned, bleached once or twice) as a physical input: what
 //! each does to the fibre's surface, as friction coefficients of fibre on fibre and of a tool on the fibre, dry
-//! and wet. Sources, and where a figure is missing and how it was set: `docs/treatment.md`.
+//! and wet, and as the receding contact angle of water on it (its wettability, [`Treatment::wettability`]).
+//! Sources, and where a figure is missing and how it was set: `docs/treatment.md`.
 //!
 //! The model's coefficients keep their own homes (the tool's: `strand::HairType::friction_coefficient`; fibre on
 //! fibre: `crate::hair_contact::HairContact::friction`; the rise with wetness: `crate::wetness::WetnessModel`).
@@ -133,6 +134,45 @@ impl Treatment {
     }
 }
 
+/// Receding contact angle of water on untreated (virgin) hair, rad: 60.0 +- 9.0 degrees (Tanamachi et al., J.
+/// Cosmet. Sci. 61, 147-160 (2010), Table III, Wilhelmy method, with the scales). The 18-MEA lipid layer keeps
+/// virgin hair's receding angle high.
+const VIRGIN_RECEDING_ANGLE: f64 = 60.0 * std::f64::consts::PI / 180.0;
+
+/// Receding contact angle of water on hair whose 18-MEA layer is removed, rad: 3.2 +- 5.5 degrees (Tanamachi et
+/// al. 2010, Table III: 18-MEA removed by potassium t-butoxide; the receding angle falls linearly with the
+/// surface's 18-MEA, to this at none).
+const STRIPPED_RECEDING_ANGLE: f64 = 3.2 * std::f64::consts::PI / 180.0;
+
+impl Treatment {
+    /// Receding contact angle of water on the fibre's surface, rad (sources in `docs/treatment.md`):
+    /// - virgin and conditioned: 60 degrees (Tanamachi et al. 2010, untreated hair; no figure read for a
+    ///   conditioned virgin fibre, whose cationic film is hydrophobic too: taken as virgin's);
+    /// - bleached once or twice: 3.2 degrees, the fibre without its 18-MEA layer (Tanamachi et al. 2010), which
+    ///   alkaline peroxide removes (`docs/treatment.md`: one bleach may leave some of it, Nikogeorgos et al. 2010,
+    ///   so this is the bleached-once fibre's lower bound).
+    ///
+    /// The receding angle is the one of a meniscus pulled off the surface, as when a comb parts wet fibres.
+    pub fn receding_contact_angle(self) -> f64 {
+        match self {
+            Treatment::Virgin | Treatment::Conditioned => VIRGIN_RECEDING_ANGLE,
+            Treatment::Bleached | Treatment::BleachedTwice => STRIPPED_RECEDING_ANGLE,
+        }
+    }
+
+    /// The capillary forces of water on this treatment's fibre surface over the virgin fibre's (dimensionless):
+    /// `cos theta_r / cos theta_r(virgin)` of the receding contact angles ([`Treatment::receding_contact_angle`]),
+    /// the capillary pull of a meniscus on a surface going as the cosine of its contact angle (Young; Israelachvili,
+    /// *Intermolecular and Surface Forces*, 3rd ed., ch. 17). Exactly 1 for virgin (and conditioned) hair; 2.0 for
+    /// bleached hair. `tools::entanglement::Entanglement::wettability` takes it.
+    pub fn wettability(self) -> f64 {
+        if self.receding_contact_angle() == VIRGIN_RECEDING_ANGLE {
+            return 1.0;
+        }
+        self.receding_contact_angle().cos() / VIRGIN_RECEDING_ANGLE.cos()
+    }
+}
+
 impl std::fmt::Display for Treatment {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
@@ -182,6 +222,19 @@ mod tests {
                 let order: Vec<f64> = [Treatment::Conditioned, Treatment::Virgin, Treatment::Bleached, Treatment::BleachedTwice].iter().map(|t| t.friction_factor(c, w)).collect();
                 assert!(order.windows(2).all(|p| p[0] < p[1]), "{order:?}");
             }
+        }
+    }
+
+    #[test]
+    fn the_wettability_is_the_cosine_of_the_receding_angle_over_virgins() {
+        // Tanamachi et al. 2010, Table III: 60.0 degrees untreated, 3.2 degrees without 18-MEA; cos 60 = 0.5, cos 3.2 =
+        // 0.99844 (by hand): bleached hair's capillary forces 1.9969 times virgin's.
+        assert_eq!(Treatment::Virgin.wettability(), 1.0);
+        assert_eq!(Treatment::Conditioned.wettability(), 1.0);
+        assert!((Treatment::Virgin.receding_contact_angle().to_degrees() - 60.0).abs() < 1e-12);
+        for t in [Treatment::Bleached, Treatment::BleachedTwice] {
+            assert!((t.receding_contact_angle().to_degrees() - 3.2).abs() < 1e-12);
+            assert!((t.wettability() - 1.99688).abs() < 1e-5, "{}", t.wettability());
         }
     }
 

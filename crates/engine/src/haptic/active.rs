@@ -26,8 +26,8 @@
 //!    whose tip is farther than `HapticParams::rest_distance` from its groomed tip returns to its groomed
 //!    shape (in the store: what it joins from next time); the displacement shown of where it was fades out
 //!    over `blend_time` ([`Faded`], no longer simulated). Nothing stays frozen where the tool left it.
-//! 4. When chosen and relaxing strands together exceed `max_active`, the relaxing ones that left first are
-//!    let go first, wherever they are (an early hand-over too): at
+//! 4. When chosen and relaxing strands together exceed `max_active`, relaxing ones are let go, those whose hair
+//!    drawn is nearest its place first (their hand-over moves it least), wherever they are (an early hand-over too): at
 //!    most `max_active` strands are simulated (the step's cost is bounded). A strand limit
 //!    below it (`Command::LimitStrands`, the live thread's strand budget, `crate::budget`) takes its place: a
 //!    new choice takes the same share of it as `max_chosen` of `max_active`, and the relaxing strands beyond
@@ -66,11 +66,14 @@ pub(crate) struct Member {
     pub tip_speed: f64,
     /// Let go before it was back in place (after `max_relax_time`, or by the strand limit).
     pub early: bool,
+    /// Found back in place: its hand-over then ([`HapticCore::handover_jump`] on that step's lattice, the one
+    /// its let-go is decided on), m.
+    pub in_place: Option<f64>,
 }
 
 impl Member {
     fn joining() -> Self {
-        Self { phase: Phase::Chosen, weight: 0.0, tip: None, tip_speed: 0.0, early: false }
+        Self { phase: Phase::Chosen, weight: 0.0, tip: None, tip_speed: 0.0, early: false, in_place: None }
     }
 }
 
@@ -266,9 +269,9 @@ impl HapticCore {
                 self.join(&chosen, &guides, &mut members);
             }
         }
-        // Beyond the strand limit the relaxing strands that left first are let go (after a lowered limit, also
-        // when no guide joins).
-        Self::let_go_beyond(self.strand_limit, &mut members);
+        // Beyond the strand limit relaxing strands are let go, those nearest their place first (after a lowered
+        // limit, also when no guide joins).
+        self.let_go_beyond(self.strand_limit, &mut members);
         // (The simulated strands' members come first, in order: what the rebuild measures of a leaving one.)
         for (m, new) in self.members.iter_mut().zip(&members) {
             m.early = new.early;
@@ -300,6 +303,7 @@ impl HapticCore {
             if chosen.contains(g) {
                 m.phase = Phase::Chosen;
                 m.early = false;
+                m.in_place = None;
             } else if m.phase == Phase::Chosen {
                 m.phase = Phase::Relaxing { since: 0.0, still: 0.0 };
             }
@@ -321,20 +325,21 @@ impl HapticCore {
         }
     }
 
-    /// While more than `limit` strands (`max_active`, or the strand limit) would stay simulated, the relaxing
-    /// ones that left first are let go (marked Fading). Chosen strands are never let go here: a choice takes
-    /// at most [`HapticCore::chosen_limit`] <= `limit`.
-    fn let_go_beyond(limit: usize, members: &mut [Member]) {
+    /// While more than `limit` strands (`max_active`, or the strand limit) would stay simulated, relaxing ones are
+    /// let go (marked Fading): those whose hair drawn is nearest its carried place first (their hand-over moves it
+    /// least; [`HapticCore::shown_offset`]), then those that left first. Chosen strands are never let go here: a
+    /// choice takes at most [`HapticCore::chosen_limit`] <= `limit`.
+    fn let_go_beyond(&self, limit: usize, members: &mut [Member]) {
         let mut over = members.iter().filter(|m| m.phase != Phase::Fading).count().saturating_sub(limit);
         if over == 0 {
             return;
         }
-        let mut relaxing: Vec<(f64, usize)> = members.iter().enumerate().filter_map(|(i, m)| match m.phase {
-            Phase::Relaxing { since, .. } => Some((since, i)),
+        let mut relaxing: Vec<(f64, f64, usize)> = members.iter().enumerate().filter_map(|(i, m)| match m.phase {
+            Phase::Relaxing { since, .. } => Some((self.shown_offset(i), since, i)),
             _ => None,
         }).collect();
-        relaxing.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        for (_, i) in relaxing {
+        relaxing.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.total_cmp(&a.1)).then(a.2.cmp(&b.2)));
+        for (_, _, i) in relaxing {
             if over == 0 {
                 break;
             }
@@ -342,6 +347,19 @@ impl HapticCore {
             members[i].early = true;
             over -= 1;
         }
+    }
+
+    /// How far the hair drawn for simulated strand `slot` is from where the global layer carries its guide (at the
+    /// nodes last seen, the hold's cache), m: what its hand-over would move it by; infinite for a slot not
+    /// simulated yet.
+    fn shown_offset(&self, slot: usize) -> f64 {
+        let (Some(&g), Some(s)) = (self.active.get(slot), self.interaction.strands.get(slot)) else { return f64::INFINITY };
+        let weight = self.members.get(slot).map_or(1.0, |m| m.weight);
+        let guide = &self.scene.guides[g];
+        let pts = samples_along(s, guide.model.length, self.scene.samples());
+        let mut cache = self.references.borrow_mut();
+        let ok = cache.has_nodes(self.scene.lattice.node_count());
+        pts.iter().zip(cache.bases(&self.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max)
     }
 
     /// Moves the strands to the new membership `guides` (`members` parallel): the staying strands move over,
@@ -374,13 +392,15 @@ impl HapticCore {
                 let g = old_guides[i];
                 let weight = old_members.get(i).map_or(0.0, |m| m.weight);
                 let early = old_members.get(i).is_some_and(|m| m.early);
+                let in_place = old_members.get(i).and_then(|m| m.in_place).filter(|_| !early);
                 if weight > 0.0 {
                     let pts = samples_along(&s, self.scene.guides[g].model.length, samples);
                     // The hand-over: how far the hair drawn moves (before the display's fade): the strand's shown
-                    // displacement from its place carried by the global layer, at the nodes last seen.
+                    // displacement from its place carried by the global layer; for a strand found back in place,
+                    // as measured then (the lattice it was checked on), else at the nodes last seen.
                     let mut cache = self.references.borrow_mut();
                     let ok = cache.has_nodes(self.scene.lattice.node_count());
-                    let jump = pts.iter().zip(cache.bases(&self.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max);
+                    let jump = in_place.unwrap_or_else(|| pts.iter().zip(cache.bases(&self.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max));
                     drop(cache);
                     if early {
                         self.early_handover_max = self.early_handover_max.max(jump);
@@ -473,8 +493,10 @@ impl HapticCore {
             }
         }
         for k in resting {
-            if self.handover_jump(k, lattice) <= h.handover_distance {
+            let jump = self.handover_jump(k, lattice);
+            if jump <= h.handover_distance {
                 self.members[k].phase = Phase::Fading;
+                self.members[k].in_place = Some(jump);
             }
         }
         for f in &mut self.faded {

@@ -201,7 +201,7 @@ impl HapticCore {
     pub fn new(scene: Arc<Scene>, params: SessionParams) -> Result<Self, SessionError> {
         params.validate()?;
         let h = scene.hair_type;
-        let strands = Self::build_strands(&scene, &h, 0.0, params.haptic.min_air_drag)?;
+        let strands = Self::build_strands(&scene, &h, 0.0, &params.haptic)?;
         let sets = strands.iter().map(|s| SetState::new(&s.model)).collect();
         let strands = strands.into_iter().map(Some).collect();
         let start = Vector3::from(params.haptic.start);
@@ -210,6 +210,7 @@ impl HapticCore {
         let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape(params.global.nozzle_standoff)).collect();
         let mut interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
         interaction.hold_distance = params.haptic.hold_distance;
+        interaction.hold_gravity = scene.guides.first().map(|g| g.model.gravity.norm());
         let bounds = active::GuideBounds::new(&scene);
         let side = DeviceSide::new(params, shapes.clone(), (scene.head.clone(), scene.lattice.params.metaball.threshold));
         Ok(Self {
@@ -235,7 +236,7 @@ impl HapticCore {
                 self.clear_active();
                 self.clipped = false;
                 if h != self.hair_type || c != self.curliness {
-                    if let Ok(s) = Self::build_strands(&self.scene, &h, c, self.params.haptic.min_air_drag) {
+                    if let Ok(s) = Self::build_strands(&self.scene, &h, c, &self.params.haptic) {
                         self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
                         self.strands = s.into_iter().map(Some).collect();
                     }
@@ -270,7 +271,7 @@ impl HapticCore {
             Command::Reset => {
                 // Back to the store first: if the rebuild fails, the store keeps every strand.
                 self.clear_active();
-                if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, self.params.haptic.min_air_drag) {
+                if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, &self.params.haptic) {
                     self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
                     self.strands = s.into_iter().map(Some).collect();
                 }
@@ -393,7 +394,7 @@ impl HapticCore {
     /// Stages the viewer's next snapshot, a share of it a step: the displacements of every
     /// `SessionParams::publish_every`-th simulated strand (this step's share of the slots) are mapped and kept,
     /// so that [`HapticCore::snapshot`] copies them rather than mapping every strand in the step that
-    /// publishes (66-118 us at 64 strands, every 5th step). Call once after each step where snapshots are
+    /// publishes (a cost that step alone would pay). Call once after each step where snapshots are
     /// published every `publish_every` steps; without it the snapshot maps every strand itself.
     pub fn stage_snapshot(&self, lattice: &LatticeSnapshot) {
         let every = self.params.publish_every.max(1);

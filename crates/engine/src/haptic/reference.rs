@@ -2,8 +2,9 @@
 //! for [`HapticCore::snapshot`](super::HapticCore::snapshot): the viewer's displacement of a sample is its
 //! strand point minus this base.
 //!
-//! Mapping every reference sample through the FFD on every published snapshot cost ~135 us on the haptic
-//! thread. A reference sample never moves, so its FFD stencil (27 node indices and weights) is found once per
+//! Mapping every reference sample through the FFD on every published snapshot was a large share of the
+//! haptic thread's step. A reference sample never moves, so its FFD stencil (27 node indices and weights) is
+//! found once per
 //! guide while the guide is shown, and the bases are summed again only when the lattice nodes or the head
 //! change (at the global rate, not the publish rate). The numbers are the same as
 //! [`Scene::guide_points`]'s: the same stencil and the same sum ([`FfdLattice::combine`]), blended with the

@@ -22,15 +22,27 @@ pub(crate) fn resting_on(scene: &Scene, mut it: LocalInteraction) -> LocalIntera
 impl HapticCore {
     /// Every guide's strand in its groomed state, with the hair type's section and material and the
     /// curliness (in [0, 1], [`hairstyle::Curl`]) added to the rest twist and bend, and an air drag of at least
-    /// `min_air_drag` (N s/m^2, `HapticParams::min_air_drag`).
-    pub(crate) fn build_strands(scene: &Scene, h: &HairType, curliness: f64, min_air_drag: f64) -> Result<Vec<Strand>, SessionError> {
+    /// `HapticParams::min_air_drag` (N s/m^2).
+    ///
+    /// Held by the hair volume (`HapticParams::hold_distance` finite, the live session's default), a strand's
+    /// weight is carried by the hold at its place (the neighbours and the scalp beneath, as the sag-free
+    /// lattice's pre-stressed springs carry the global layer's): its model has no gravity, its rest shape is its
+    /// groomed shape (so the groom is its equilibrium for every hair type, and the only one: the hold's spring
+    /// brings it back from anywhere), and the hold's damping (`HapticParams::hold_damping`) is added to its air
+    /// drag. Not held, it keeps its weight and the guide's sag-free rest (a single fibre carrying itself).
+    pub(crate) fn build_strands(scene: &Scene, h: &HairType, curliness: f64, params: &HapticParams) -> Result<Vec<Strand>, SessionError> {
         let err = |e: strand::StrandError| SessionError::Scene(e.to_string());
         let curl = hairstyle::Curl::from_curliness(curliness.clamp(0.0, 1.0)).map_err(|e| SessionError::Scene(e.to_string()))?;
+        let held = params.hold_distance.is_finite();
         scene.guides.iter().map(|g| {
             let mut m = g.model.clone();
             if *h != scene.hair_type {
                 m.section = h.section().map_err(err)?;
                 m.material = h.material().map_err(err)?;
+            }
+            if held {
+                m.set_rest_coordinates(&g.state.q);
+                m.gravity = Vector3::zeros();
             }
             if let Some(c) = curl.as_ref() {
                 let mut q = m.rest_coordinates();
@@ -40,7 +52,10 @@ impl HapticCore {
                 }
                 m.set_rest_coordinates(&q);
             }
-            m.air_drag = m.air_drag.max(min_air_drag);
+            m.air_drag = m.air_drag.max(params.min_air_drag);
+            if held {
+                m.air_drag += 2.0 * params.hold_damping * (g.model.gravity.norm() / params.hold_distance).sqrt() * m.linear_density();
+            }
             let mut s = Strand::new(m, g.state.root.clone()).map_err(err)?;
             s.state.q.copy_from(&g.state.q);
             Ok(s)
@@ -117,9 +132,11 @@ impl HapticCore {
         it.body = body;
         it.body_friction = self.fibre_friction(0.0);
         it.hold_distance = self.params.haptic.hold_distance;
+        // The strands' models carry no weight (the hold does, `build_strands`): the hold's spring takes the scene's gravity.
+        it.hold_gravity = self.scene.guides.first().map(|g| g.model.gravity.norm());
         it.hair_contact = self.hair_contact(0.0);
         if self.params.haptic.entanglement {
-            it.entanglement = Some(Entanglement::default());
+            it.entanglement = Some(Entanglement { wettability: self.params.haptic.treatment.wettability(), ..Entanglement::default() });
         }
         self.interaction = it;
     }
@@ -131,8 +148,8 @@ impl HapticCore {
 /// (`tools::entanglement::Entanglement::fibre_stiffness`, the span of the tress calibration, 6.6 mm; caucasian
 /// dry 0.48 N/m, against the solver's default cap of 100 N/m). A simulated guide is a chain of rigid-curvature
 /// segments (8 of 2.5 cm in the built-in hairstyle) and stands for hundreds of fibres, so a tooth pressing it near its
-/// root, or two teeth shearing it on opposite sides, met the whole segment's resistance and the solver's cap:
-/// 2-6 mN per guide, 1-3 N at the hand (issue 12's upward strokes). A real fibre there bends over one span.
+/// root, or two teeth shearing it on opposite sides, met the whole segment's resistance and the solver's cap
+/// (newtons at the hand on issue 12's upward strokes). A real fibre there bends over one span.
 pub(crate) fn contact_options(ei: f64) -> ConstraintOptions {
     ConstraintOptions { max_stiffness: Entanglement::default().fibre_stiffness(ei), ..ConstraintOptions::default() }
 }

@@ -724,12 +724,12 @@ mod tests {
         // and within `handover_distance` (2 mm) of where the global layer carries its guide: those hand-overs
         // (`max_handover_m`, the hair drawn moving at a let-go, before any fade) are asserted under it.
         // Reported, not asserted (issue 30 asks for a few mm; not met from every direction): the early hand-overs
-        // (`max_early_handover_m`) of strands not back in place 0.6 s after they left, let go there and put back
-        // on their groom (the display fades it over 0.3 s): from the front-top and the sides some guides on the
-        // crown were blown over their own roots (the first segment turned 50-90 degrees to the other side of its
-        // groomed direction) and rest there, 2-7 cm off. Neither friction (the same with the body's and the
-        // hair-hair friction off) nor the hold of the neighbours (at 1 cm and at 2 mm instead of 3 cm: still 4.9
-        // and 1.8 cm off) brings them back; kept simulated, they stay there (7.1 cm 2.3 s after, from [0, 1, 1]).
+        // (`max_early_handover_m`) of strands not back in place 1.5 s after they left, let go there and put back
+        // on their groom (the display fades it over 0.3 s). Before the hair volume carried the local strands'
+        // weight (`HapticCore::build_strands`) they reached 72 mm: crown guides blown over their own roots rested
+        // in a second equilibrium of their sag-free rest, 4-7 cm off. What is left (up to 18 mm) is hair-hair
+        // contact: wisps blown across each other at 30-60 degrees (the same with the fibre friction at 0; back
+        // within 2-3 mm without hair-hair contact; docs/scenarios.md).
         let dirs: [[f64; 3]; 10] = [[0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 1.0], [-1.0, -1.0, 1.0], [1.0, -1.0, 0.0], [-1.0, 1.0, 0.3], [1.0, 0.0, 1.0]];
         let scene = Arc::new(Scene::builtin(&dryer_held([0.0, 0.0, 1.0], 0.1, 2.0, 4.3, &[], 2000).scene_options()).unwrap());
         let (mut least_moved, mut worst_back, mut worst_handover, mut worst_early, mut handovers, mut early) = ((f64::INFINITY, [0.0; 3]), (0.0f64, [0.0; 3]), 0.0f64, 0.0f64, 0, 0);
@@ -805,7 +805,7 @@ mod tests {
             runs.push((format!("{name} dryer from {:?}", dirs[k]), dryer));
             for (what, s) in runs {
                 let (_, m) = s.run().unwrap();
-                eprintln!("{what}: hand-over {:.2} mm ({} strands), early (not back in place after 0.6 s, or the strand limit) {:.1} mm ({} strands); moved {:.1} mm, at the end {:.1} mm", m.max_handover_m * 1e3, m.handovers, m.max_early_handover_m * 1e3, m.early_handovers, m.max_displacement_m * 1e3, m.final_max_displacement_m * 1e3);
+                eprintln!("{what}: hand-over {:.2} mm ({} strands), early (not back in place after 1.5 s, or the strand limit) {:.1} mm ({} strands); moved {:.1} mm, at the end {:.1} mm", m.max_handover_m * 1e3, m.handovers, m.max_early_handover_m * 1e3, m.early_handovers, m.max_displacement_m * 1e3, m.final_max_displacement_m * 1e3);
                 if m.max_early_handover_m >= worst_early.0 {
                     worst_early = (m.max_early_handover_m, what.clone());
                 }

@@ -100,7 +100,8 @@ pub struct PatchSpec {
     #[serde(default)]
     pub wetness: f64,
     /// Surface treatment of the hair: "virgin" (default), "conditioned", "bleached" or "bleached-twice"; scales
-    /// the tool-hair and hair-hair friction, dry and wet (`tools::treatment::Treatment`, docs/treatment.md).
+    /// the tool-hair and hair-hair friction, dry and wet, and wet, the capillary forces of the entanglement drag by
+    /// its wettability (`tools::treatment::Treatment`, docs/treatment.md).
     #[serde(default)]
     pub treatment: Treatment,
     /// Contact and friction between the simulated strands, each a wisp of `represents` fibres
@@ -443,7 +444,8 @@ impl Scenario {
         }
         if p.entanglement {
             let d = Entanglement::default();
-            it.entanglement = Some(Entanglement { span: p.entanglement_span.unwrap_or(d.span), ..d });
+            // The treatment's wettability: its capillary forces over virgin hair's (`Treatment::wettability`).
+            it.entanglement = Some(Entanglement { span: p.entanglement_span.unwrap_or(d.span), wettability: p.treatment.wettability(), ..d });
             it.wetness = vec![p.wetness; it.strands.len()];
         }
         // Settle under gravity (and the strands' contacts), the tool held at its start.

@@ -108,7 +108,7 @@ mod tests {
         assert_eq!(s.render.guide.len(), 2000 * s.render.guides_per_strand);
         assert!(s.render.guide.iter().all(|&g| (g as usize) < s.guides.len()));
         assert!(s.guides.iter().all(|g| g.reference.len() == 16));
-        let strands = HapticCore::build_strands(&s, &s.hair_type, 0.0, crate::params::HapticParams::default().min_air_drag).unwrap();
+        let strands = HapticCore::build_strands(&s, &s.hair_type, 0.0, &crate::params::HapticParams::default()).unwrap();
         for (st, g) in strands.iter().zip(&s.guides) {
             for (a, b) in centreline(st, 16).iter().zip(&g.reference) {
                 assert!((a - b).norm() < 1e-12);
@@ -128,7 +128,7 @@ mod tests {
         let o = SceneOptions { render_strands: 500, ..SceneOptions::default() };
         let s = Scene::builtin(&o).unwrap();
         assert!(s.guides.iter().all(|g| g.stable), "every guide of the default scene is stable");
-        let mut strands = HapticCore::build_strands(&s, &s.hair_type, 0.0, crate::params::HapticParams::default().min_air_drag).unwrap();
+        let mut strands = HapticCore::build_strands(&s, &s.hair_type, 0.0, &crate::params::HapticParams::default()).unwrap();
         for g in [89, 110, 140, 152, 178, 182, 190, 191] {
             let st = &mut strands[g];
             for i in 0..st.model.segments {

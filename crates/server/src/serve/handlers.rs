@@ -20,9 +20,9 @@ pub(super) async fn carried_handler(headers: axum::http::HeaderMap, query: axum:
     if let Err(why) = check_access(&headers, query.get("token").map(String::as_str), &app.access) {
         return (StatusCode::FORBIDDEN, why).into_response();
     }
-    let req: crate::carried::CarriedRequest = match serde_json::from_slice(&body) {
+    let req = match crate::carried::parse(&body) {
         Ok(r) => r,
-        Err(e) => return (StatusCode::BAD_REQUEST, format!("not a carried request: {e}")).into_response(),
+        Err(why) => return (StatusCode::BAD_REQUEST, why).into_response(),
     };
     let scene = app.scene.lock().unwrap().clone();
     match tokio::task::spawn_blocking(move || crate::carried::carried(&scene, &req)).await {

@@ -13,6 +13,7 @@ pub mod combing;
 pub mod files;
 pub mod global;
 pub mod live;
+pub mod meter;
 pub mod output;
 pub mod patch;
 pub mod run;

@@ -233,7 +233,7 @@ pub struct LiveSummary {
 
 impl LiveSummary {
     /// `dt`: the haptic step, s.
-    pub(crate) fn new(trace: &ForceTrace, max_force: f64, dt: f64, meter: &super::live::Meter, timing: &mut [f64], rejected: u64, failed: u64, wall: f64) -> Self {
+    pub(crate) fn new(trace: &ForceTrace, max_force: f64, dt: f64, meter: &super::meter::Meter, timing: &mut [f64], rejected: u64, failed: u64, wall: f64) -> Self {
         let stats = ForceStats::of((0..trace.len()).map(|i| (trace.force(i).norm(), trace.contacts[i] > 0)), max_force);
         // Continuity: the steps with the tool in the hair and their share above the force floor; the largest
         // change between consecutive steps over the whole run.

@@ -209,7 +209,7 @@ fn build_guide(
         }
         if let Ok(eq) = solve_equilibrium(&model, &start, &[], &StaticOptions::default()) {
             let s = StrandState { q: eq.q.clone(), ..state.clone() };
-            let clear = strand::kinematics::centerline(&model, &s, 64).iter().skip(1).all(|(_, p)| head.signed_distance(&Point3::from(*p)) >= 0.0);
+            let clear = head.clears(&model, &s, 0.0);
             if eq.stable && clear {
                 state = s;
                 stable = true;

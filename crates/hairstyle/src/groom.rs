@@ -172,7 +172,7 @@ pub fn groomed_state(
             s.q[2 * i] = *t;
             s.q[2 * i + 1] = *b;
         }
-        let clear = strand::kinematics::centerline(model, &s, 64).iter().skip(1).all(|(_, p)| head.signed_distance(&nalgebra::Point3::from(*p)) >= 0.5 * params.clearance);
+        let clear = head.clears(model, &s, 0.5 * params.clearance);
         state = Some(s);
         if clear {
             break;

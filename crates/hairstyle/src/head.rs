@@ -223,6 +223,12 @@ impl Head {
         self.body.field(p) > self.params.threshold
     }
 
+    /// Whether a strand's centreline clears the surface by `margin` (m): every one of 64 points evenly spaced
+    /// in arc length after the root at a [`Head::signed_distance`] of at least `margin`.
+    pub fn clears(&self, model: &strand::StrandModel, state: &strand::StrandState, margin: f64) -> bool {
+        strand::kinematics::centerline(model, state, 64).iter().skip(1).all(|(_, p)| self.signed_distance(&Point3::from(*p)) >= margin)
+    }
+
     /// First-order signed distance (m) from `p` to the surface, (T - F) / |grad F|: negative
     /// inside. Infinite where the field is zero or flat.
     pub fn signed_distance(&self, p: &Point3<f64>) -> f64 {

@@ -541,35 +541,8 @@ impl Hairstyle {
 }
 
 /// `n` points evenly spaced in arc length along a polyline; None if it has fewer than 2 points
-/// or zero length.
+/// or zero length (`strand::samples::resample`).
 fn resample(p: &[Point3<f64>], n: usize) -> Option<Vec<Point3<f64>>> {
-    if p.len() < 2 {
-        return None;
-    }
-    let mut cum = vec![0.0];
-    for w in p.windows(2) {
-        cum.push(cum.last().unwrap() + (w[1] - w[0]).norm());
-    }
-    let total = *cum.last().unwrap();
-    if !(total > 0.0) {
-        return None;
-    }
-    let mut seg = 0;
-    Some(
-        (0..n)
-            .map(|j| {
-                let s = total * j as f64 / (n - 1) as f64;
-                while seg + 2 < cum.len() && cum[seg + 1] < s {
-                    seg += 1;
-                }
-                let len = cum[seg + 1] - cum[seg];
-                let t = if len > 0.0 {
-                    ((s - cum[seg]) / len).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
-                p[seg] + t * (p[seg + 1] - p[seg])
-            })
-            .collect(),
-    )
+    let coords: Vec<_> = p.iter().map(|x| x.coords).collect();
+    Some(strand::samples::resample(&coords, n)?.into_iter().map(Point3::from).collect())
 }

@@ -109,11 +109,10 @@ impl RenderStrands {
     }
 }
 
-/// Linear interpolation in evenly spaced samples at the fraction `u` in [0, 1] of the length.
+/// Linear interpolation in evenly spaced samples (at least two) at the fraction `u` in [0, 1] of the length
+/// (`strand::samples::between`).
 pub(crate) fn lerp_samples(s: &[Point3<f64>], u: f64) -> Point3<f64> {
-    let x = u.clamp(0.0, 1.0) * (s.len() - 1) as f64;
-    let i = (x as usize).min(s.len() - 2);
-    let t = x - i as f64;
+    let (i, t) = strand::samples::between(s.len(), u);
     s[i] + t * (s[i + 1] - s[i])
 }
 

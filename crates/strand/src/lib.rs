@@ -38,6 +38,7 @@ pub mod material;
 pub mod model;
 #[cfg(feature = "reference")]
 pub mod reference;
+pub mod samples;
 pub mod section;
 pub mod spec;
 pub mod state;

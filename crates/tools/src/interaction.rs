@@ -249,14 +249,7 @@ pub struct Hold {
 impl Hold {
     /// The hold's point at arc length `s` (m; clamped to the points' span), linearly interpolated.
     pub fn at(&self, s: f64) -> Vector3<f64> {
-        let n = self.points.len();
-        if n < 2 {
-            return self.points.first().copied().unwrap_or_else(Vector3::zeros);
-        }
-        let u = (s / self.length.max(1e-12) * (n - 1) as f64).clamp(0.0, (n - 1) as f64);
-        let i = (u.floor() as usize).min(n - 2);
-        let f = u - i as f64;
-        self.points[i] * (1.0 - f) + self.points[i + 1] * f
+        strand::samples::lerp(&self.points, s / self.length.max(1e-12))
     }
 }
 

@@ -264,11 +264,7 @@ impl GlobalCore {
 
 /// The centres of `n` even segments of the polyline of even samples `r` (linear between samples), m.
 fn segment_centres(r: &[Vector3<f64>], n: usize) -> Vec<Vector3<f64>> {
-    (0..n).map(|k| {
-        let u = (k as f64 + 0.5) / n as f64 * (r.len() - 1) as f64;
-        let (i, f) = ((u.floor() as usize).min(r.len() - 2), u - u.floor().min((r.len() - 2) as f64));
-        r[i] * (1.0 - f) + r[i + 1] * f
-    }).collect()
+    (0..n).map(|k| strand::samples::lerp(r, (k as f64 + 0.5) / n as f64)).collect()
 }
 
 /// The nozzle tools' and the scissors' settings the global layer uses (what a viewer's settings or a

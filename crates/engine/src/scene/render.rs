@@ -71,11 +71,7 @@ impl Scene {
         for m in 0..k {
             let g = r.guide[i * k + m];
             if let Some(a) = guides.active.iter().position(|&x| x == g) {
-                let x = u * (s - 1) as f64;
-                let lo = (x.floor() as usize).min(s - 1);
-                let hi = (lo + 1).min(s - 1);
-                let f = x - lo as f64;
-                let d = guides.displacement[a * s + lo] * (1.0 - f) + guides.displacement[a * s + hi] * f;
+                let d = strand::samples::lerp(&guides.displacement[a * s..(a + 1) * s], u);
                 q += d * r.weight[i * k + m] as f64;
             }
         }

@@ -238,25 +238,12 @@ pub fn resample(curves: &HairCurves, n: usize) -> Result<HairCurves, FormatError
                 .sqrt();
             cum.push(cum.last().unwrap() + d);
         }
-        let total = *cum.last().unwrap();
+        // Segment j and fraction t where each target length falls (`strand::samples::stations`); a
+        // strand of one vertex or of zero length: n copies of its root.
+        let at = strand::samples::stations(&cum, n).unwrap_or_else(|| vec![(0, 0.0); n]);
         let mut strand = Vec::with_capacity(n);
-        for k in 0..n {
-            // Segment j and fraction t where the target length falls.
-            let (j, t) = if s.len() == 1 || total == 0.0 {
-                (0, 0.0)
-            } else {
-                let target = total * k as f64 / (n - 1) as f64;
-                let j = cum.partition_point(|&c| c <= target).clamp(1, s.len() - 1) - 1;
-                let len = cum[j + 1] - cum[j];
-                (
-                    j,
-                    if len > 0.0 {
-                        ((target - cum[j]) / len).clamp(0.0, 1.0) as f32
-                    } else {
-                        0.0
-                    },
-                )
-            };
+        for (j, t) in at {
+            let t = t as f32;
             let j1 = (j + 1).min(s.len() - 1);
             let lerp = |a: f32, b: f32| a + (b - a) * t;
             strand.push(std::array::from_fn(|c| lerp(s[j][c], s[j1][c])));

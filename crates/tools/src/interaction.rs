@@ -220,6 +220,10 @@ pub struct LocalInteraction {
     warm: Vec<Vec<Warm>>,
     /// Workspace of [`LocalInteraction::warm_start`]: which of a strand's last impulses are taken.
     warm_used: Vec<bool>,
+    /// Each strand's arc length (m) at which the comb entered the wisp, while a tooth drags through it (None when
+    /// none does): the crossings the comb pushes ahead are those it met since ([`Entanglement::pile_factor`]). A
+    /// wisp that leaves every tooth leaves its pile behind.
+    piles: Vec<Option<f64>>,
 }
 
 /// Loads per held strand that carry the hold ([`LocalInteraction::hold_distance`]).
@@ -331,6 +335,7 @@ impl LocalInteraction {
             rows: Vec::new(),
             warm: vec![Vec::new(); strands_len],
             warm_used: Vec::new(),
+            piles: vec![None; strands_len],
         }
     }
 
@@ -421,6 +426,11 @@ impl LocalInteraction {
                 }
             }
         }
+        let piles = std::mem::take(&mut self.piles);
+        self.piles = (0..strands.len()).map(|i| match from.get(i).copied().flatten() {
+            Some(j) if j < piles.len() => piles[j],
+            _ => None,
+        }).collect();
         let mut warm = std::mem::take(&mut self.warm);
         self.warm = (0..strands.len()).map(|i| match from.get(i).copied().flatten() {
             Some(j) if j < warm.len() => {
@@ -816,6 +826,7 @@ impl LocalInteraction {
         let mut mine: Vec<&Contact> = Vec::new();
         let mut resting: Vec<PointConstraint> = Vec::new();
         let mut cons: Vec<PointConstraint> = Vec::new();
+        self.piles.resize(self.strands.len(), None);
         for (k, strand) in self.strands.iter_mut().enumerate() {
             let t_strand = clock.elapsed().as_secs_f64();
             // A clip's jaws hold the strands it pins rather than pushing them.
@@ -892,6 +903,10 @@ impl LocalInteraction {
                     // A wisp of many fibres parts around a tooth (the drag) instead of being pushed aside; a thick
                     // capsule (a comb's spine: `Entanglement::parts`) pushes it as a solid at the fibre's radius.
                     let parting = entanglement.is_some() && wisp_radius > radius;
+                    let hair_friction = self.hair_contact.map_or(0.0, |hc| hc.friction);
+                    // Where the comb entered the wisp: kept while a tooth drags through it, else this step's
+                    // shallowest contact.
+                    let entry = self.piles[k].take().unwrap_or_else(|| mine.iter().map(|c| c.s).fold(f64::INFINITY, f64::min));
                     for (i, c) in mine.iter().enumerate() {
                         let r_t = self.shape.capsules.get(c.primitive).map_or(0.0, |cap| cap.radius);
                         let parts = parting && entanglement.is_some_and(|e| e.parts(r_t));
@@ -909,7 +924,8 @@ impl LocalInteraction {
                             let distance = r_t + reach - c.depth;
                             let share = crate::entanglement::parted_share(distance, wisp_radius, r_t + r_f);
                             let curl = crate::entanglement::curl_curvature(strand, c.s);
-                            let max_force = friction * share * e.parting_load(ei, r_f, r_t, w, strand.model.length - c.s, curl);
+                            self.piles[k] = Some(entry);
+                            let max_force = friction * share * e.parting_load_piled(ei, r_f, r_t, w, strand.model.length - c.s, curl, hair_friction, c.s - entry);
                             if max_force > 0.0 {
                                 cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Drag { max_force, slip_speed: e.slip_speed }, velocity: c.tool_velocity });
                                 levers.push(c.lever);

@@ -125,7 +125,11 @@ ws.onclose = (ev) => {
 };
 ws.onmessage = (ev) => {
   const buf = ev.data as ArrayBuffer;
-  const type = new Uint8Array(buf)[0];
+  let type: number;
+  try { type = P.messageType(buf); } catch (e) {
+    statusEl.textContent = `server: ${(e as Error).message}`;
+    return;
+  }
   switch (type) {
     case P.Server.SCENE: {
       let msg: P.SceneMsg;
@@ -168,22 +172,24 @@ ws.onmessage = (ev) => {
       break;
     }
     case P.Server.CONTROL: {
-      const v = new DataView(buf);
-      status.youControl = v.getUint8(2) === 1;
-      status.viewers = v.getUint32(3, true);
+      const c = P.decodeControl(buf);
+      status.youControl = c.youControl;
+      status.viewers = c.viewers;
       statusEl.textContent = `${status.youControl ? 'you control the tool' : 'watching'} (${status.viewers} viewer${status.viewers === 1 ? '' : 's'})${status.recordStopped ? `; ${status.recordStopped}` : ''}`;
       break;
     }
     case P.Server.FILE: {
-      const format = new Uint8Array(buf)[2];
-      const blob = new Blob([buf.slice(3)]);
-      status.lastFile = { format, bytes: blob.size };
+      const f = P.decodeFile(buf);
+      const blob = new Blob([f.bytes]);
+      status.lastFile = { format: f.format, bytes: blob.size };
       const a = document.createElement('a');
       a.href = URL.createObjectURL(blob);
-      a.download = `hairstyle.${P.FORMATS[format]}`;
+      a.download = `hairstyle.${f.extension}`;
       a.click();
       break;
     }
+    case P.Server.PONG: break;
+    default: statusEl.textContent = `server: unknown message type 0x${type.toString(16)}`;
   }
 };
 

@@ -279,6 +279,35 @@ export function decodeError(buf: ArrayBuffer): ErrorMsg {
   return { code, message: new TextDecoder().decode(new Uint8Array(buf, 6, len)) };
 }
 
+/** The type byte of a server message (`Server`), after checking its header: at least [type][version], and this
+ *  protocol's version. Throws naming what is wrong. */
+export function messageType(buf: ArrayBuffer): number {
+  if (buf.byteLength < 2) throw new Error(`a server message of ${buf.byteLength} bytes has no header`);
+  const v = new DataView(buf);
+  if (v.getUint8(1) !== VERSION) throw new Error(`server message 0x${v.getUint8(0).toString(16)} has protocol version ${v.getUint8(1)}, the viewer speaks ${VERSION}`);
+  return v.getUint8(0);
+}
+
+/** CONTROL: whether this viewer controls the tool, and how many viewers are connected. */
+export interface ControlMsg { youControl: boolean; viewers: number }
+
+export function decodeControl(buf: ArrayBuffer): ControlMsg {
+  if (buf.byteLength < 7) throw new Error(`CONTROL of ${buf.byteLength} bytes, expected 7`);
+  const v = new DataView(buf);
+  return { youControl: v.getUint8(2) === 1, viewers: v.getUint32(3, true) };
+}
+
+/** FILE (the answer to SAVE): the hairstyle file's format (index in `FORMATS`, its extension) and bytes. */
+export interface FileMsg { format: number; extension: string; bytes: ArrayBuffer }
+
+export function decodeFile(buf: ArrayBuffer): FileMsg {
+  if (buf.byteLength < 3) throw new Error(`FILE of ${buf.byteLength} bytes has no format byte`);
+  const format = new DataView(buf).getUint8(2);
+  const extension = FORMATS[format];
+  if (extension === undefined) throw new Error(`FILE in unknown format ${format}`);
+  return { format, extension, bytes: buf.slice(3) };
+}
+
 function header(type: number, payload: number): [ArrayBuffer, DataView] {
   const b = new ArrayBuffer(2 + payload);
   const v = new DataView(b);

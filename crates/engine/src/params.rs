@@ -45,8 +45,8 @@ pub struct SessionParams {
     /// strands around a comb for a continuous force (issue 12).
     pub max_chosen: usize,
     /// Most guide strands simulated at once: the chosen ones and those still relaxing after they left (the
-    /// relaxing ones whose hair drawn is nearest its carried place are let go first beyond it; strands let go
-    /// are no longer simulated while their shown displacement fades out), >= `max_chosen`. Bounds the haptic
+    /// relaxing ones whose hair drawn is nearest its carried place are let go first beyond it, handed over to the
+    /// global layer where they are), >= `max_chosen`. Bounds the haptic
     /// step's cost. Default 56 (64 before the hold of the neighbours, `HapticParams::hold_distance`, made a step
     /// with the comb in the hair dearer; 56 keeps the mean step where 64 had it: docs/physics.md, step costs in
     /// bench/RESULTS.md).

@@ -29,7 +29,7 @@
 //!    groomed tip returns to its groomed shape in the store (what it joins from next time; not drawn). Nothing
 //!    stays frozen where the tool left it.
 //! 4. When chosen and relaxing strands together exceed `max_active`, relaxing ones are let go, those whose hair
-//!    drawn is nearest its place first (their hand-over moves it least), wherever they are (an early hand-over too): at
+//!    drawn is nearest its place first (the least for the global layer to take over), wherever they are (an early hand-over too): at
 //!    most `max_active` strands are simulated (the step's cost is bounded). A strand limit
 //!    below it (`Command::LimitStrands`, the live thread's strand budget, `crate::budget`) takes its place: a
 //!    new choice takes the same share of it as `max_chosen` of `max_active`, and the relaxing strands beyond
@@ -344,8 +344,8 @@ impl HapticCore {
     }
 
     /// While more than `limit` strands (`max_active`, or the strand limit) would stay simulated, relaxing ones are
-    /// let go (marked Fading): those whose hair drawn is nearest its carried place first (their hand-over moves it
-    /// least; [`HapticCore::shown_offset`]), then those that left first. Chosen strands are never let go here: a
+    /// let go (marked Fading): those whose hair drawn is nearest its carried place first (the least for the
+    /// global layer to take over and bring back; [`HapticCore::shown_offset`]), then those that left first. Chosen strands are never let go here: a
     /// choice takes at most [`HapticCore::chosen_limit`] <= `limit`.
     fn let_go_beyond(&self, limit: usize, members: &mut [Member]) {
         let mut over = members.iter().filter(|m| m.phase != Phase::Fading).count().saturating_sub(limit);
@@ -381,8 +381,8 @@ impl HapticCore {
     }
 
     /// Moves the strands to the new membership `guides` (`members` parallel): the staying strands move over,
-    /// the joining ones come from the store at rest, the leaving ones go back to the store let go and their
-    /// shown displacement fades out from where they were.
+    /// the joining ones come from the store at rest, the leaving ones are handed over to the global layer
+    /// ([`HapticCore::hand_over`]) and go back to the store let go.
     fn rebuild(&mut self, guides: Vec<usize>, members: Vec<Member>) {
         let old_guides = std::mem::take(&mut self.active);
         let old_members = std::mem::take(&mut self.members);

@@ -45,8 +45,8 @@ pub struct SessionParams {
     /// strands around a comb for a continuous force (issue 12).
     pub max_chosen: usize,
     /// Most guide strands simulated at once: the chosen ones and those still relaxing after they left (the
-    /// relaxing ones whose hair drawn is nearest its carried place are let go first beyond it; strands let go
-    /// are no longer simulated while their shown displacement fades out), >= `max_chosen`. Bounds the haptic
+    /// relaxing ones whose hair drawn is nearest its carried place are let go first beyond it, handed over to the
+    /// global layer where they are), >= `max_chosen`. Bounds the haptic
     /// step's cost. Default 56 (64 before the hold of the neighbours, `HapticParams::hold_distance`, made a step
     /// with the comb in the hair dearer; 56 keeps the mean step where 64 had it: docs/physics.md, step costs in
     /// bench/RESULTS.md).
@@ -200,27 +200,28 @@ pub struct HapticParams {
     /// How long a leaving strand's tip must stay slower than `rest_speed` to count as at rest, s.
     /// Default 0.2.
     pub rest_time: f64,
-    /// A leaving strand is let go (handed over to the global layer, which then draws its guide where the head
-    /// and the lattice carry it) once at rest and with every sample within this distance of that carried
-    /// place, so that the hair drawn moves by at most this at the hand-over: the strand falls back by its own
-    /// dynamics (gravity, its rest shape, the hold of the neighbours), not by a display blend, m. Default
+    /// A leaving strand is let go (handed over to the global layer, which carries its displacement from where the
+    /// head and the lattice carry its guide and brings it back by the hold: `HapticCore::handed`) once at rest and
+    /// with every sample within this distance of that carried place, so that what the global layer takes over is
+    /// at most this: the strand falls back by its own dynamics (its rest shape, the hold of the neighbours), m. Default
     /// 0.002: under the width of the wisp a guide stands for (twice the wisp's radius, the hair-hair contact
     /// distance `HairContact::distance`: 2.5 mm for 500 Caucasian fibres), so the guide drawn stays inside its
     /// own wisp across the hand-over. A strand not back in place within `max_relax_time` is let go all the same
     /// (an early hand-over, measured apart: `HapticCore::early_handovers`).
     pub handover_distance: f64,
     /// A leaving strand not back in place (`handover_distance`) this long after it left is let go wherever it
-    /// is and put back on its groom, its display fading over `blend_time` (an early hand-over), s. Default 1.5:
-    /// within issue 30's 2.3 s after a dryer stops, less the fade. A critically damped hold brings most strands
+    /// is (an early hand-over: the global layer takes its displacement over, the hair drawn does not move, and
+    /// the hold brings it back in about 0.3 s), s. Default 1.5: within issue 30's 2.3 s after a dryer stops. A
+    /// critically damped hold brings most strands
     /// back within `handover_distance` well before; what is still off then is mostly held by its contact with
     /// other local strands (wisps blown across each other: issue 30, docs/scenarios.md). How many strands go
     /// early and how far off, at this and at 0.6 s: bench/RESULTS.md, the hand-over rows.
     pub max_relax_time: f64,
-    /// A strand let go whose tip is farther than this from its groomed tip returns to its groomed shape
-    /// (what the viewer shows once it has faded out), m. Default 0.005.
+    /// A strand let go whose tip is farther than this from its groomed tip returns to its groomed shape in the
+    /// store (what it joins from next time; the hair drawn is the global layer's), m. Default 0.005.
     pub rest_distance: f64,
-    /// The displacement shown of a strand fades in over this time when it joins the active set and out
-    /// when it is let go (while still simulated), s. Default 0.3.
+    /// The displacement shown of a strand fades in over this time when it joins the active set, s (and, with
+    /// no hold, `hold_distance` infinite, a handed-over guide's displacement fades out over it). Default 0.3.
     pub blend_time: f64,
     /// The ends of the tool's capsules stay this far outside the body (head, neck, shoulders), m: the teeth
     /// ride on the hair near the scalp and never reach the roots. Default 0.004.
@@ -333,6 +334,19 @@ impl HapticParams {
             return p(format!("haptic.start must be finite, got {:?}", self.start));
         }
         Ok(())
+    }
+
+    /// The hold of the hair volume per unit mass of hair at gravity `g` (m/s^2): its stiffness
+    /// `omega^2 = |g| / hold_distance` (1/s^2) and its damping `2 hold_damping omega` (1/s); (0, 0) without a hold
+    /// (`hold_distance` infinite). The one hold law's rates: a local strand's hold (`LocalInteraction::holds`, its
+    /// spring `omega^2` times the linear density per unit length) and damping (added to its air drag), and the
+    /// relaxation of a handed-over guide's displacement in the global layer (`HapticCore::handed`).
+    pub fn hold_rates(&self, g: f64) -> (f64, f64) {
+        if !(self.hold_distance.is_finite() && self.hold_distance > 0.0) {
+            return (0.0, 0.0);
+        }
+        let k = g.abs() / self.hold_distance;
+        (k, 2.0 * self.hold_damping * k.sqrt())
     }
 
     /// The tool's friction coefficient on hair of friction `mu` at combing ease `ease` (clamped to [0, 1];

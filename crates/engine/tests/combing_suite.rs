@@ -249,7 +249,6 @@ fn the_combing_law_meets_the_measured_anchors() {
     let unmet = [
         "H2 wet/dry peak",
         "asian wet/dry peak",
-        "african dry peak / H1 dry peak",
         "african wet peak / dry peak",
     ];
     // (criterion, value, each layout's value, bounds)

@@ -11,8 +11,8 @@
 //!
 //! Then the physics step ([`HapticCore::physics_step`]) with the proxy's state at the period's start:
 //! 3. **Active set**: the guides near the tool's path over the next `HapticParams::lookahead` s become the
-//!    local strands; strands that left it are still stepped until at rest, then fade back to the global
-//!    layer ([`active`]).
+//!    local strands; strands that left it are still stepped until at rest and back in place, then handed
+//!    over to the global layer without a jump (their displacement carried there, relaxed by the hold; [`active`]).
 //! 4. **Roots**: the local strands' roots stay with the head (rigid), not with the tool-deformed lattice;
 //!    the hair volume holds each strand near its place (its groom through the lattice,
 //!    `HapticParams::hold_distance`).
@@ -23,7 +23,8 @@
 //!    linearised about the proxy's state (force, stiffness, damping, torque: the local force model), times the
 //!    real hairs each guide stands for ([`HapticCore::hairs_per_guide`]), is published for the device steps
 //!    of the next period.
-//! 8. **Tracking**: each local strand's tip speed, the leaving strands' rest, the display's fade in and out
+//! 8. **Tracking**: each local strand's tip speed, the leaving strands' rest, the display's fade in, the
+//!    handed-over guides' offsets relaxed by the hold
 //!    ([`active`]).
 
 pub mod actions;
@@ -80,8 +81,9 @@ pub struct HapticCore {
     /// move back to `strands` when they leave or the set is cleared), and each one's membership.
     pub(crate) active: Vec<usize>,
     pub(crate) members: Vec<active::Member>,
-    /// Strands let go whose shown displacement is fading out (no longer simulated).
-    pub(crate) faded: Vec<active::Faded>,
+    /// Guides handed over to the global layer whose displacement from their carried place is still relaxing
+    /// (no longer simulated, or simulated again with it; [`active::HandedOver`]).
+    pub(crate) handed: Vec<active::HandedOver>,
     /// The shown guides' reference samples mapped through the lattice, kept between snapshots
     /// ([`HapticCore::snapshot`] takes `&self`, hence the cell; the core lives on one thread).
     pub(crate) references: std::cell::RefCell<reference::ReferenceCache>,
@@ -128,7 +130,8 @@ pub struct HapticCore {
     /// Strand steps that failed (state kept).
     pub failed: u64,
     /// The largest hand-over to the global layer so far: a let-go strand's largest shown displacement from its
-    /// place carried by the global layer when it leaves the simulation (what its display fade hides), m.
+    /// place carried by the global layer when it leaves the simulation (what the hand-over carries into the
+    /// global layer, which the hold then brings back; [`active::HandedOver`]), m.
     pub(crate) handover_max: f64,
     /// Strands let go so far back in place (handed over to the global layer).
     pub(crate) handovers: u64,
@@ -214,7 +217,7 @@ impl HapticCore {
         let bounds = active::GuideBounds::new(&scene);
         let side = DeviceSide::new(params, shapes.clone(), (scene.head.clone(), scene.lattice.params.metaball.threshold));
         Ok(Self {
-            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, side, proxy: ProxyState::default(), anchors: 0, strands, active: Vec::new(), members: Vec::new(), faded: Vec::new(), references: Default::default(), staged: Default::default(), choice: None, bounds, queued: Vec::new(), max_tip_speed: 0.0, interaction,
+            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, side, proxy: ProxyState::default(), anchors: 0, strands, active: Vec::new(), members: Vec::new(), handed: Vec::new(), references: Default::default(), staged: Default::default(), choice: None, bounds, queued: Vec::new(), max_tip_speed: 0.0, interaction,
             hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, strand_limit: params.max_active, head: nalgebra::Isometry3::identity(), rejected: 0, runaways: 0, failed: 0, handover_max: 0.0, handovers: 0, early_handover_max: 0.0, early_handovers: 0, timings: StepPhases::default(),
         })
     }
@@ -269,8 +272,10 @@ impl HapticCore {
                 }
             }
             Command::Reset => {
-                // Back to the store first: if the rebuild fails, the store keeps every strand.
+                // Back to the store first: if the rebuild fails, the store keeps every strand. A reset shows the
+                // groom: no hand-over's offset is kept.
                 self.clear_active();
+                self.handed.clear();
                 if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, &self.params.haptic) {
                     self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
                     self.strands = s.into_iter().map(Some).collect();
@@ -462,20 +467,25 @@ impl HapticCore {
         let mut cache = self.references.borrow_mut();
         cache.use_nodes(&lattice.positions, &lattice.head);
         let mut staged = self.staged.borrow_mut();
+        let turn = lattice.head.rotation;
         for (slot, &g) in self.active.iter().enumerate() {
             out.active.push(g as u32);
+            let at = out.displacement.len();
             match staged.iter().find(|e| e.guide == g && e.step + every > self.step) {
                 Some(e) => out.displacement.extend_from_slice(&e.displacement),
                 None => self.displacement_into(slot, g, &mut cache, ok, &mut out.displacement),
             }
-        }
-        // The let-go strands fading out, from where they were let go.
-        for f in &self.faded {
-            out.active.push(f.guide as u32);
-            let bases = cache.bases(&self.scene, f.guide, ok);
-            for (p, base) in f.samples.iter().zip(bases) {
-                out.displacement.push(self.shown((p - base) * f.weight));
+            // A guide simulated again while its hand-over's offset still relaxes shows both.
+            if let Some(h) = self.handed.iter().find(|h| h.guide == g) {
+                for (d, x) in out.displacement[at..].iter_mut().zip(&h.offset) {
+                    *d = self.shown(*d + turn * x * h.weight);
+                }
             }
+        }
+        // The handed-over guides: their offsets from their carried places, relaxing.
+        for h in self.handed.iter().filter(|h| !self.active.contains(&h.guide)) {
+            out.active.push(h.guide as u32);
+            out.displacement.extend(h.offset.iter().map(|x| self.shown(turn * x * h.weight)));
         }
         cache.keep_only(&out.active);
         staged.retain(|e| self.active.contains(&e.guide));
@@ -519,9 +529,10 @@ impl HapticCore {
         self.max_tip_speed
     }
     /// The largest hand-over to the global layer so far, m: a let-go strand's largest shown displacement from
-    /// its place carried by the global layer when it left the simulation (before the display's fade over
-    /// `HapticParams::blend_time`; at most `HapticParams::handover_distance`: the strands let go before they were
-    /// back in place are counted apart, [`HapticCore::early_handovers`]).
+    /// its place carried by the global layer when it left the simulation (carried over as the guide's offset
+    /// there, which the hold brings back: the hair drawn does not move at the hand-over; at most
+    /// `HapticParams::handover_distance`: the strands let go before they were back in place are counted apart,
+    /// [`HapticCore::early_handovers`]).
     pub fn handover_max(&self) -> f64 {
         self.handover_max
     }
@@ -530,8 +541,8 @@ impl HapticCore {
         self.handovers
     }
     /// The strands let go before they were back in place (after `HapticParams::max_relax_time`, or by the strand
-    /// limit, wherever they were): their largest hand-over (as [`HapticCore::handover_max`], before the display's
-    /// fade), m, and how many so far.
+    /// limit, wherever they were, or by a command that empties the active set): their largest hand-over (as
+    /// [`HapticCore::handover_max`], the displacement carried over), m, and how many so far.
     pub fn early_handovers(&self) -> (f64, u64) {
         (self.early_handover_max, self.early_handovers)
     }

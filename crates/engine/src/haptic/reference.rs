@@ -85,6 +85,11 @@ impl ReferenceCache {
         &e.bases
     }
 
+    /// The head pose the bases are carried by (the one last given to [`use_nodes`](Self::use_nodes)).
+    pub fn head(&self) -> &Isometry3<f64> {
+        &self.head
+    }
+
     /// Whether the nodes last given are a lattice's of `count` nodes.
     pub fn has_nodes(&self, count: usize) -> bool {
         self.nodes.len() == count

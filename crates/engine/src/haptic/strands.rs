@@ -54,7 +54,7 @@ impl HapticCore {
             }
             m.air_drag = m.air_drag.max(params.min_air_drag);
             if held {
-                m.air_drag += 2.0 * params.hold_damping * (g.model.gravity.norm() / params.hold_distance).sqrt() * m.linear_density();
+                m.air_drag += params.hold_rates(g.model.gravity.norm()).1 * m.linear_density();
             }
             let mut s = Strand::new(m, g.state.root.clone()).map_err(err)?;
             s.state.q.copy_from(&g.state.q);

@@ -564,16 +564,15 @@ mod tests {
         // blows) and fall back by their own dynamics; a strand is handed over to the global layer once at rest
         // and within `handover_distance` (2 mm) of where the global layer carries its guide: those hand-overs
         // (`max_handover_m`, the hair drawn moving at a let-go, before any fade) are asserted under it.
-        // Reported, not asserted (issue 30 asks for a few mm; not met from every direction): the early hand-overs
-        // (`max_early_handover_m`) of strands not back in place 1.5 s after they left, let go there and put back
-        // on their groom (the display fades it over 0.3 s). Before the hair volume carried the local strands'
-        // weight (`HapticCore::build_strands`) they reached 72 mm: crown guides blown over their own roots rested
-        // in a second equilibrium of their sag-free rest, 4-7 cm off. What is left (up to 18 mm) is hair-hair
-        // contact: wisps blown across each other at 30-60 degrees (the same with the fibre friction at 0; back
-        // within 2-3 mm without hair-hair contact; docs/scenarios.md).
+        // Strands not back in place 1.5 s after they left are let go there (early hand-overs,
+        // `max_early_handover_m`: up to 18 mm, wisps blown across each other at 30-60 degrees held by their
+        // contact; docs/scenarios.md). Every hand-over carries the strand's displacement over into the global
+        // layer, which the hold then brings back: asserted, the hair drawn moves by at most 3 mm across any
+        // hand-over (`max_handover_change_m`, from the viewer's snapshots the step before and the step of it).
         let dirs: [[f64; 3]; 10] = [[0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 1.0], [-1.0, -1.0, 1.0], [1.0, -1.0, 0.0], [-1.0, 1.0, 0.3], [1.0, 0.0, 1.0]];
         let scene = Arc::new(Scene::builtin(&dryer_held([0.0, 0.0, 1.0], 0.1, 2.0, 4.3, &[], 2000).scene_options()).unwrap());
         let (mut least_moved, mut worst_back, mut worst_handover, mut worst_early, mut handovers, mut early) = ((f64::INFINITY, [0.0; 3]), (0.0f64, [0.0; 3]), 0.0f64, 0.0f64, 0, 0);
+        let mut worst_change = 0.0f64;
         for (k, d) in dirs.iter().enumerate() {
             let gap = 0.08 + 0.12 * k as f64 / (dirs.len() - 1) as f64;
             let s = dryer_held(*d, gap, 2.0, 4.3, &[], 2000);
@@ -581,7 +580,9 @@ mod tests {
             let cone = crate::tool::ToolInput { position: r.position, rotation: r.rotation, ..Default::default() }.cone(tools::dryer::HairDryer::default().cone, crate::params::GlobalParams::default().nozzle_standoff);
             let in_jet = scene.guides.iter().flat_map(|g| &g.reference).filter(|p| cone.weight(p).0 > 0.25).count();
             let (_, m) = s.run_on(scene.clone()).unwrap();
-            eprintln!("dryer from {d:?}, nozzle {gap:.2} m from the head, {in_jet} guide samples in the jet: moved {:.1} mm, 2.3 s after {:.1} mm; hand-over {:.2} mm ({} strands), early {:.1} mm ({} strands); contact steps {}, wall {:.1} s", m.max_displacement_m * 1e3, m.final_max_displacement_m * 1e3, m.max_handover_m * 1e3, m.handovers, m.max_early_handover_m * 1e3, m.early_handovers, m.contact_steps, m.wall_time_s);
+            eprintln!("dryer from {d:?}, nozzle {gap:.2} m from the head, {in_jet} guide samples in the jet: moved {:.1} mm, 2.3 s after {:.1} mm; hand-over {:.2} mm ({} strands), early {:.1} mm ({} strands), hair drawn moved across a hand-over {:.3} mm; contact steps {}, wall {:.1} s", m.max_displacement_m * 1e3, m.final_max_displacement_m * 1e3, m.max_handover_m * 1e3, m.handovers, m.max_early_handover_m * 1e3, m.early_handovers, m.max_handover_change_m * 1e3, m.contact_steps, m.wall_time_s);
+            assert!(m.max_handover_change_m <= 3e-3, "dryer from {d:?}: a hand-over moved the hair drawn by {} m", m.max_handover_change_m);
+            worst_change = worst_change.max(m.max_handover_change_m);
             assert_eq!((m.rejected_readings, m.failed_steps), (0, 0));
             assert_eq!(m.contact_steps, 0, "dryer from {d:?}: something solid met the hair");
             assert!(m.max_handover_m <= crate::params::HapticParams::default().handover_distance + 1e-12, "dryer from {d:?}: a hand-over moved the hair drawn by {} m", m.max_handover_m);
@@ -595,7 +596,8 @@ mod tests {
                 worst_back = (m.final_max_displacement_m, *d);
             }
         }
-        eprintln!("worst: least moved {:.1} mm (from {:?}, hair in the jet), farthest 2.3 s after {:.1} mm (from {:?}); largest hand-over {:.2} mm ({handovers} strands), early {:.1} mm ({early} strands)", least_moved.0 * 1e3, least_moved.1, worst_back.0 * 1e3, worst_back.1, worst_handover * 1e3, worst_early * 1e3);
+        eprintln!("worst: least moved {:.1} mm (from {:?}, hair in the jet), farthest 2.3 s after {:.1} mm (from {:?}); largest hand-over {:.2} mm ({handovers} strands), early {:.1} mm ({early} strands); hair drawn moved across a hand-over {:.3} mm at most", least_moved.0 * 1e3, least_moved.1, worst_back.0 * 1e3, worst_back.1, worst_handover * 1e3, worst_early * 1e3, worst_change * 1e3);
+        assert!(early > 0, "early hand-overs happen (else the change bound says little of them)");
         assert!(least_moved.0 >= 0.02, "the jet moves the hair: {} m from {:?}", least_moved.0, least_moved.1);
         assert!(worst_back.0 <= 0.01, "the hair falls back: {} m 2.3 s after, from {:?}", worst_back.0, worst_back.1);
     }
@@ -619,20 +621,22 @@ mod tests {
 
     #[test]
     fn no_hand_over_moves_the_hair_drawn_by_more_than_the_handover_distance() {
-        // Issue 30: a local strand leaves the simulation only once its own dynamics has brought it back within
-        // `handover_distance` (2 mm) of where the global layer carries its guide, so the hair drawn never jumps at
-        // the hand-over (`max_handover_m`: the largest change of a guide point drawn at a let-go, before the
-        // display's fade). Generated over every hair preset: for each, a comb and a brush stroke down the hair
+        // Issue 30: a local strand leaves the simulation once its own dynamics has brought it back within
+        // `handover_distance` (2 mm) of where the global layer carries its guide (`max_handover_m`), or early
+        // (`max_relax_time`, the strand limit) wherever it is; either way its displacement is carried over into the
+        // global layer, so the hair drawn does not jump (`max_handover_change_m`, from the viewer's snapshots the
+        // step before and the step of each hand-over: at most 3 mm). Generated over every hair preset: for each, a comb and a brush stroke down the hair
         // at a placement turned about the head (8 placements from one side over the back to the other, over the
         // 7 presets' two strokes), and the dryer held still from one of the 10 directions of
         // `a_dryer_held_anywhere_blows_the_hair_and_it_falls_back_while_it_stays`, blowing 1 s then not for
-        // 1.3 s. Asserted in every case: the hand-over bound, strands handed over (else the bound says nothing),
+        // 1.3 s. Asserted in every case: both hand-over bounds, strands handed over (else the bounds say nothing),
         // no failed step. Reported: the worst case, and how far the hair drawn is from its settled place at the
         // end.
         use strand::HairType;
         let bound = crate::params::HapticParams::default().handover_distance;
         let dirs: [[f64; 3]; 7] = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [-1.0, -1.0, 1.0], [1.0, -1.0, 0.0], [-1.0, 1.0, 0.3]];
         let (mut worst, mut worst_early, mut cases, mut handed) = ((0.0f64, String::new()), (0.0f64, String::new()), 0, 0);
+        let mut worst_change = (0.0f64, String::new());
         for (k, h) in HairType::ALL.iter().enumerate() {
             let name = h.name.to_lowercase();
             let mut runs: Vec<(String, LiveScenario)> = Vec::new();
@@ -646,7 +650,11 @@ mod tests {
             runs.push((format!("{name} dryer from {:?}", dirs[k]), dryer));
             for (what, s) in runs {
                 let (_, m) = s.run().unwrap();
-                eprintln!("{what}: hand-over {:.2} mm ({} strands), early (not back in place after 1.5 s, or the strand limit) {:.1} mm ({} strands); moved {:.1} mm, at the end {:.1} mm", m.max_handover_m * 1e3, m.handovers, m.max_early_handover_m * 1e3, m.early_handovers, m.max_displacement_m * 1e3, m.final_max_displacement_m * 1e3);
+                eprintln!("{what}: hand-over {:.2} mm ({} strands), early (not back in place after 1.5 s, or the strand limit) {:.1} mm ({} strands); hair drawn moved across a hand-over {:.3} mm; moved {:.1} mm, at the end {:.1} mm", m.max_handover_m * 1e3, m.handovers, m.max_early_handover_m * 1e3, m.early_handovers, m.max_handover_change_m * 1e3, m.max_displacement_m * 1e3, m.final_max_displacement_m * 1e3);
+                assert!(m.max_handover_change_m <= 3e-3, "{what}: a hand-over moved the hair drawn by {} m", m.max_handover_change_m);
+                if m.max_handover_change_m >= worst_change.0 {
+                    worst_change = (m.max_handover_change_m, what.clone());
+                }
                 if m.max_early_handover_m >= worst_early.0 {
                     worst_early = (m.max_early_handover_m, what.clone());
                 }
@@ -659,7 +667,7 @@ mod tests {
                 }
             }
         }
-        eprintln!("{cases} cases, {handed} with strands let go; largest hand-over {:.2} mm ({}); largest early hand-over (not bounded; faded) {:.1} mm ({})", worst.0 * 1e3, worst.1, worst_early.0 * 1e3, worst_early.1);
+        eprintln!("{cases} cases, {handed} with strands let go; largest hand-over {:.2} mm ({}); largest early hand-over (carried over) {:.1} mm ({}); hair drawn moved across a hand-over {:.3} mm at most ({})", worst.0 * 1e3, worst.1, worst_early.0 * 1e3, worst_early.1, worst_change.0 * 1e3, worst_change.1);
         assert!(handed * 2 > cases, "strands were let go in only {handed} of {cases} cases");
     }
 
@@ -668,7 +676,10 @@ mod tests {
         // Issue 30: the dryer held still above the head (its nozzle 12 cm from the surface, not blowing) while
         // the head turns 30 degrees to its left or to its right in 0.3 s and holds, or nods (20 degrees down in
         // 0.3 s and back up in 0.3 s): the hair swings >= 2 cm relative to the head and is within 1 cm of its
-        // settled place 2.3 s after the motion. (A nod held down is not asked to come back: hanging hair keeps
+        // settled place 2.3 s after the motion. The same motions with the dryer blowing for the first 0.6 s (the head
+        // turning under the jet, the local strands simulated and handed over while it moves and after): also within 1
+        // cm 2.3 s after the motion and the jet, strands handed over, and no hand-over moves the hair drawn by more
+        // than 3 mm (`max_handover_change_m`). (A nod held down is not asked to come back: hanging hair keeps
         // hanging under gravity, 39 mm from where the head would carry it rigidly.)
         let nod = [-0.3490659, 0.0, 0.0];
         let motions: [(&str, Vec<(f64, [f64; 3])>); 3] = [
@@ -677,12 +688,17 @@ mod tests {
             ("nod", vec![(0.0, [0.0; 3]), (0.3, nod), (0.6, [0.0; 3])]),
         ];
         let scene = Arc::new(Scene::builtin(&dryer_held([0.0, 0.0, 1.0], 0.12, 0.0, 2.6, &[], 2000).scene_options()).unwrap());
-        for (name, head) in motions {
-            let end = head.last().unwrap().0 + 2.3;
-            let s = dryer_held([0.0, 0.0, 1.0], 0.12, 0.0, end, &head, 2000);
+        for ((name, head), blow) in motions.iter().flat_map(|m| [(m, 0.0), (m, 0.6)]) {
+            let end = head.last().unwrap().0.max(blow) + 2.3;
+            let s = dryer_held([0.0, 0.0, 1.0], 0.12, blow, end, head, 2000);
             let (_, m) = s.run_on(scene.clone()).unwrap();
-            eprintln!("{name}: swung {:.1} mm, 2.3 s after {:.1} mm", m.max_displacement_m * 1e3, m.final_max_displacement_m * 1e3);
+            let name = format!("{name}{}", if blow > 0.0 { ", the jet blowing 0.6 s" } else { "" });
+            if blow > 0.0 {
+                assert!(m.handovers + m.early_handovers > 0, "{name}: no strand handed over");
+            }
+            eprintln!("{name}: swung {:.1} mm, 2.3 s after {:.1} mm; hand-overs {} + {} early (carried {:.1} mm), hair drawn moved across a hand-over {:.3} mm", m.max_displacement_m * 1e3, m.final_max_displacement_m * 1e3, m.handovers, m.early_handovers, m.max_handover_m.max(m.max_early_handover_m) * 1e3, m.max_handover_change_m * 1e3);
             assert_eq!((m.rejected_readings, m.failed_steps), (0, 0));
+            assert!(m.max_handover_change_m <= 3e-3, "{name}: a hand-over moved the hair drawn by {} m", m.max_handover_change_m);
             assert!(m.max_displacement_m >= 0.02, "{name}: the hair swings {} m", m.max_displacement_m);
             assert!(m.final_max_displacement_m <= 0.01, "{name}: {} m 2.3 s after", m.final_max_displacement_m);
         }

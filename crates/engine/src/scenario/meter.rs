@@ -27,7 +27,7 @@ impl Default for ContinuityParams {
 }
 
 /// Guide point displacements: every guide's samples as the viewer shows them (reference through the
-/// lattice, plus the local strand's displacement for the active guides, faded in and out), against their
+/// lattice, plus the local strand's displacement for the active guides, faded in, and the handed-over guides' offsets), against their
 /// settled positions; and, each traced haptic step, whether the tool is in the hair and the simulated
 /// strands' fastest tip.
 pub(crate) struct Meter {
@@ -61,6 +61,12 @@ pub(crate) struct Meter {
     pub early_handover: f64,
     /// How many strands were let go before they were back in place.
     pub early_handovers: u64,
+    /// The largest change of any guide point drawn across a hand-over to the global layer, m: a simulated
+    /// strand's shown displacement from its carried place (the viewer's snapshot) the step before it was let go,
+    /// against the step it was (early hand-overs included).
+    pub handover_change: f64,
+    /// The simulated guides' shown displacements after the last traced step (guide, per sample, m).
+    simulated: Vec<(usize, Vec<Vector3<f64>>)>,
     /// Deepest sampled render vertex inside the body at a measure as the viewer shows it (the lattice's FFD,
     /// then the push-out out of the body, `MetaballSet::push_out` with `PUSH_OUT_SKIN`), m; 0 if none.
     pub max_depth: f64,
@@ -73,7 +79,7 @@ const DEPTH_SAMPLE_EVERY: usize = 25;
 
 impl Meter {
     pub(crate) fn new(scene: &Arc<Scene>) -> Self {
-        Self { scene: scene.clone(), settled: Vec::new(), params: ContinuityParams::default(), max: 0.0, last: 0.0, stroke_max: 0.0, in_hair: Vec::new(), in_hair_path: 0.0, moving: Vec::new(), moving_path: 0.0, last_tool: None, max_tip_speed: 0.0, handover: 0.0, handovers: 0, early_handover: 0.0, early_handovers: 0, max_depth: 0.0, max_depth_raw: 0.0 }
+        Self { scene: scene.clone(), settled: Vec::new(), params: ContinuityParams::default(), max: 0.0, last: 0.0, stroke_max: 0.0, in_hair: Vec::new(), in_hair_path: 0.0, moving: Vec::new(), moving_path: 0.0, last_tool: None, max_tip_speed: 0.0, handover: 0.0, handovers: 0, early_handover: 0.0, early_handovers: 0, handover_change: 0.0, simulated: Vec::new(), max_depth: 0.0, max_depth_raw: 0.0 }
     }
     /// Guide points as shown, in the head frame (relative to the head), m.
     pub(crate) fn points(&self, ls: &Lockstep) -> Vec<Vector3<f64>> {
@@ -164,5 +170,29 @@ impl Meter {
         self.handover = ls.haptic.handover_max();
         self.handovers = ls.haptic.handovers();
         (self.early_handover, self.early_handovers) = ls.haptic.early_handovers();
+        self.hand_overs(ls);
+    }
+    /// The hand-overs of the last step: the change of each guide point drawn of the guides that were simulated
+    /// after the step before and no longer are ([`Meter::handover_change`]); then the simulated guides' shown
+    /// displacements now. A snapshot is taken only while strands are simulated.
+    fn hand_overs(&mut self, ls: &Lockstep) {
+        let simulated = ls.haptic.active();
+        if simulated.is_empty() && self.simulated.is_empty() {
+            return;
+        }
+        let n = self.scene.samples();
+        let mut snap = crate::snapshot::HapticSnapshot::default();
+        ls.haptic.snapshot(&ls.lattice, ls.dt, &mut snap);
+        let shown = |g: usize| snap.active.iter().position(|&a| a as usize == g).map(|i| &snap.displacement[i * n..(i + 1) * n]);
+        for (g, before) in &self.simulated {
+            if ls.haptic.active().contains(g) {
+                continue;
+            }
+            let zeros = vec![Vector3::zeros(); n];
+            let now = shown(*g).unwrap_or(&zeros);
+            let change = before.iter().zip(now).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+            self.handover_change = self.handover_change.max(change);
+        }
+        self.simulated = simulated.iter().filter_map(|&g| shown(g).map(|d| (g, d.to_vec()))).collect();
     }
 }

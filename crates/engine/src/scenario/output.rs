@@ -199,16 +199,22 @@ pub struct LiveSummary {
     /// Fastest tip of a simulated strand over the run, m/s.
     pub max_strand_speed_m_s: f64,
     /// The largest hand-over of a local strand to the global layer: its shown displacement from its place
-    /// carried by the global layer when it left the simulation (before the display's fade), m; at most
+    /// carried by the global layer when it left the simulation (carried over into the global layer as the guide's
+    /// offset, which the hold brings back: `max_handover_change_m` is what the hair drawn moves), m; at most
     /// `HapticParams::handover_distance` (the strands let go before they were back in place are counted apart).
     pub max_handover_m: f64,
     /// Local strands let go back in place (handed over to the global layer) over the run.
     pub handovers: u64,
     /// The largest early hand-over: of a strand let go before it was back in place (after
-    /// `HapticParams::max_relax_time`, or by the strand limit), wherever it was (not bounded; the display's fade
-    /// then shows it over `HapticParams::blend_time`), m, and how many such strands.
+    /// `HapticParams::max_relax_time`, or by the strand limit), wherever it was (not bounded; carried over as
+    /// `max_handover_m` is), m, and how many such strands.
     pub max_early_handover_m: f64,
     pub early_handovers: u64,
+    /// The largest change of any guide point drawn across a hand-over to the global layer (early ones included):
+    /// a leaving strand's shown displacement from its carried place the step before it was let go against the step
+    /// it was, m. The hand-over carries the displacement over into the global layer, which the hold then brings
+    /// back (`HapticCore`'s handed-over guides), so this is one step of that motion.
+    pub max_handover_change_m: f64,
     /// Deepest render vertex inside the head and body at any measure as the viewer shows it (every 25th
     /// strand sampled; the lattice's FFD, then the viewer's push-out), m; 0 if none.
     pub max_depth_in_body_m: f64,
@@ -278,6 +284,7 @@ impl LiveSummary {
             handovers: meter.handovers,
             max_early_handover_m: meter.early_handover,
             early_handovers: meter.early_handovers,
+            max_handover_change_m: meter.handover_change,
             max_depth_in_body_m: meter.max_depth,
             max_depth_before_push_out_m: meter.max_depth_raw,
             haptic_step_p50_us: p50 * 1e6,

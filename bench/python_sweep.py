@@ -47,7 +47,7 @@ def main() -> None:
     t_ray = time.perf_counter() - t0
     ray.shutdown()
     print(f"Ray local:  {t_ray:.1f} s wall after ray.init ({t_init:.1f} s) ({remote['wall_time'].sum():.1f} s of scenario time; errors {remote['error'].notna().sum()})")
-    peak = [c for c in local.columns if c.startswith("peak_force")][0]
+    peak = "peak_force_n"
     print(f"same peak forces: {bool((local[peak] == remote[peak]).all())}")
 
 

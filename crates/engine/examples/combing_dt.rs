@@ -48,7 +48,7 @@ fn toml(hair: &str, wetness: f64, treatment: &str, dt: f64, seed: u64) -> String
 fn stats(hair: &str, wetness: f64, treatment: &str, dt: f64, seed: u64) -> ([f64; 6], u64) {
     let out = run(&ScenarioFile::from_toml(&toml(hair, wetness, treatment, dt, seed)).unwrap()).unwrap();
     let clamped = match &out.summary {
-        ScenarioSummary::Patch(s) => s.clamped_steps,
+        ScenarioSummary::Patch(s) => s.strand_clamped_steps,
         _ => unreachable!(),
     };
     let f = &out.force;

@@ -69,8 +69,8 @@ fn main() {
                 m.max_step_change_n,
                 100.0 * m.max_step_change_rel,
                 if w > 0.0 { format!("{:.2}", m.peak_n / dry_peak) } else { "-".into() },
-                s.hair_contact_distance * 1e3,
-                s.clamped_steps,
+                s.hair_contact_distance_m * 1e3,
+                s.strand_clamped_steps,
                 s.wall_time_s
             );
         }

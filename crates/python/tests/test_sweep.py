@@ -11,7 +11,7 @@ import pytest
 import ray
 
 import coiffure
-from test_scenario import small_comb
+from test_scenario import short_live_comb, small_comb
 
 
 def four() -> list:
@@ -28,16 +28,28 @@ def check_table(t):
     assert "patch.strands" in t.columns and "dt" not in t.columns  # only what varies
     assert t["error"].iloc[:3].isna().all()
     assert "strands" in t["error"].iloc[3]
-    peak = [c for c in t.columns if c.startswith("peak_force")][0]
+    peak = "peak_force_n"
     assert (t[peak].iloc[:3] > 0).all() and pd.isna(t[peak].iloc[3])
 
 
 def test_sweep_in_process_equals_the_single_runs():
     t = coiffure.sweep(four())
     check_table(t)
-    peak = [c for c in t.columns if c.startswith("peak_force")][0]
+    peak = "peak_force_n"
     for i, s in enumerate(four()[:3]):
         assert t[peak].iloc[i] == coiffure.run_scenario(s)["summary"][peak]
+
+
+def test_a_sweep_over_mixed_kinds_has_one_column_per_quantity():
+    """Issue 33: a tress (patch) and a `[live]` scenario name their shared quantities alike, so a sweep over both
+    gets one column for each (filled in both rows), and no column of an old, unit-less name."""
+    t = coiffure.sweep([small_comb("H1"), short_live_comb()], progress=False)
+    assert list(t["kind"]) == ["patch", "live"] and t["error"].isna().all()
+    for key in ["peak_force_n", "mean_force_n", "contact_steps", "steps", "wall_time_s"]:
+        assert t[key].notna().all(), key
+    assert (t["peak_force_n"] > 0).all()
+    for old in ["peak_force", "mean_force", "work", "clamped_steps", "tress_mass"]:
+        assert old not in t.columns, old
 
 
 def test_sweep_on_ray_local_gives_the_same_table():

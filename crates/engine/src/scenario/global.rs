@@ -119,28 +119,28 @@ pub struct GlobalSummary {
     /// Render strands cut (a strand cut twice counts twice).
     pub render_cut: usize,
     /// Dry hair mass of the cut strands just before their cuts, kg (`CutReport::mass_before`, summed).
-    pub render_mass_before: f64,
+    pub render_mass_before_kg: f64,
     /// Dry mass they kept on the head, kg (`CutReport::mass_kept`, summed).
-    pub render_mass_on_head: f64,
+    pub render_mass_on_head_kg: f64,
     /// Dry mass of the pieces cut off, kg (`CutReport::mass_pieces`, summed).
-    pub render_mass_cut: f64,
+    pub render_mass_cut_kg: f64,
     /// Mean render strand length at the start (rest), m.
-    pub render_length_before: f64,
+    pub render_length_before_m: f64,
     /// Mean render strand length of the final hairstyle (the strands as the viewer shows them), m.
-    pub render_length_after: f64,
+    pub render_length_after_m: f64,
     /// Falling clusters made.
     pub clusters: usize,
     /// Kinetic energy of the clusters at the end, J.
-    pub cluster_energy: f64,
+    pub cluster_energy_j: f64,
     /// Largest metaball field value over the fallen pieces' points at the end (threshold 0.25: inside above).
     pub pieces_max_field: f64,
     /// Largest distance, over the run, between a lattice node and the same node of a twin core stepped
     /// alongside with the tool away: the tools' effect alone, m.
-    pub lattice_max_displacement: f64,
+    pub lattice_max_displacement_m: f64,
     /// The same distance at the end, m.
-    pub lattice_end_displacement: f64,
+    pub lattice_end_displacement_m: f64,
     /// Largest magnitude of the dryer jet's total force on the lattice at one step, N.
-    pub lattice_peak_force: f64,
+    pub lattice_peak_force_n: f64,
     /// Global steps whose lattice went non-finite and was put back to rest (`GlobalCore::step`'s flag).
     pub recovered_steps: u64,
     /// Wall time of the run, s (set by [`super::run`]; 0 from [`GlobalScenario::run`]).
@@ -353,17 +353,17 @@ impl GlobalScenario {
             wetness_after,
             wetness_range_after: [lo, hi],
             render_cut,
-            render_mass_before: mass_before,
-            render_mass_on_head: mass_kept,
-            render_mass_cut: mass_cut,
-            render_length_before,
-            render_length_after: mean_length(&hairstyle),
+            render_mass_before_kg: mass_before,
+            render_mass_on_head_kg: mass_kept,
+            render_mass_cut_kg: mass_cut,
+            render_length_before_m: render_length_before,
+            render_length_after_m: mean_length(&hairstyle),
             clusters: core.cluster_count(),
-            cluster_energy: core.cluster_energy() + 0.0,
+            cluster_energy_j: core.cluster_energy() + 0.0,
             pieces_max_field: max_field,
-            lattice_max_displacement: lattice_max,
-            lattice_end_displacement: lattice_end,
-            lattice_peak_force: peak_force,
+            lattice_max_displacement_m: lattice_max,
+            lattice_end_displacement_m: lattice_end,
+            lattice_peak_force_n: peak_force,
             recovered_steps: recovered,
             wall_time_s: 0.0,
         };
@@ -426,11 +426,11 @@ mod tests {
         let at = |t: f64| a.rows.iter().find(|r| (r.t - t).abs() < 1e-9).unwrap().wetness[0];
         assert!(at(0.1) > at(0.05) && at(0.2) > at(0.1), "sprayed: {} {} {}", at(0.05), at(0.1), at(0.2));
         assert!(at(0.3) < 0.98 * at(0.2), "dried from {} to {}", at(0.2), at(0.3));
-        assert!(a.rows.iter().any(|r| r.in_cone > 0) && m.lattice_peak_force > 0.0, "the jet reached the hair");
+        assert!(a.rows.iter().any(|r| r.in_cone > 0) && m.lattice_peak_force_n > 0.0, "the jet reached the hair");
         assert!(m.render_cut > 0 && m.clusters > 0);
-        let after = m.render_mass_on_head + m.render_mass_cut;
-        assert!(((after - m.render_mass_before) / m.render_mass_before).abs() < 1e-9, "{after} vs {}", m.render_mass_before);
-        assert!(m.render_length_after < m.render_length_before);
+        let after = m.render_mass_on_head_kg + m.render_mass_cut_kg;
+        assert!(((after - m.render_mass_before_kg) / m.render_mass_before_kg).abs() < 1e-9, "{after} vs {}", m.render_mass_before_kg);
+        assert!(m.render_length_after_m < m.render_length_before_m);
         assert!(!a.pieces.strands.is_empty() && a.pieces.strands.len() <= crate::params::GlobalParams::default().max_pieces_per_cut);
         assert_eq!(m.recovered_steps, 0);
     }
@@ -447,7 +447,7 @@ mod tests {
         let mut seen: Vec<(Vec<nalgebra::Point3<f64>>, ToolInput, crate::global::ToolSettings)> = vec![];
         let out = s.run_on(scene.clone(), |core, input| seen.push((core.positions().to_vec(), *input, *core.tools()))).unwrap();
         assert_eq!(seen.len(), out.summary.steps);
-        assert!(out.summary.lattice_max_displacement > 1e-3, "{}", out.summary.lattice_max_displacement);
+        assert!(out.summary.lattice_max_displacement_m > 1e-3, "{}", out.summary.lattice_max_displacement_m);
         assert!(seen.iter().any(|(_, i, _)| i.tool == Tool::Dryer && i.pressed) && seen.iter().any(|(_, i, _)| i.cuts == 1));
         let params = s.session_params();
         let mut live = crate::lockstep::Lockstep::new(scene, params, params.haptic_rate_hz).unwrap();
@@ -511,10 +511,10 @@ mod tests {
                 }
             }).unwrap();
             assert_eq!(seen.len(), 4, "four instants while it blows");
-            assert!(out.summary.lattice_max_displacement > 5e-3, "direction {d:?}: the jet moved the lattice {} m", out.summary.lattice_max_displacement);
+            assert!(out.summary.lattice_max_displacement_m > 5e-3, "direction {d:?}: the jet moved the lattice {} m", out.summary.lattice_max_displacement_m);
             assert!(seen.iter().any(|x| x.3 > 5e-3), "direction {d:?}: the hair moved {} m", seen.iter().map(|x| x.3).fold(0.0, f64::max));
             for (i, (r, stretch, mean, tips)) in seen.iter().enumerate() {
-                eprintln!("dryer from {d:?} at {:.2} m: t {:.1} s roots median {:.2} mm max {:.2} mm; length change max {:.1e} mean {:.1e}; tips moved {:.1} mm; lattice moved {:.1} mm", gap, 0.4 * (i + 1) as f64, r.median * 1e3, r.max * 1e3, stretch, mean, tips * 1e3, out.summary.lattice_max_displacement * 1e3);
+                eprintln!("dryer from {d:?} at {:.2} m: t {:.1} s roots median {:.2} mm max {:.2} mm; length change max {:.1e} mean {:.1e}; tips moved {:.1} mm; lattice moved {:.1} mm", gap, 0.4 * (i + 1) as f64, r.median * 1e3, r.max * 1e3, stretch, mean, tips * 1e3, out.summary.lattice_max_displacement_m * 1e3);
                 worst_median = worst_median.max(r.median);
                 worst_max = worst_max.max(r.max);
                 worst_stretch = worst_stretch.max(*stretch);
@@ -537,7 +537,7 @@ mod tests {
         let rest = scene.render_curves(&scene.lattice.rest, &Isometry3::identity(), &[], &GuideDisplacements::default());
         let out = s.run_on(scene, |_, _| {}).unwrap();
         let (r, stretch, mean, tips) = roots_and_stretch(&out.hairstyle, &rest);
-        eprintln!("dry.toml at its end: roots median {:.2} mm, max {:.2} mm; length change max {:.1e}, mean {:.1e}; tips moved {:.1} mm; lattice moved {:.1} mm", r.median * 1e3, r.max * 1e3, stretch, mean, tips * 1e3, out.summary.lattice_max_displacement * 1e3);
+        eprintln!("dry.toml at its end: roots median {:.2} mm, max {:.2} mm; length change max {:.1e}, mean {:.1e}; tips moved {:.1} mm; lattice moved {:.1} mm", r.median * 1e3, r.max * 1e3, stretch, mean, tips * 1e3, out.summary.lattice_max_displacement_m * 1e3);
         assert!(r.median <= 1e-3 && r.max <= 5e-3, "roots median {} m, max {} m", r.median, r.max);
         assert!(stretch <= 1e-4 && tips > 0.01, "length changed by {stretch}, tips moved {tips} m");
     }

@@ -7,6 +7,7 @@
 //!
 //! [`run`] runs any kind into memory ([`ScenarioOutput`]); [`files`] reads a scenario's tool files
 //! ([`run_in`]) and writes the outputs ([`write_output`]), for the CLI and the Python binding alike.
+//! [`schema`]: the one summary schema of every kind (each key's unit, by its suffix or the unitless list).
 
 pub mod actions;
 pub mod combing;
@@ -17,6 +18,7 @@ pub mod meter;
 pub mod output;
 pub mod patch;
 pub mod run;
+pub mod schema;
 pub mod strokes;
 
 pub use actions::{Action, ConeAction, ConePose, CutAction};

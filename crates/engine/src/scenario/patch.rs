@@ -238,17 +238,17 @@ pub struct TraceRow {
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Summary {
     /// Largest force magnitude, N.
-    pub peak_force: f64,
+    pub peak_force_n: f64,
     /// Mean force magnitude over the steps with contact, N.
-    pub mean_force: f64,
+    pub mean_force_n: f64,
     /// Work done by the hand against the hair, `-sum F . dx`, J.
-    pub work: f64,
+    pub work_j: f64,
     /// Steps with at least one contact.
     pub contact_steps: usize,
     /// Steps.
     pub steps: usize,
     /// Mass of the real tress represented, kg.
-    pub tress_mass: f64,
+    pub tress_mass_kg: f64,
     /// Real hairs per simulated strand (the force scale).
     pub represents: f64,
     /// Wetness of the tress (dimensionless, 0..1).
@@ -260,7 +260,7 @@ pub struct Summary {
     /// Hair-hair friction coefficient used (0 without hair contact).
     pub hair_friction: f64,
     /// Hair-hair contact distance between two strands' centrelines, m (0 without hair contact).
-    pub hair_contact_distance: f64,
+    pub hair_contact_distance_m: f64,
     /// The stroke's quality figures (peak, median, 90th percentile, continuity, largest step change), from the
     /// first to the last step with contact (all strokes).
     pub stroke: StrokeMetrics,
@@ -271,8 +271,9 @@ pub struct Summary {
     pub strokes: u32,
     /// The combing rig's figures of each stroke.
     pub per_stroke: PerStroke,
-    /// Steps in which some strand's velocities were scaled down by the safety net.
-    pub clamped_steps: u64,
+    /// Strand-steps in which a strand's velocities were scaled down by the strand safety net (summed over the
+    /// strands; not the device clamp, see `LiveSummary::clamp_steps`).
+    pub strand_clamped_steps: u64,
     /// Wall time of the run, s (set by [`super::run_patch`]; 0 from [`Scenario::run`]).
     pub wall_time_s: f64,
 }
@@ -475,23 +476,23 @@ impl Scenario {
         let stats = ForceStats::of(rows.iter().map(|r| (r.force.norm(), r.contacts > 0)), f64::INFINITY);
         let strokes = self.profile(&rows).strokes(p.length);
         let summary = Summary {
-            peak_force: stats.peak,
-            mean_force: stats.mean_in_contact,
-            work,
+            peak_force_n: stats.peak,
+            mean_force_n: stats.mean_in_contact,
+            work_j: work,
             contact_steps: stats.contact_steps,
             steps,
-            tress_mass,
+            tress_mass_kg: tress_mass,
             represents: k,
             wetness: p.wetness,
             treatment: p.treatment,
             tool_friction,
             hair_friction,
-            hair_contact_distance,
+            hair_contact_distance_m: hair_contact_distance,
             stroke: StrokeMetrics::of(&trace),
             combing: CombingFigures::total(&strokes),
             strokes: self.tool.strokes,
             per_stroke: PerStroke::of(&strokes),
-            clamped_steps: it.strands.iter().map(|s| s.clamped_steps).sum(),
+            strand_clamped_steps: it.strands.iter().map(|s| s.clamped_steps).sum(),
             wall_time_s: 0.0,
         };
         Ok((rows, summary))
@@ -533,7 +534,7 @@ mod tests {
         let b = s.run(ToolShape::builtin("comb").unwrap(), &p).unwrap();
         assert_eq!(a.0, b.0, "same trace twice, to the bit");
         assert!(a.1.contact_steps > 0, "the comb met the hair");
-        assert!(a.1.peak_force > 0.0);
+        assert!(a.1.peak_force_n > 0.0);
         assert_eq!(a.1.steps, 270, "0.2 s of path, 0.02 s later for the ease-in, and 0.05 s");
     }
 

@@ -233,7 +233,7 @@ def sweep(
     ``pandas.DataFrame`` with one row per scenario, in order: ``scenario`` (index in the list), ``name``,
     ``kind``, ``error`` (None, or the exception of a scenario that failed, whose summary columns are then
     empty), ``wall_time`` (s), the parameters that vary across the list (dotted keys such as
-    ``patch.hair_type``) and the summary (``summary.json``: e.g. ``peak_force`` N, ``mean_force`` N, ``work``
+    ``patch.hair_type``) and the summary (``summary.json``: e.g. ``peak_force_n`` N, ``mean_force_n`` N, ``work_j``
     J, ``combing_work_j`` J for a tress), nested keys dotted and lists indexed (``work_fifths_j.4``, the
     tips' fifth; ``per_stroke.combing_work_j.0``, the first stroke's work).
 

@@ -31,11 +31,6 @@ use tools::shape::ToolShape;
 /// Most passes of [`DeviceSide::out_of_body`]'s push-out (each moves the tool by its deepest end's push-out).
 pub const BODY_PUSH_PASSES: usize = 4;
 
-/// How much farther out than the tool a pointer's target is kept from the body, m: 1 mm. The smoothed device
-/// point lags its target; sliding along the convex scalp it cuts the chord, and every push back out of the tool's
-/// clearance steps its velocity (a 13 mN force step every ~20 ms in a slow comb stroke at 1 kHz without it).
-pub const POINTER_TARGET_MARGIN: f64 = 1e-3;
-
 /// What a physics step publishes for the device loop: the local force model and what the device side needs of
 /// the session's state (the tool's shape and the head's pose for the body contact).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -252,7 +247,7 @@ impl DeviceSide {
             // continuous velocity and bounded acceleration. Pushing the point itself out gave it a velocity
             // step where a target sliding along the scalp left the body's clearance (5 cm/s in one step), which
             // the coupling's damper passed to the hand as 0.1-0.3 N in one step.
-            target + self.out_of_body_by(&target, &r.rotation, POINTER_TARGET_MARGIN)
+            target + self.out_of_body(&target, &r.rotation)
         } else {
             target
         };
@@ -299,11 +294,6 @@ impl DeviceSide {
     /// another's way in): one pass left the tool to be pushed again the next step, a jump of the push-out the
     /// coupling passed to the hand.
     pub fn out_of_body(&self, point: &Vector3<f64>, rotation: &Matrix3<f64>) -> Vector3<f64> {
-        self.out_of_body_by(point, rotation, 0.0)
-    }
-
-    /// [`DeviceSide::out_of_body`] with the clearance widened by `margin` (m).
-    fn out_of_body_by(&self, point: &Vector3<f64>, rotation: &Matrix3<f64>, margin: f64) -> Vector3<f64> {
         let Some((body, threshold)) = self.body.as_ref() else { return Vector3::zeros() };
         let shape = &self.shapes[self.tool as usize];
         let mut total = Vector3::zeros();
@@ -312,7 +302,7 @@ impl DeviceSide {
             for c in &shape.capsules {
                 for end in [c.a, c.b] {
                     let x = point + total + rotation * Vector3::from(end);
-                    let d = body.push_out(&x.into(), *threshold, self.params.haptic.body_clearance + margin + c.radius).coords - x;
+                    let d = body.push_out(&x.into(), *threshold, self.params.haptic.body_clearance + c.radius).coords - x;
                     if d.norm_squared() > push.norm_squared() && d.iter().all(|v| v.is_finite()) {
                         push = d;
                     }

@@ -203,24 +203,6 @@ impl TargetFilter {
         self.point
     }
 
-    /// Moves the point by `by` (m), a constraint's correction such as the body's push-out, and takes away the
-    /// velocity's component against it (m/s), as a god-object would: the point then slides along the
-    /// constraint and leaves it with the velocity it slid with (continuous), where moving the point alone left
-    /// its velocity the unconstrained one (a step when the constraint lets go). Non-finite or zero `by`: no
-    /// change. Returns the point.
-    pub fn push(&mut self, by: &Vector3<f64>) -> Vector3<f64> {
-        let depth = by.norm();
-        if depth > 0.0 && depth.is_finite() {
-            let n = by / depth;
-            self.point += by;
-            let into = self.velocity.dot(&n);
-            if into < 0.0 {
-                self.velocity -= n * into;
-            }
-        }
-        self.point
-    }
-
     /// One haptic step of `dt` s with the pointer's latest target (m). Returns the device point (m).
     /// Non-finite targets are ignored (the point holds).
     pub fn step(&mut self, target: &Vector3<f64>, dt: f64) -> Vector3<f64> {

@@ -28,9 +28,6 @@ use lattice::metaball::MetaballSet;
 use nalgebra::{Isometry3, Matrix3, Vector3};
 use tools::shape::ToolShape;
 
-/// Most passes of [`DeviceSide::out_of_body`]'s push-out (each moves the tool by its deepest end's push-out).
-pub const BODY_PUSH_PASSES: usize = 4;
-
 /// What a physics step publishes for the device loop: the local force model and what the device side needs of
 /// the session's state (the tool's shape and the head's pose for the body contact).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -230,7 +227,7 @@ impl DeviceSide {
     }
 
     /// The device point following the pointer's target or the device's samples `r` (interpolated between
-    /// them, `SessionParams::input`; a pointer's target kept out of the body, [`DeviceSide::out_of_body`]), as a
+    /// them, `SessionParams::input`; a pointer's kept out of the body, [`DeviceSide::out_of_body`]), as a
     /// reading; None (counted) for a non-finite target. The first reading (and the first after none) puts
     /// device, proxy and tool where the pointer or device is, at rest.
     fn follow(&mut self, r: &DeviceReading, dt: f64) -> Option<DeviceReading> {
@@ -239,18 +236,6 @@ impl DeviceSide {
             self.rejected += 1;
             return None;
         }
-        let target = if self.params.input == InputKind::Pointer {
-            // The pointer's depth is the viewer's guess (its pressed plane): its target is kept out of the body
-            // as the tool is, so that pressing near a bulge of the head does not pull the hand into the skull
-            // at the device's force limit (3.3 N, seen pressing and drawing at once before the tool had come
-            // over the head). The target, not the smoothed point: the point then follows it with the filter's
-            // continuous velocity and bounded acceleration. Pushing the point itself out gave it a velocity
-            // step where a target sliding along the scalp left the body's clearance (5 cm/s in one step), which
-            // the coupling's damper passed to the hand as 0.1-0.3 N in one step.
-            target + self.out_of_body(&target, &r.rotation)
-        } else {
-            target
-        };
         if self.device.is_none() {
             self.coupling = Coupling::new(self.params.profile, CouplingParams::for_profile(&self.params.profile), target);
             self.model = HairReaction::none();
@@ -263,10 +248,11 @@ impl DeviceSide {
         let dev = self.device.get_or_insert_with(|| TargetFilter::new(follow, target));
         let mut point = dev.follow(&target, r.time, dt);
         if self.params.input == InputKind::Pointer {
-            // The smoothed point lags its target: where the target slides along the scalp it may cut into the
-            // clearance, and is then pushed out as the tool is, sliding along the body (`TargetFilter::push`).
-            let push = self.out_of_body(&point, &r.rotation);
-            point = self.device.as_mut().map_or(point, |d| d.push(&push));
+            // The pointer's depth is the viewer's guess (its pressed plane): the device point is kept out of the
+            // body as the tool is, so that pressing near a bulge of the head does not pull the hand into the
+            // skull at the device's force limit (3.3 N, seen pressing and drawing at once before the tool had
+            // come over the head).
+            point += self.out_of_body(&point, &r.rotation);
         }
         Some(DeviceReading { position: point, ..*r })
     }
@@ -288,31 +274,21 @@ impl DeviceSide {
     }
 
     /// The move that takes the selected tool at `point` (m), turned by `rotation`, out of the body: every end of
-    /// its capsules `HapticParams::body_clearance` plus its radius outside, m; zero if none is within that, or
-    /// without a body. The deepest end's push-out, repeated (at most [`BODY_PUSH_PASSES`] times) while it leaves
-    /// another end inside (in a concave place, between head and neck or shoulder, one end's way out is
-    /// another's way in): one pass left the tool to be pushed again the next step, a jump of the push-out the
-    /// coupling passed to the hand.
+    /// its capsules `HapticParams::body_clearance` plus its radius outside (the deepest end's push-out), m; zero
+    /// if none is within that, or without a body.
     pub fn out_of_body(&self, point: &Vector3<f64>, rotation: &Matrix3<f64>) -> Vector3<f64> {
         let Some((body, threshold)) = self.body.as_ref() else { return Vector3::zeros() };
         let shape = &self.shapes[self.tool as usize];
-        let mut total = Vector3::zeros();
-        for _ in 0..BODY_PUSH_PASSES {
-            let mut push = Vector3::zeros();
-            for c in &shape.capsules {
-                for end in [c.a, c.b] {
-                    let x = point + total + rotation * Vector3::from(end);
-                    let d = body.push_out(&x.into(), *threshold, self.params.haptic.body_clearance + c.radius).coords - x;
-                    if d.norm_squared() > push.norm_squared() && d.iter().all(|v| v.is_finite()) {
-                        push = d;
-                    }
+        let mut push = Vector3::zeros();
+        for c in &shape.capsules {
+            for end in [c.a, c.b] {
+                let x = point + rotation * Vector3::from(end);
+                let d = body.push_out(&x.into(), *threshold, self.params.haptic.body_clearance + c.radius).coords - x;
+                if d.norm_squared() > push.norm_squared() && d.iter().all(|v| v.is_finite()) {
+                    push = d;
                 }
             }
-            if push == Vector3::zeros() {
-                break;
-            }
-            total += push;
         }
-        total
+        push
     }
 }

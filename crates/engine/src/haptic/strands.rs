@@ -60,10 +60,10 @@ impl HapticCore {
                 m.gravity = Vector3::zeros();
             }
             if let Some(c) = curl.as_ref() {
-                let mut q = m.rest_coordinates();
+                let (mut q, d) = (m.rest_coordinates(), m.dofs_per_segment());
                 for i in 0..m.segments {
-                    q[2 * i] += c.twist;
-                    q[2 * i + 1] += c.bend;
+                    q[d * i] += c.twist;
+                    q[d * i + 1] += c.bend;
                 }
                 m.set_rest_coordinates(&q);
             }

@@ -97,6 +97,9 @@ pub struct LiveFit {
     pub units: Option<String>,
     /// True: only the given units and axes, no detection, no ICP, no push-out (`--no-fit`). Default false.
     pub no_fit: bool,
+    /// Follow strands drawn around each of the file's strands (`SceneOptions::follow_strands`). Default: as
+    /// many as bring the drawn strands to `[live] render_strands`.
+    pub follow_strands: Option<usize>,
 }
 
 impl LiveFit {
@@ -272,8 +275,9 @@ impl LiveScenario {
     }
 
     /// The scene: the built-in one of `coiffure serve` ([`LiveScenario::scene_options`]), or with `[live]
-    /// hairstyle` that file placed on the head by `hairstyle::fit` and carried by the built-in head and
-    /// guides ([`Scene::from_curves`], as the viewer's load), a relative name looked up in `dir`.
+    /// hairstyle` that file placed on the head by `hairstyle::fit`, its strands drawn with `[live.fit]
+    /// follow_strands` around each and guides fitted to them ([`Scene::from_curves`], as the viewer's load), a
+    /// relative name looked up in `dir`.
     pub fn scene_in(&self, dir: &std::path::Path) -> Result<Scene, ScenarioError> {
         self.validate()?;
         let opts = self.scene_options();
@@ -282,7 +286,7 @@ impl LiveScenario {
             Some(name) => {
                 let path = dir.join(name);
                 let (curves, _) = hairstyle::fit::fit_file(&path, &self.live.fit.options()?).map_err(|e| ScenarioError::File { path: path.clone(), message: format!("live.hairstyle: {e}") })?;
-                Scene::from_curves(&curves, &opts)
+                Scene::from_curves(&curves, &SceneOptions { follow_strands: self.live.fit.follow_strands, ..opts })
             }
         };
         scene.map_err(|e| ScenarioError::Invalid(format!("live scene: {e}")))

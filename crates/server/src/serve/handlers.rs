@@ -122,15 +122,17 @@ pub(super) fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
     }
 }
 
-/// Replaces the live hairstyle by `curves` (m, head frame, as `hairstyle::fit` leaves them): a scene of the built-in head and guides
-/// carrying them ([`Scene::from_curves`]), a new session on it, the new SCENE sent to every viewer, then
+/// Replaces the live hairstyle by `curves` (m, head frame, as `hairstyle::fit` leaves them): a scene of the built-in head
+/// with guides fitted to the file's strands and follow strands around them ([`Scene::load`]), a new session on it, the new SCENE sent to every viewer, then
 /// the frame thread switched to the new session's snapshots. The old session stops. Refused while
 /// recording (a record is of one scene).
 fn load(app: &App, curves: &hairstyle::HairCurves, t0: Instant) -> Result<(), String> {
     if app.record.is_some() {
         return Err("cannot load a hairstyle while recording (--record): a record replays one scene".into());
     }
-    let scene = Arc::new(Scene::from_curves(curves, &app.opts).map_err(|e| format!("cannot use the loaded hairstyle: {e}"))?);
+    let (scene, report) = Scene::load(curves, &app.opts).map_err(|e| format!("cannot use the loaded hairstyle: {e}"))?;
+    let scene = Arc::new(scene);
+    tracing::info!("loaded hairstyle: {}", report.summary());
     // Over the budget the new scene is dropped before anything live changes.
     app.opts.load.check_time(t0, "building the scene")?;
     let (session, io) = Session::start_with_device(scene.clone(), app.params, app.session_device()?).map_err(|e| e.to_string())?;

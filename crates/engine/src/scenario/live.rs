@@ -498,6 +498,27 @@ mod tests {
     }
 
     #[test]
+    fn live_comb_stroke_through_a_loaded_groom_meets_the_acceptance() {
+        // Issue 34: the acceptance stroke (live-comb.toml, issue 12's bounds) through a loaded groom that is not
+        // the built-in one: 3,000 strands of 30 cm, wavy (curliness 0.2), no parting, written as a .hair file
+        // and loaded with `[live] hairstyle` (placed by `hairstyle::fit`, 200 of its strands the guides, 32
+        // follow strands around each to 100,000 drawn strands). The comb moves the guides fitted to the file:
+        // some guide point at least 5 mm from its place during the stroke.
+        let h = hairstyle::Hairstyle::generate(&hairstyle::HairstyleParams { render_count: 3000, guide_count: 80, render_vertices: 24, length: 0.3, curliness: 0.2, fringe_flow: None, seed: 21, ..Default::default() }).unwrap();
+        let dir = std::env::temp_dir().join(format!("coiffure-loaded-comb-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("groom.hair");
+        hairstyle::write_file(&path, &h.to_curves()).unwrap();
+        let mut s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-comb.toml")).unwrap();
+        s.live.hairstyle = Some(path.clone());
+        let scene = s.scene_in(&dir).unwrap();
+        assert_eq!(scene.render.strands(), 3000 * 33);
+        let m = meets_the_comb_acceptance(&s, 300);
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(m.stroke_max_displacement_m >= 5e-3, "the comb moves the fitted guides: {} m", m.stroke_max_displacement_m);
+    }
+
+    #[test]
     fn live_comb_stroke_meets_the_acceptance_on_african_hair() {
         // Issue 29: the same acceptance stroke (live-comb.toml) through tightly curled African hair.
         let mut s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-comb.toml")).unwrap();

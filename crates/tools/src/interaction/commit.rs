@@ -2,8 +2,7 @@
 //! reaction's damping and stiffness ([`super::StepResult`]), surface friction the brush torque (applied at the
 //! next step).
 
-use super::rows::Solved;
-use super::step::StepFrame;
+use super::frame::{Solved, StepFrame};
 use super::warm::Warm;
 use super::LocalInteraction;
 use nalgebra::{Matrix3, Vector3};

@@ -3,33 +3,13 @@
 //! step's impulses (`warm.rs`); with the paper's model (`paper.rs`) and for an unprepared strand, the strand
 //! steps here.
 
-use super::step::StepFrame;
+use super::frame::{Pending, Solved, StepFrame};
 use super::warm::WarmTag;
 use super::{ForceModel, LocalInteraction};
 use crate::contact::Contact;
 use nalgebra::Vector3;
 use strand::constraint::{ConstraintKind, ConstraintRows, PointConstraint};
 use strand::StrandError;
-
-/// How a strand's constrained step stands between the stages of [`LocalInteraction::step`].
-pub(super) enum Solved {
-    /// Its rows, at this index of the step's rows, wait for the common solve.
-    Rows(usize),
-    /// It stepped on its own (its step could not be prepared), with these impulses, N s.
-    Stepped(Vec<Vector3<f64>>),
-}
-
-/// A strand's constrained step between the stages of [`LocalInteraction::step`]: the tool constraints' levers
-/// (m) and contacts (the first `levers.len()` constraints are the tool's), and whether it had constraints.
-pub(super) struct Pending {
-    pub strand: usize,
-    /// What each of its constraints is, to warm-start the next step's solve.
-    pub tags: Vec<(WarmTag, f64)>,
-    pub levers: Vec<Vector3<f64>>,
-    pub touching: Vec<Option<Contact>>,
-    pub solved: Solved,
-    pub touched: bool,
-}
 
 impl LocalInteraction {
     /// Stage 5: every strand's constraints and rows (the constrained strands' rows in `frame.rows[..frame.used]`, each
@@ -45,12 +25,12 @@ impl LocalInteraction {
         for k in (0..self.strands.len()).rev() {
             first_piece[k] = first_piece[k].min(first_piece[k + 1]);
         }
-        let entanglement = if constraint { self.entanglement } else { None };
+        let entanglement = if constraint { self.params.entanglement } else { None };
         if let Some(e) = entanglement {
             e.validate()?;
         }
         let wisp_radius = self.wisp_radius(radius);
-        frame.rows = std::mem::take(&mut self.rows);
+        frame.rows = std::mem::take(&mut self.ws.rows);
         frame.used = 0;
         // Per-strand buffers, kept across the strands (no allocation per strand and step).
         let mut mine: Vec<&Contact> = Vec::new();
@@ -69,7 +49,7 @@ impl LocalInteraction {
             // Body contacts (constraint model): sampled points inside the body or within a hair's radius of it.
             resting.clear();
             let t_body = frame.clock.elapsed().as_secs_f64();
-            if let (Some((body, threshold)), ForceModel::Constraint { .. }) = (&self.body, &self.model) {
+            if let (Some((body, threshold)), ForceModel::Constraint { .. }) = (&self.params.body, &self.model) {
                 // Each piece's start, and the strand's last end (a piece's end is the next one's start). The
                 // pieces are contiguous per strand, in strand order.
                 let pieces = &self.pieces[first_piece[k]..first_piece[k + 1]];
@@ -85,7 +65,7 @@ impl LocalInteraction {
                     let d = q - x;
                     let depth = d.norm();
                     if depth > 0.0 {
-                        let kind = ConstraintKind::Contact { normal: d / depth, depth, friction: self.body_friction };
+                        let kind = ConstraintKind::Contact { normal: d / depth, depth, friction: self.params.body_friction };
                         resting.push(PointConstraint { s, kind, velocity: Vector3::zeros() });
                     }
                 }
@@ -114,7 +94,7 @@ impl LocalInteraction {
                     // A wisp of many fibres parts around a tooth (the drag) instead of being pushed aside; a thick
                     // capsule (a comb's spine: `Entanglement::parts`) pushes it as a solid at the fibre's radius.
                     let parting = entanglement.is_some() && wisp_radius > radius;
-                    let hair_friction = self.hair_contact.map_or(0.0, |hc| hc.friction);
+                    let hair_friction = self.params.hair_contact.map_or(0.0, |hc| hc.friction);
                     // Where the comb entered the wisp: kept while a tooth drags through it, else this step's
                     // shallowest contact.
                     let entry = self.piles[k].take().unwrap_or_else(|| mine.iter().map(|c| c.s).fold(f64::INFINITY, f64::min));
@@ -160,10 +140,10 @@ impl LocalInteraction {
                     cons.extend(frame.hair_rows[k].iter().map(|(_, c)| *c));
                     tags.extend(frame.hair_rows[k].iter().map(|(side, c)| (WarmTag::Hair(side.other), c.s)));
                     let last = std::mem::take(&mut self.warm[k]);
-                    let outcome = if self.prepared[k] {
+                    let outcome = if self.ws.prepared[k] {
                         // A batched strand with constraints takes over its lane's solver workspace.
-                        let handed = match (cons.is_empty(), self.lane_of[k]) {
-                            (false, Some((b, j))) => self.batches[b].hand_over(j, strand),
+                        let handed = match (cons.is_empty(), self.ws.lane_of[k]) {
+                            (false, Some((b, j))) => self.ws.batches[b].hand_over(j, strand),
                             _ => Ok(()),
                         };
                         if frame.rows.len() <= frame.used {
@@ -181,7 +161,7 @@ impl LocalInteraction {
                         strand.step_constrained(dt, &twisting, &cons, &options).map(Solved::Stepped)
                     };
                     if let Ok(Solved::Rows(i)) = &outcome {
-                        Self::warm_start(&last, &tags, strand.model.segment_length(), &mut self.warm_used, &mut frame.rows[*i]);
+                        Self::warm_start(&last, &tags, strand.model.segment_length(), &mut self.ws.warm_used, &mut frame.rows[*i]);
                     }
                     self.warm[k] = last;
                     self.warm[k].clear();

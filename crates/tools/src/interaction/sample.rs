@@ -1,7 +1,7 @@
 //! Sampling the strands' centrelines into straight collision pieces (from the prepared step's sweep when there
 //! is one), and the radii the contacts use (a fibre's, a wisp's, the reach).
 
-use super::step::StepFrame;
+use super::frame::StepFrame;
 use super::{ForceModel, LocalInteraction};
 use crate::bvh::Piece;
 use nalgebra::Vector3;
@@ -17,13 +17,13 @@ impl LocalInteraction {
     /// Radius of the wisp each strand stands for, m: half the hair-hair contact distance, or the fibre's radius
     /// without hair contact.
     pub(super) fn wisp_radius(&self, fibre_radius: f64) -> f64 {
-        self.hair_contact.map_or(fibre_radius, |hc| 0.5 * hc.distance(fibre_radius)).max(fibre_radius)
+        self.params.hair_contact.map_or(fibre_radius, |hc| 0.5 * hc.distance(fibre_radius)).max(fibre_radius)
     }
 
     /// Distance from a strand's centreline within which the tool's capsules are looked for, m: the wisp's radius
     /// with the entanglement drag, else the fibre's.
     pub(super) fn reach_radius(&self, fibre_radius: f64) -> f64 {
-        if self.entanglement.is_some() && matches!(self.model, ForceModel::Constraint { .. }) {
+        if self.params.entanglement.is_some() && matches!(self.model, ForceModel::Constraint { .. }) {
             self.wisp_radius(fibre_radius)
         } else {
             fibre_radius
@@ -92,7 +92,7 @@ impl LocalInteraction {
     pub(super) fn sample_pieces(&mut self, frame: &mut StepFrame) {
         self.pieces.clear();
         for (k, strand) in self.strands.iter().enumerate() {
-            if self.prepared[k] {
+            if self.ws.prepared[k] {
                 Self::sample_strand_from_sweep(k, strand, &mut self.pieces);
             } else {
                 Self::sample_strand(k, strand, &mut self.pieces);
@@ -106,13 +106,13 @@ impl LocalInteraction {
         }
         let radius = Self::hair_radius(&self.strands);
         let reach = self.reach_radius(radius);
-        if self.pieces.len() == self.bvh.len() && self.bvh.margin() == reach && !self.rebuild_tree {
-            self.bvh.refit(&self.pieces);
+        if self.pieces.len() == self.ws.bvh.len() && self.ws.bvh.margin() == reach && !self.ws.rebuild_tree {
+            self.ws.bvh.refit(&self.pieces);
         } else {
             // A strand changed its number of pieces (cut by the scissors, or replaced), or the reach changed: new
             // tree.
-            self.bvh.rebuild(&self.pieces, reach);
-            self.rebuild_tree = false;
+            self.ws.bvh.rebuild(&self.pieces, reach);
+            self.ws.rebuild_tree = false;
         }
         frame.radius = radius;
         frame.reach = reach;

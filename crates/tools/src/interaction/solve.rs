@@ -1,7 +1,7 @@
 //! Stage 6: the constraints of all strands in one projected Gauss-Seidel solve ([`strand::constraint::solve`]), the
 //! hair-hair contacts linking the two strands' rows (both strands' responses in each, no lag of a step).
 
-use super::step::StepFrame;
+use super::frame::StepFrame;
 use super::LocalInteraction;
 use strand::constraint::{solve, ConstraintLink, ConstraintOptions, ConstraintRows};
 

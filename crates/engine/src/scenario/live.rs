@@ -361,13 +361,13 @@ impl LiveScenario {
             let cmd = ls.haptic_step(&std::mem::take(&mut commands), &readings);
             if n >= settle_steps {
                 timing.push(t0.elapsed().as_secs_f64());
-                trace.push(t, &cmd.force, &cmd.torque, ls.haptic.last_contacts, &ls.haptic.tool_input().position);
+                trace.push(t, &cmd.force, &cmd.torque, ls.haptic.last_contacts(), &ls.haptic.tool_input().position);
                 meter.step(&ls);
             }
         }
         meter.measure(&ls);
         let wall = started.elapsed().as_secs_f64();
-        let summary = LiveSummary::new(&trace, max_force, ls.dt, &meter, &mut timing, ls.haptic.rejected, ls.haptic.failed, wall);
+        let summary = LiveSummary::new(&trace, max_force, ls.dt, &meter, &mut timing, ls.haptic.stats.rejected, ls.haptic.stats.failed, wall);
         Ok((trace, summary, ls.record.take()))
     }
 }
@@ -392,14 +392,14 @@ pub fn replay_record(scene: Arc<Scene>, params: SessionParams, record: &Record) 
         Some(c) => {
             // The haptic step's wall time (from the end of the previous step or global step).
             timing.push(last.elapsed().as_secs_f64());
-            trace.push(trace.len() as f64 * ls.dt, &c.force, &c.torque, ls.haptic.last_contacts, &ls.haptic.tool_input().position);
+            trace.push(trace.len() as f64 * ls.dt, &c.force, &c.torque, ls.haptic.last_contacts(), &ls.haptic.tool_input().position);
             meter.step(ls);
             last = Instant::now();
         }
     });
     meter.measure(&ls);
     let wall = started.elapsed().as_secs_f64();
-    Ok((trace.clone(), LiveSummary::new(&trace, params.profile.max_force, ls.dt, &meter, &mut timing, ls.haptic.rejected, ls.haptic.failed, wall)))
+    Ok((trace.clone(), LiveSummary::new(&trace, params.profile.max_force, ls.dt, &meter, &mut timing, ls.haptic.stats.rejected, ls.haptic.stats.failed, wall)))
 }
 
 #[cfg(test)]

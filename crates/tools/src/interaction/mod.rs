@@ -1,33 +1,40 @@
 //! The local interaction: a tool touching a patch of strands, one haptic step at a time.
 //!
-//! Stages of [`LocalInteraction::step`] (`step.rs`), in order:
+//! Stages of [`LocalInteraction::step`] (`step.rs`: the list, and `StepFrame`, what the stages hand each
+//! other), each in its own file:
 //! 1. **Hold** (`hold.rs`): the hair volume's pull towards each held strand's place, in turns.
-//! 2. **Dynamics** (constraint model): every strand's free step is prepared ([`strand::Strand::prepare_step`]),
-//!    batched strands together ([`strand::StrandBatch`]).
+//! 2. **Dynamics** (`prepare.rs`, constraint model): every strand's free step is prepared
+//!    ([`strand::Strand::prepare_step`]), batched strands together ([`strand::StrandBatch`]).
 //! 3. **Sample** (`sample.rs`): every strand's centreline as straight pieces (two per helical segment, read from
 //!    the prepared sweep), and the AABB tree refitted.
-//! 4. **Detect**: contacts between the tool's swept motion and the pieces ([`crate::contact::detect`]), and the
-//!    hair-hair contacts ([`crate::hair_contact`]).
-//! 5. **Rows**, per strand: its constraints (tool contacts and, with the entanglement, drags against the
-//!    parted fibres; clip pins; body contacts; hair-hair contacts) as rows of its prepared step, warm-started
-//!    from the last step's impulses (`warm.rs`); with the paper's [`ForceModel`] the strand steps here with
-//!    the explicit point forces.
-//! 6. **Solve**: all strands' rows in one projected Gauss-Seidel solve ([`strand::constraint::solve`]), a
-//!    hair-hair contact linking its two strands' rows.
-//! 7. **Commit**, per strand: the impulses applied and the step committed; the tool contacts' compliance gives
-//!    the reaction's damping and stiffness ([`StepResult`]), surface friction the brush torque (applied at the
-//!    next step).
-//! 8. **Reaction**: the tool receives the exact opposite of what the strands received: force and torque about
-//!    its origin.
+//! 4. **Detect** (`detect.rs`): contacts between the tool's swept motion and the pieces
+//!    ([`crate::contact::detect`]), and the hair-hair contacts ([`crate::hair_contact`]) as pairs of rows.
+//! 5. **Rows** (`rows.rs`), per strand: its constraints (tool contacts and, with the entanglement, drags against
+//!    the parted fibres; clip pins; body contacts; hair-hair contacts) as rows of its prepared step, warm-started
+//!    from the last step's impulses (`warm.rs`); with the paper's [`ForceModel`] (`paper.rs`) the strand steps
+//!    here with the explicit point forces.
+//! 6. **Solve** (`solve.rs`): all strands' rows in one projected Gauss-Seidel solve
+//!    ([`strand::constraint::solve`]), a hair-hair contact linking its two strands' rows.
+//! 7. **Commit** (`commit.rs`), per strand: the impulses applied and the step committed; the tool contacts'
+//!    compliance gives the reaction's damping and stiffness ([`StepResult`]), surface friction the brush torque
+//!    (applied at the next step).
+//! 8. **Reaction** (`step.rs`): the tool receives the exact opposite of what the strands received: force and
+//!    torque about its origin.
 //!
 //! A clip ([`LocalInteraction::clip`]) pins strand points to the tool: they follow it (constraint model only).
-//! Files: `model.rs` (the force model), `result.rs` (what a step gives), `hold.rs`, `sample.rs`, `warm.rs`,
-//! `step.rs` (the stages), this file (the interaction's state and its changes between steps).
+//! Other files: `model.rs` (the force model), `result.rs` (what a step gives), this file (the interaction's
+//! settings, state and workspaces, and their changes between steps).
 
+mod commit;
+mod detect;
 mod hold;
 mod model;
+mod paper;
+mod prepare;
 mod result;
+mod rows;
 mod sample;
+mod solve;
 mod step;
 mod warm;
 
@@ -43,7 +50,7 @@ use crate::hair_contact::HairContactFinder;
 use crate::shape::ToolShape;
 use nalgebra::Vector3;
 use strand::constraint::{ConstraintRows, PointConstraint};
-use strand::{ModelKind, PointForce, Strand, StrandBatch};
+use strand::{PointForce, Strand, StrandBatch};
 use warm::{HairSide, Warm, WarmTag};
 
 /// A patch of strands, a tool, and the contact between them.
@@ -295,70 +302,6 @@ impl LocalInteraction {
         s.state = own;
         self.rest_stale = true;
         true
-    }
-
-    /// Aligns the strands' rest shapes with this step's pieces into `rest_pieces` (NaN for a strand whose rest
-    /// shape is missing or has another number of pieces; empty when no strand has one).
-    fn rebuild_rest_pieces(&mut self) {
-        self.rest_stale = false;
-        self.rest_pieces.clear();
-        if self.rest_shapes.iter().all(|r| r.is_empty()) {
-            return;
-        }
-        let nan = Vector3::repeat(f64::NAN);
-        let mut i = 0;
-        while i < self.pieces.len() {
-            let k = self.pieces[i].strand;
-            let n = self.pieces[i..].iter().take_while(|p| p.strand == k).count();
-            match self.rest_shapes.get(k).filter(|r| r.len() == n) {
-                Some(r) => self.rest_pieces.extend_from_slice(r),
-                None => self.rest_pieces.extend(self.pieces[i..i + n].iter().map(|p| Piece { a: nan, b: nan, ..*p })),
-            }
-            i += n;
-        }
-    }
-
-    /// Prepares the steps of the reduced, linearly implicit strands in batches of four strands of equal size
-    /// ([`StrandBatch::prepare`]); marks them prepared and remembers their lanes. Strands left out (another
-    /// model or integrator, a lane that failed) are prepared one by one afterwards.
-    fn prepare_batched(&mut self, dt: f64) {
-        self.lane_of.clear();
-        self.lane_of.resize(self.strands.len(), None);
-        let mut groups: Vec<((usize, usize), Vec<usize>)> = Vec::new();
-        for (k, s) in self.strands.iter().enumerate() {
-            // A strand that carries the last step's constraint loads takes their geometric stiffness in its own
-            // (scalar) step.
-            if s.model.kind != ModelKind::Reduced || s.integrator != strand::Integrator::LinearlyImplicitEuler || !s.constraint_loads.is_empty() {
-                continue;
-            }
-            let key = (s.model.segments, s.dynamics.quadrature_nodes().len());
-            match groups.iter_mut().find(|g| g.0 == key) {
-                Some(g) => g.1.push(k),
-                None => groups.push((key, vec![k])),
-            }
-        }
-        let mut b = 0;
-        for (key, members) in groups {
-            for chunk in members.chunks(strand::batch::LANES) {
-                if self.batches.len() <= b {
-                    self.batches.push(StrandBatch::new(key.0, key.1));
-                } else if !self.batches[b].accepts(&self.strands[chunk[0]]) {
-                    self.batches[b] = StrandBatch::new(key.0, key.1);
-                }
-                let ext: Vec<&[PointForce]> = chunk.iter().map(|&k| self.surface_torques[k].as_slice()).collect();
-                let mut refs: Vec<&mut Strand> = self.strands.iter_mut().enumerate().filter(|(k, _)| chunk.contains(k)).map(|(_, s)| s).collect();
-                // A lane that fails is left unprepared; its strand's own step reports the error below.
-                let _ = self.batches[b].prepare(dt, &mut refs, &ext);
-                for (j, &k) in chunk.iter().enumerate() {
-                    if self.strands[k].has_prepared_step() {
-                        self.prepared[k] = true;
-                        self.lane_of[k] = Some((b, j));
-                        self.surface_torques[k].clear();
-                    }
-                }
-                b += 1;
-            }
-        }
     }
 
     /// Adds a point load (force in N, torque in N m, at arc length `load.s` m) on strand `strand` for the

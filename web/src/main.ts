@@ -159,7 +159,7 @@ ws.onmessage = (ev) => {
       const t = f.translation.map((x) => x.toFixed(3)).join(', ');
       const el = document.getElementById('fit-info');
       if (el) {
-        el.textContent = `fit: ${f.metersPerUnit} m/unit (${f.unitsSource}), up ${f.up} front ${f.front} (${f.axesSource}), scale ${f.scale.toPrecision(4)}, move [${t}] m; ${(100 * f.rooted).toFixed(0)} % of strands rooted on the scalp (roots median ${(1e3 * f.rootedMedian).toFixed(1)} mm, p95 ${(1e3 * f.rootedP95).toFixed(1)} mm from it)${f.rooted < 0.999 ? `, ${(100 * (1 - f.rooted)).toFixed(0)} % loose` : ''}`;
+        el.textContent = `fit: units ${P.unitsName(f.metersPerUnit)} (${f.unitsSource}), up ${f.up} front ${f.front} (${f.axesSource}), scale ${f.scale.toPrecision(4)}, move [${t}] m; ${(100 * f.rooted).toFixed(0)} % of strands rooted on the scalp (roots median ${(1e3 * f.rootedMedian).toFixed(1)} mm, p95 ${(1e3 * f.rootedP95).toFixed(1)} mm from it)${f.rooted < 0.999 ? `, ${(100 * (1 - f.rooted)).toFixed(0)} % loose` : ''}`;
         el.title = `rotation (file to head frame, rows): ${f.rotation.map((x) => x.toFixed(3)).join(' ')}; all roots to the scalp: median ${(1e3 * f.rootMedian).toFixed(1)} mm, p95 ${(1e3 * f.rootP95).toFixed(1)} mm, max ${(1e3 * f.rootMax).toFixed(1)} mm; ${f.pushedOut} points pushed out of the head`;
       }
       break;
@@ -376,6 +376,8 @@ document.getElementById('load')!.addEventListener('change', async (ev) => {
     up: sel('fit-up'), front: sel('fit-front'), metersPerUnit: sel('fit-units'),
     noFit: (document.getElementById('fit-none') as HTMLInputElement).checked,
   };
+  const follow = (document.getElementById('fit-follow') as HTMLInputElement).value.trim();
+  if (follow !== '') opts.followStrands = Math.max(0, Math.round(Number(follow)));
   status.send(P.encodeLoad(format, await file.arrayBuffer(), opts));
   (ev.target as HTMLInputElement).value = '';
 });

@@ -103,6 +103,17 @@ export interface FitOptions {
   front: number; // same
   noFit: boolean;
   metersPerUnit: number; // 0 detect
+  followStrands?: number; // follow strands per strand of the file; undefined: the server's default
+}
+
+/** Metres per file unit for people (the rule of `hairstyle::fit::units_name`): a named unit when within 1e-6 of it
+ * ("cm (0.01 m)"; a file's f32 holds 0.009999999776 for 0.01), else 4 significant digits. */
+export function unitsName(m: number): string {
+  const named: [string, number][] = [['m', 1], ['dm', 0.1], ['cm', 0.01], ['mm', 0.001], ['in', 0.0254], ['ft', 0.3048]];
+  for (const [name, v] of named) {
+    if (Math.abs(m / v - 1) < 1e-6) return name === 'm' ? 'm' : `${name} (${v} m)`;
+  }
+  return `${Number(m.toPrecision(4))} m`;
 }
 
 export const FORMATS = ['hair', 'data', 'tfx', 'usda'];
@@ -368,13 +379,15 @@ export function encodeLoad(format: number, file: ArrayBuffer, opts?: FitOptions)
     new Uint8Array(b, 3).set(new Uint8Array(file));
     return b;
   }
-  const [b, v] = header(Client.LOAD, 9 + file.byteLength);
+  const follow = opts.followStrands !== undefined;
+  const [b, v] = header(Client.LOAD, 9 + (follow ? 4 : 0) + file.byteLength);
   v.setUint8(2, format | 0x80);
   v.setUint8(3, opts.up);
   v.setUint8(4, opts.front);
-  v.setUint8(5, opts.noFit ? 1 : 0);
+  v.setUint8(5, (opts.noFit ? 1 : 0) | (follow ? 2 : 0));
   v.setUint8(6, 0);
   v.setFloat32(7, opts.metersPerUnit, true);
-  new Uint8Array(b, 11).set(new Uint8Array(file));
+  if (follow) v.setUint32(11, opts.followStrands!, true);
+  new Uint8Array(b, follow ? 15 : 11).set(new Uint8Array(file));
   return b;
 }

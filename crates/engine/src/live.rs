@@ -201,7 +201,6 @@ impl Session {
             let mut cmds = Vec::new();
             // The strand budget's change decided after the last step, applied and recorded first.
             if let Some(c) = budget.as_mut().and_then(|b| b.change.take()) {
-                core.apply(&c);
                 cmds.push(c);
             }
             // At most MAX_COMMANDS_PER_STEP viewer commands per haptic step (the rest wait for the next steps):
@@ -212,11 +211,10 @@ impl Session {
                 if c == Command::Reset {
                     epoch_h.fetch_add(1, Ordering::Release);
                 }
-                core.apply(&c);
                 cmds.push(c);
             }
             let lattice = lat_h_out.read();
-            core.physics_step(&h.proxy, lattice, dt);
+            core.physics_period(&cmds, &h.proxy, lattice, dt);
             tool_in.write(core.tool_input());
             if let Some(r) = step_tx.as_mut() {
                 // Period k's record is whole at physics step k + 1: its device readings and last force come

@@ -338,14 +338,11 @@ impl HapticParams {
 
     /// The hold of the hair volume per unit mass of hair at gravity `g` (m/s^2): its stiffness
     /// `omega^2 = |g| / hold_distance` (1/s^2) and its damping `2 hold_damping omega` (1/s); (0, 0) without a hold
-    /// (`hold_distance` infinite). The one hold law's rates: a local strand's hold (`LocalInteraction::holds`, its
+    /// (`hold_distance` infinite). The one hold law (`tools::interaction::hold_rate`)'s rates: a local strand's hold (`LocalInteraction::holds`, its
     /// spring `omega^2` times the linear density per unit length) and damping (added to its air drag), and the
     /// relaxation of a handed-over guide's displacement in the global layer (`HapticCore::handed`).
     pub fn hold_rates(&self, g: f64) -> (f64, f64) {
-        if !(self.hold_distance.is_finite() && self.hold_distance > 0.0) {
-            return (0.0, 0.0);
-        }
-        let k = g.abs() / self.hold_distance;
+        let k = tools::interaction::hold_rate(g, self.hold_distance);
         (k, 2.0 * self.hold_damping * k.sqrt())
     }
 
@@ -444,13 +441,11 @@ pub struct GlobalParams {
     pub obstacle_spacing: f64,
     /// Most metaballs along one capsule, minus one. Default 64.
     pub obstacle_max_balls: usize,
-    /// Newton steps of the push-out of lattice nodes from the body per global step. Default 4.
-    pub push_out_iterations: usize,
 }
 
 impl Default for GlobalParams {
     fn default() -> Self {
-        Self { nozzle_standoff: 0.15, blade_radius: 0.04, max_pieces_per_cut: 256, max_cluster_sets: 8, obstacle_margin: 0.02, obstacle_spacing: 0.5, obstacle_max_balls: 64, push_out_iterations: 4 }
+        Self { nozzle_standoff: 0.15, blade_radius: 0.04, max_pieces_per_cut: 256, max_cluster_sets: 8, obstacle_margin: 0.02, obstacle_spacing: 0.5, obstacle_max_balls: 64 }
     }
 }
 

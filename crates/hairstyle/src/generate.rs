@@ -200,28 +200,51 @@ fn build_guide(
             break;
         }
     }
-    let (model, mut state, mut stable) = best.expect("at least one plane");
-    if !stable {
-        // last resort: the nearest stable minimum of the sag-free model, from a slightly twisted start
-        let mut start = state.clone();
-        for i in 0..model.segments {
-            start.q[2 * i] += 1e-3 * if i % 2 == 0 { 1.0 } else { -1.0 };
-        }
-        if let Ok(eq) = solve_equilibrium(&model, &start, &[], &StaticOptions::default()) {
-            let s = StrandState { q: eq.q.clone(), ..state.clone() };
-            let clear = head.clears(&model, &s, 0.0);
-            if eq.stable && clear {
-                state = s;
-                stable = true;
-            }
-        }
-    }
+    let (model, state, stable) = best.expect("at least one plane");
+    let (state, stable) = stabilise(&model, state, stable, head);
     Ok(Guide {
         model,
         state,
         root,
         stable,
     })
+}
+
+/// The stability rule of every guide, generated or fitted to a file's strand: a groomed `state` whose
+/// sag-free rest (`model`, from [`sag_free_rest`]) is not a stable equilibrium (`stable` false) is relaxed,
+/// as a last resort, to the nearest stable minimum of that model ([`solve_equilibrium`] from a slightly
+/// twisted start) if that lies outside the body; else it is kept, flagged unstable. Returns the state and
+/// the flag.
+pub fn stabilise(model: &StrandModel, state: StrandState, stable: bool, head: &Head) -> (StrandState, bool) {
+    if stable {
+        return (state, true);
+    }
+    let mut start = state.clone();
+    for i in 0..model.segments {
+        start.q[model.dofs_per_segment() * i] += 1e-3 * if i % 2 == 0 { 1.0 } else { -1.0 };
+    }
+    if let Ok(eq) = solve_equilibrium(model, &start, &[], &StaticOptions::default()) {
+        let s = StrandState { q: eq.q.clone(), ..state.clone() };
+        if eq.stable && head.clears(model, &s, 0.0) {
+            return (s, true);
+        }
+    }
+    (state, false)
+}
+
+/// Keeps every vertex of `path` (m, head frame) but the root at least [`RENDER_GAP`] outside the body of
+/// `head` (pushed along the body's normal, up to four times, at most 5 cm in at a time).
+pub fn keep_outside(head: &Head, path: &mut [Point3<f64>]) {
+    for p in path.iter_mut().skip(1) {
+        for _ in 0..4 {
+            let d = head.signed_distance(p);
+            if d >= RENDER_GAP {
+                break;
+            }
+            let Some(nrm) = head.normal(p) else { break };
+            *p += (RENDER_GAP - d.max(-0.05) + 1e-5) * nrm;
+        }
+    }
 }
 
 /// Parallel-transported unit vector perpendicular to each tangent of a polyline.
@@ -330,17 +353,7 @@ impl Hairstyle {
                         *p += amp * ramp * (phi.cos() * a + phi.sin() * b);
                     }
                 }
-                // keep every vertex but the root at least RENDER_GAP outside the body
-                for p in path.iter_mut().skip(1) {
-                    for _ in 0..4 {
-                        let d = head.signed_distance(p);
-                        if d >= RENDER_GAP {
-                            break;
-                        }
-                        let Some(nrm) = head.normal(p) else { break };
-                        *p += (RENDER_GAP - d.max(-0.05) + 1e-5) * nrm;
-                    }
-                }
+                keep_outside(&head, &mut path);
                 let pos: Vec<[f32; 3]> = path
                     .iter()
                     .map(|p| [p.x as f32, p.y as f32, p.z as f32])

@@ -14,6 +14,8 @@
 pub mod cut;
 pub mod error;
 pub mod fit;
+pub mod fitted;
+pub mod follow;
 pub mod formats;
 pub mod generate;
 pub mod global;

@@ -37,6 +37,10 @@ use crate::reading::DeviceReading;
 use nalgebra::{Matrix3, Vector3};
 use thiserror::Error;
 
+/// Longest time since the last accepted reading over which a jump is judged against the device's top speed,
+/// s: 1 (at an Omni's 5 m/s, 5 m: beyond any workspace; a stamp far in the future does not excuse any jump).
+pub const TELEPORT_WINDOW: f64 = 1.0;
+
 /// Why a device reading was rejected.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum InputError {
@@ -51,7 +55,7 @@ pub enum InputError {
     Teleport {
         /// Distance jumped, m.
         distance: f64,
-        /// Time step, s.
+        /// Time since the last accepted reading it was judged over (at least the step), s.
         dt: f64,
         /// The profile's limit, m/s.
         max_speed: f64,
@@ -223,10 +227,19 @@ impl Coupling {
             self.reject();
             return Err(InputError::NonFinite { time: reading.time });
         }
+        // A teleport: farther from the last accepted reading than the device's top speed covers in the time
+        // since it (by the readings' own stamps, at least one step, at most TELEPORT_WINDOW). Judged by the time
+        // since, a stream that resumes after its sender stalled is taken back as soon as the time covers the
+        // distance; judged by one step, every reading after the stall stayed too far from the stale one and the
+        // hand felt nothing for the rest of the session (the CHAI3D bridge test on a loaded host: a 19 ms stall).
         let jump = (reading.position - self.device).norm();
-        if self.last_time.is_some() && jump > self.profile.max_speed * dt {
+        let since = self.last_time.map_or(dt, |t0| {
+            let e = reading.time - t0;
+            if e.is_finite() { e.clamp(dt, TELEPORT_WINDOW.max(dt)) } else { dt }
+        });
+        if self.last_time.is_some() && jump > self.profile.max_speed * since {
             self.reject();
-            return Err(InputError::Teleport { distance: jump, dt, max_speed: self.profile.max_speed });
+            return Err(InputError::Teleport { distance: jump, dt: since, max_speed: self.profile.max_speed });
         }
         self.device_velocity = if self.last_time.is_some() { (reading.position - self.device) / dt } else { Vector3::zeros() };
         self.angular_velocity = if self.last_time.is_some() { angular_velocity(&self.rotation, &reading.rotation, dt) } else { Vector3::zeros() };
@@ -427,6 +440,33 @@ mod tests {
         assert!(f.norm() <= p.max_force);
         let f = c.update(&reading(0.003, Vector3::new(0.001, 0.0, 0.0)), dt, &Vector3::new(f64::NAN, 0.0, 0.0)).unwrap();
         assert!(f.iter().all(|x| x.is_finite()));
+    }
+
+    #[test]
+    fn a_stream_resuming_after_a_stall_is_taken_back_and_a_teleport_is_not() {
+        // The device moves at 0.5 m/s, stamped every 1 ms; its sender stalls 20 ms (10 mm, twice the Omni's 5 m/s
+        // over one step): the reading after the stall is accepted and the force comes back (it was rejected then,
+        // and every reading after it, for good). A 0.3 m jump within one step is rejected; the stream's next
+        // reading is accepted.
+        let p = DeviceProfile::PHANTOM_OMNI;
+        let mut c = Coupling::new(p, CouplingParams::for_profile(&p), Vector3::zeros());
+        let dt = 1e-3;
+        let at = |t: f64| reading(t, Vector3::new(0.5 * t, 0.0, 0.0));
+        let mut t = 0.0;
+        for _ in 0..50 {
+            c.update(&at(t), dt, &Vector3::new(0.0, -0.5, 0.0)).unwrap();
+            t += dt;
+        }
+        t += 0.02;
+        for _ in 0..50 {
+            assert!(c.update(&at(t), dt, &Vector3::new(0.0, -0.5, 0.0)).is_ok(), "t {t}: rejected after the stall");
+            t += dt;
+        }
+        assert!(c.force.y < -0.4, "the hair's 0.5 N is felt again: {:?}", c.force);
+        let jump = reading(t, Vector3::new(0.5 * t + 0.3, 0.0, 0.0));
+        assert!(matches!(c.update(&jump, dt, &Vector3::zeros()), Err(InputError::Teleport { .. })));
+        t += dt;
+        assert!(c.update(&at(t), dt, &Vector3::zeros()).is_ok());
     }
 
     #[test]

@@ -11,6 +11,9 @@
 //! [`crate::local_model`]): the same [`Coupling`] as the server's, against the latest model, which holds until
 //! a newer one comes or expires 50 ms after its answer (then no hair: the proxy settles on the device and the
 //! force fades through the coupling).
+//!
+//! The device samples on its own clock, as a device's servo loop does: pose `k` is the path at `k / rate` s,
+//! stamped with that time, sent when the loop gets to it (late on a loaded host, several at once after a stall).
 
 use crate::coupling::{Coupling, HairReaction};
 use crate::device::{DeviceProfile, DeviceReading};
@@ -122,7 +125,7 @@ pub enum Sent {
 /// One pose sent and its answer.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SimRow {
-    /// Time the pose was sent, s from the start (its `time` field).
+    /// The pose's time on the device's clock, s from the start (its `time` field: the tick it was sampled at).
     pub t: f64,
     /// Sequence number.
     pub seq: u32,
@@ -240,7 +243,12 @@ pub fn run(server: SocketAddr, path: &dyn Fn(f64) -> DeviceReading, p: &SimParam
             client.set_nonblocking(true).map_err(|e| e.to_string())?;
         }
         take(&mut client, &mut rows, &sent_at, &mut force, &mut force_at, &mut model);
-        let t = start.elapsed().as_secs_f64();
+        // The device samples on its own clock (a device's servo loop: every `dt`, stamped with that clock),
+        // whenever this loop gets to send it. Sampled at the wall clock's late wake-ups instead, the rigid hand's
+        // steps were uneven (a loaded host wakes the loop 0.05-0.5 ms late) while the rendering took them over the
+        // nominal `dt`: its velocity, and the coupling's damper force, jumped every step (0.30 N median one-step
+        // change of the felt force, bench/RESULTS.md).
+        let t = nominal;
         let reading = path(t);
         let target = ws.to_device(&reading.position);
         // The force on the hand: the latest received, or the device's own rendering of the latest model.

@@ -51,6 +51,10 @@ pub struct FitArgs {
     /// Print the report as JSON (one object) instead of text.
     #[arg(long)]
     json: bool,
+    /// Follow strands written around each strand rooted on the scalp (`hairstyle::follow`, as the viewer's
+    /// load draws them); default 0: the file's strands only.
+    #[arg(long, default_value_t = 0)]
+    follow_strands: usize,
 }
 
 fn distances(d: &Distances) -> serde_json::Value {
@@ -84,8 +88,8 @@ pub fn report_text(r: &FitReport) -> String {
     let t = &r.transform;
     let m = |x: f64| format!("{:.2} mm", 1e3 * x);
     let mut s = format!(
-        "units    {} m per file unit ({})\naxes     up {} front {} ({})\nscale    {:.6} m per file unit\nrotation [{:.4} {:.4} {:.4}; {:.4} {:.4} {:.4}; {:.4} {:.4} {:.4}]\ntranslation [{:.5}, {:.5}, {:.5}] m\n",
-        r.meters_per_unit, r.units_source.name(), r.up.name(), r.front.name(), r.orientation_source.name(), t.scale,
+        "units    {} per file unit ({})\naxes     up {} front {} ({})\nscale    {:.6} m per file unit\nrotation [{:.4} {:.4} {:.4}; {:.4} {:.4} {:.4}; {:.4} {:.4} {:.4}]\ntranslation [{:.5}, {:.5}, {:.5}] m\n",
+        hairstyle::fit::units_name(r.meters_per_unit), r.units_source.name(), r.up.name(), r.front.name(), r.orientation_source.name(), t.scale,
         t.rotation[(0, 0)], t.rotation[(0, 1)], t.rotation[(0, 2)], t.rotation[(1, 0)], t.rotation[(1, 1)], t.rotation[(1, 2)], t.rotation[(2, 0)], t.rotation[(2, 1)], t.rotation[(2, 2)],
         t.translation.x, t.translation.y, t.translation.z,
     );
@@ -100,6 +104,14 @@ pub fn report_text(r: &FitReport) -> String {
 pub fn run(args: &FitArgs) -> Result<()> {
     let opts = args.flags.options()?;
     let (mut curves, report) = fit_file(&args.input, &opts).with_context(|| format!("cannot fit {}", args.input.display()))?;
+    if args.follow_strands > 0 {
+        let head = hairstyle::Head::default();
+        let scalp = hairstyle::fit::ScalpIndex::new(&head, FitParams::default().scalp_samples);
+        let params = hairstyle::follow::FollowParams { per_strand: args.follow_strands, ..Default::default() };
+        let more = hairstyle::follow::follow_strands(&curves.strands, &head, &scalp, FitParams::default().inlier_distance, &params);
+        curves.strands.extend(more);
+        curves.thickness = None;
+    }
     if curves.thickness.is_none() {
         // widths from the default hair type (USD `widths`; ignored by formats without thickness)
         let d = strand::HairType::by_name("caucasian").map_or(7e-5, |h| h.major_diameter) as f32;

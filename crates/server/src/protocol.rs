@@ -101,7 +101,7 @@ pub enum ClientMessage {
     /// A session command.
     Command(Command),
     /// Load a hairstyle: format index into [`FORMATS`], fit options, bytes.
-    Load(usize, hairstyle::fit::FitOptions, Vec<u8>),
+    Load(usize, hairstyle::fit::FitOptions, Option<usize>, Vec<u8>),
     /// Save the hairstyle in a format (index into [`FORMATS`]).
     Save(usize),
     /// Ping.
@@ -189,7 +189,7 @@ pub fn parse_client(b: &[u8]) -> Result<ClientMessage, WireError> {
                 return Err(err(code::MALFORMED, "LOAD needs a format byte (0 .hair, 1 .data, 2 .tfx, 3 .usda; bit 7 set when fit options follow) and the file".into()));
             }
             if p[0] & 0x80 == 0 {
-                return Ok(ClientMessage::Load(format, hairstyle::fit::FitOptions::default(), p[1..].to_vec()));
+                return Ok(ClientMessage::Load(format, hairstyle::fit::FitOptions::default(), None, p[1..].to_vec()));
             }
             if p.len() < 9 {
                 return Err(err(code::MALFORMED, format!("LOAD with fit options needs 8 option bytes after the format, got {}", p.len() - 1)));
@@ -202,15 +202,22 @@ pub fn parse_client(b: &[u8]) -> Result<ClientMessage, WireError> {
                 }
             };
             let (up, front) = (axis(p[1], "up")?, axis(p[2], "front")?);
-            if p[3] > 1 || p[4] != 0 {
-                return Err(err(code::MALFORMED, format!("LOAD option flags {} and reserved byte {} (flags: bit 0 no fit; reserved 0)", p[3], p[4])));
+            if p[3] > 3 || p[4] != 0 {
+                return Err(err(code::MALFORMED, format!("LOAD option flags {} and reserved byte {} (flags: bit 0 no fit, bit 1 follow strands given; reserved 0)", p[3], p[4])));
             }
             let units = f32_at(p, 5) as f64;
             if !(units.is_finite() && units >= 0.0) {
                 return Err(err(code::MALFORMED, format!("LOAD units {units}: metres per unit must be positive, or 0 to detect")));
             }
             let opts = hairstyle::fit::FitOptions { units: (units > 0.0).then_some(units), up, front, fit: p[3] & 1 == 0 };
-            Ok(ClientMessage::Load(format, opts, p[9..].to_vec()))
+            if p[3] & 2 == 0 {
+                return Ok(ClientMessage::Load(format, opts, None, p[9..].to_vec()));
+            }
+            if p.len() < 13 {
+                return Err(err(code::MALFORMED, format!("LOAD with follow strands needs a u32 count after the 8 option bytes, got {} bytes", p.len() - 9)));
+            }
+            let follow = u32::from_le_bytes([p[9], p[10], p[11], p[12]]) as usize;
+            Ok(ClientMessage::Load(format, opts, Some(follow), p[13..].to_vec()))
         }
         client::SAVE => {
             need(1, "SAVE")?;
@@ -632,12 +639,18 @@ mod tests {
     #[test]
     fn load_with_fit_options_and_the_fit_message() {
         use hairstyle::fit::{Axis, FitOptions};
-        assert_eq!(parse_client(&[client::LOAD, VERSION, 2, 9, 9]).unwrap(), ClientMessage::Load(2, FitOptions::default(), vec![9, 9]));
+        assert_eq!(parse_client(&[client::LOAD, VERSION, 2, 9, 9]).unwrap(), ClientMessage::Load(2, FitOptions::default(), None, vec![9, 9]));
         let mut m = vec![client::LOAD, VERSION, 0x80 | 3, 3, 6, 1, 0];
         m.extend_from_slice(&0.01f32.to_le_bytes());
         m.push(7);
         let opts = FitOptions { units: Some(0.01f32 as f64), up: Some(Axis::PosY), front: Some(Axis::NegZ), fit: false };
-        assert_eq!(parse_client(&m).unwrap(), ClientMessage::Load(3, opts, vec![7]));
+        assert_eq!(parse_client(&m).unwrap(), ClientMessage::Load(3, opts, None, vec![7]));
+        // Bit 1 of the flags: a u32 count of follow strands comes before the file.
+        let mut f = m.clone();
+        f[5] |= 2;
+        f.splice(11..11, 437u32.to_le_bytes());
+        assert_eq!(parse_client(&f).unwrap(), ClientMessage::Load(3, opts, Some(437), vec![7]));
+        assert!(parse_client(&f[..13]).unwrap_err().message.contains("u32 count"));
         let mut bad = m.clone();
         bad[3] = 7;
         assert!(parse_client(&bad).unwrap_err().message.contains("up axis 7 unknown"));

@@ -303,6 +303,12 @@ fn fit_brings_a_moved_centimetre_y_up_hairstyle_back() {
     assert!(text.contains("metersPerUnit = 1") && text.contains("upAxis = \"Z\"") && text.contains("float[] widths"));
     let text_report = bin().arg("fit").arg(dir.join("moved.hair")).arg(dir.join("back.hair")).output().unwrap();
     assert!(String::from_utf8_lossy(&text_report.stdout).contains("rooted on the scalp (within 10.00 mm): 100.0 % of the strands"), "{}", String::from_utf8_lossy(&text_report.stdout));
+    assert!(String::from_utf8_lossy(&text_report.stdout).contains("units    cm (0.01 m) per file unit (detected)"), "{}", String::from_utf8_lossy(&text_report.stdout));
+    // --follow-strands N: N follow strands written around each strand (all rooted here).
+    let follow = bin().args(["fit", "--follow-strands", "3"]).arg(dir.join("moved.hair")).arg(dir.join("follow.hair")).output().unwrap();
+    assert!(follow.status.success(), "{}", String::from_utf8_lossy(&follow.stderr));
+    let (one, four) = (hairstyle::read_file(dir.join("back.hair")).unwrap(), hairstyle::read_file(dir.join("follow.hair")).unwrap());
+    assert_eq!(four.strands.len(), 4 * one.strands.len());
     let bad = bin().args(["fit", "--up", "w"]).arg(dir.join("moved.hair")).arg(dir.join("x.hair")).output().unwrap();
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("--up: axis `w`"));
     let usdz = bin().arg("fit").arg(dir.join("a.usdz")).arg(dir.join("x.hair")).output().unwrap();

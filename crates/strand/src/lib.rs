@@ -29,6 +29,7 @@ pub mod batch;
 pub mod constraint;
 pub mod dynamics;
 pub mod error;
+pub mod fit;
 pub mod hair_type;
 pub mod helix;
 pub mod integrator;

@@ -2,9 +2,13 @@
 
 use super::GlobalCore;
 
+/// How far outside the body's surface a pushed-out lattice node is put, m: enough that rounding never
+/// leaves it inside (`MetaballSet::push_out` lands within 1e-3 of this), far below anything drawn.
+const NODE_SKIN: f64 = 1e-6;
+
 impl GlobalCore {
-    /// Pushes nodes that started outside the body back onto its surface (a position correction along the
-    /// field gradient, a few Newton steps) and removes their inward velocity.
+    /// Pushes nodes that started outside the body back onto its surface (`MetaballSet::push_out`, a position
+    /// correction along the outward normal) and removes their inward velocity.
     pub(crate) fn push_out_of_body(&mut self) {
         let t = self.model.params.metaball.threshold;
         let body = &self.scene.head;
@@ -12,17 +16,11 @@ impl GlobalCore {
             if !self.outside[i] {
                 continue;
             }
-            let mut x = self.head.inverse() * self.state.positions[i];
-            let mut moved = false;
-            for _ in 0..self.params.push_out_iterations {
-                let (f, g) = body.field_and_gradient(&x);
-                let gg = g.norm_squared();
-                if f <= t || !(gg > 1e-12) {
-                    break;
-                }
-                x -= g * ((f - t) / gg * 1.05);
-                moved = true;
-            }
+            // The body's one push-out law (`MetaballSet::push_out`, the same the tools and the render strands
+            // use), just outside the surface.
+            let x0 = self.head.inverse() * self.state.positions[i];
+            let x = body.push_out(&x0, t, NODE_SKIN);
+            let moved = x != x0;
             if moved {
                 let n = -(self.head * body.gradient(&x)).normalize();
                 self.state.positions[i] = self.head * x;

@@ -9,6 +9,19 @@ use strand::PointForce;
 use tools::dryer::{HairDrag, HairDryer};
 
 
+/// Stage 6's state: what the scissors, the clip and the dryer did so far.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct ToolActions {
+    /// Scissors closes so far.
+    pub cuts: u64,
+    /// Whether the primary button was held in the last step.
+    pub was_pressed: bool,
+    /// Where the scissors last closed (device frame, m), if they did since the button was pressed.
+    pub last_cut_at: Option<Vector3<f64>>,
+    /// Whether the clip holds the strands.
+    pub clipped: bool,
+}
+
 impl HapticCore {
     /// The tool's action this step with the primary button `pressed`, the tool at `proxy` (m) turned by
     /// `rotation`.
@@ -16,19 +29,19 @@ impl HapticCore {
         // Scissors: closing the blades (the button going down) cuts the active guides where the blades are,
         // and again each time the held scissors have moved `snip_distance` (dragging cuts along the path); the
         // global layer cuts the render strands when it sees the count go up (`ToolInput::cuts`).
-        let snip = self.tool == Tool::Scissors && pressed && (!self.was_pressed || self.last_cut_at.is_none_or(|p| (p - *proxy).norm() > self.params.haptic.snip_distance));
+        let snip = self.tool == Tool::Scissors && pressed && (!self.actions.was_pressed || self.actions.last_cut_at.is_none_or(|p| (p - *proxy).norm() > self.model.params.haptic.snip_distance));
         if !pressed {
-            self.last_cut_at = None;
+            self.actions.last_cut_at = None;
         }
         if snip {
-            self.cuts += 1;
-            self.last_cut_at = Some(*proxy);
-            let blade = ToolInput { position: *proxy, rotation: *rotation, ..Default::default() }.blade(self.params.global.blade_radius);
-            for (slot, &g) in self.active.iter().enumerate() {
-                if let Ok(Some((kept, _piece))) = cut_strand(&self.interaction.strands[slot], &blade, self.params.haptic.cut_pieces, g) {
+            self.actions.cuts += 1;
+            self.actions.last_cut_at = Some(*proxy);
+            let blade = ToolInput { position: *proxy, rotation: *rotation, ..Default::default() }.blade(self.model.params.global.blade_radius);
+            for (slot, &g) in self.set.active.iter().enumerate() {
+                if let Ok(Some((kept, _piece))) = cut_strand(&self.interaction.strands[slot], &blade, self.model.params.haptic.cut_pieces, g) {
                     self.interaction.strands[slot] = kept;
                     // Its tip is now the cut end: no speed across the cut.
-                    if let Some(m) = self.members.get_mut(slot) {
+                    if let Some(m) = self.set.members.get_mut(slot) {
                         m.tip = None;
                     }
                 }
@@ -36,24 +49,24 @@ impl HapticCore {
         }
         // A nozzle's choice of the local strands follows its jet while it blows (`HapticCore::reach`): choose
         // again when it starts or stops.
-        if pressed != self.was_pressed && matches!(self.tool, Tool::Dryer | Tool::Sprayer) {
-            self.last_select = None;
+        if pressed != self.actions.was_pressed && matches!(self.tool, Tool::Dryer | Tool::Sprayer) {
+            self.set.last_select = None;
         }
-        self.was_pressed = pressed;
+        self.actions.was_pressed = pressed;
         if self.tool == Tool::Clip {
-            if pressed && !self.clipped {
-                self.clipped = self.interaction.clip(self.params.haptic.clip_reach).is_some();
-            } else if !pressed && self.clipped {
+            if pressed && !self.actions.clipped {
+                self.actions.clipped = self.interaction.clip(self.model.params.haptic.clip_reach).is_some();
+            } else if !pressed && self.actions.clipped {
                 self.interaction.release();
-                self.clipped = false;
+                self.actions.clipped = false;
             }
         }
         // The dryer's jet blows on the simulated strands near the tool too: the jet's drag on each of
         // `dryer_pieces` pieces per strand (one hair: frontal area length x diameter), by the one law
         // `HairDryer::hair_force` that `GlobalCore` blows the lattice with, held over the step.
         if self.tool == Tool::Dryer && pressed {
-            let jet = HairDryer { cone: ToolInput { position: *proxy, rotation: *rotation, ..Default::default() }.cone(HairDryer::default().cone, self.params.global.nozzle_standoff), ..HairDryer::default() };
-            let pieces = self.params.haptic.dryer_pieces;
+            let jet = HairDryer { cone: ToolInput { position: *proxy, rotation: *rotation, ..Default::default() }.cone(HairDryer::default().cone, self.model.params.global.nozzle_standoff), ..HairDryer::default() };
+            let pieces = self.model.params.haptic.dryer_pieces;
             for slot in 0..self.interaction.strands.len() {
                 let s = &self.interaction.strands[slot];
                 let piece = s.model.length / pieces as f64;
@@ -100,7 +113,7 @@ mod tests {
                 let p = Vector3::new(0.0, -0.118, 0.0);
                 core.step(Some(DeviceReading { time: n as f64 * 1e-3, position: p, rotation: test_rot(), buttons: blow as u32 }), &snap, 1e-3);
             }
-            let tips: Vec<(usize, Vector3<f64>)> = core.active.iter().zip(&core.interaction.strands).map(|(&g, s)| (g, strand::kinematics::centerline(&s.model, &s.state, 2)[1].1)).collect();
+            let tips: Vec<(usize, Vector3<f64>)> = core.set.active.iter().zip(&core.interaction.strands).map(|(&g, s)| (g, strand::kinematics::centerline(&s.model, &s.state, 2)[1].1)).collect();
             tips
         };
         assert!(run(false).is_empty(), "a nozzle that does not blow simulates no strand");

@@ -150,22 +150,67 @@ fn tip(s: &Strand) -> Vector3<f64> {
     frames.last().map_or(s.state.root.position, |f| f.position)
 }
 
+/// Stages 3-4 and 8's state: which guides are simulated, their strands, the choice in progress and the
+/// hand-overs to the global layer.
+#[derive(Debug, Clone)]
+pub(crate) struct ActiveSet {
+    /// Every guide's strand while it is not simulated (it keeps its last state there); None while it is: the
+    /// interaction has it (moved, not copied: a copy of a strand's workspaces was most of a joining step).
+    pub strands: Vec<Option<Strand>>,
+    /// Simulated guides, in the interaction's order (their strands live in the interaction meanwhile and
+    /// move back to `strands` when they leave or the set is cleared), and each one's membership.
+    pub active: Vec<usize>,
+    pub members: Vec<Member>,
+    /// Guides handed over to the global layer whose displacement from their carried place is still relaxing
+    /// (no longer simulated, or simulated again with it; [`HandedOver`]).
+    pub handed: Vec<HandedOver>,
+    /// The choice of the active set in progress, if any (spread over steps).
+    pub choice: Option<Choice>,
+    /// Guides the last finished choice chose that have yet to join, nearest first (they join
+    /// `HapticParams::joins_per_step` at a time).
+    pub queued: Vec<usize>,
+    /// The most strands simulated now ([`Command::LimitStrands`](crate::command::Command::LimitStrands), the live
+    /// thread's strand budget), in 1..=`SessionParams::max_active`; `max_active` unless limited.
+    pub strand_limit: usize,
+    /// Where the tool was at the last choice (None: choose again).
+    pub last_select: Option<Vector3<f64>>,
+    /// Fastest tip of the simulated strands over the last step, m/s.
+    pub max_tip_speed: f64,
+    /// The largest hand-over to the global layer so far: a let-go strand's largest shown displacement from its
+    /// place carried by the global layer when it leaves the simulation (what the hand-over carries into the
+    /// global layer, which the hold then brings back; [`HandedOver`]), m.
+    pub handover_max: f64,
+    /// Strands let go so far back in place (handed over to the global layer).
+    pub handovers: u64,
+    /// The same for the strands let go before they were back in place (after `HapticParams::max_relax_time`,
+    /// or by the strand limit): the largest hand-over, m, and how many.
+    pub early_handover_max: f64,
+    pub early_handovers: u64,
+}
+
+impl ActiveSet {
+    /// Every guide's strand in the store, none simulated, at most `strand_limit` at once.
+    pub fn new(strands: Vec<Strand>, strand_limit: usize) -> Self {
+        Self { strands: strands.into_iter().map(Some).collect(), active: Vec::new(), members: Vec::new(), handed: Vec::new(), choice: None, queued: Vec::new(), strand_limit, last_select: None, max_tip_speed: 0.0, handover_max: 0.0, handovers: 0, early_handover_max: 0.0, early_handovers: 0 }
+    }
+}
+
 impl HapticCore {
     /// Empties the active set: its strands are handed over to the global layer where they are
     /// ([`HapticCore::hand_over`]: the hair drawn does not move; counted as early hand-overs) and go back to the
     /// guide store let go (the interaction keeps none); forgets any choice in progress.
     pub(crate) fn clear_active(&mut self) {
         let strands = std::mem::take(&mut self.interaction.strands);
-        let guides = std::mem::take(&mut self.active);
-        let members = std::mem::take(&mut self.members);
+        let guides = std::mem::take(&mut self.set.active);
+        let members = std::mem::take(&mut self.set.members);
         for (i, (s, g)) in strands.into_iter().zip(guides).enumerate() {
             let member = members.get(i).map(|m| Member { early: true, ..*m });
             self.hand_over(g, s, member);
         }
         self.interaction.set_strands(Vec::new(), &[]);
-        self.choice = None;
-        self.queued.clear();
-        self.last_select = None;
+        self.set.choice = None;
+        self.set.queued.clear();
+        self.set.last_select = None;
     }
 
     /// The guides whose settled shapes (through the lattice `nodes`) come within the activation radius of the
@@ -176,7 +221,7 @@ impl HapticCore {
     #[cfg(test)]
     pub(crate) fn choose(&self, tool: &Vector3<f64>, ahead: &Vector3<f64>, rotation: &Matrix3<f64>, nodes: &[Point3<f64>], head: &Isometry3<f64>) -> Vec<usize> {
         let mut c = Choice { tool: *tool, ahead: *ahead, rotation: *rotation, next: 0, near: Vec::new() };
-        self.scan(&mut c, self.scene.guides.len(), nodes, head);
+        self.scan(&mut c, self.model.scene.guides.len(), nodes, head);
         self.chosen(c)
     }
 
@@ -186,18 +231,18 @@ impl HapticCore {
     /// `tools::dryer::Cone::range`), so that the strands the jet blows are simulated, not those near the nozzle
     /// or the aim point. A nozzle that does not blow touches the hair only with its body.
     fn reach(&self) -> Vec<(Vector3<f64>, Vector3<f64>, f64)> {
-        if self.was_pressed && matches!(self.tool, crate::tool::Tool::Dryer | crate::tool::Tool::Sprayer) {
-            let back = self.params.global.nozzle_standoff;
+        if self.actions.was_pressed && matches!(self.tool, crate::tool::Tool::Dryer | crate::tool::Tool::Sprayer) {
+            let back = self.model.params.global.nozzle_standoff;
             let range = if self.tool == crate::tool::Tool::Dryer { tools::dryer::HairDryer::default().cone.range } else { tools::sprayer::Sprayer::default().cone.range };
             return vec![(Vector3::new(0.0, 0.0, back), Vector3::new(0.0, 0.0, back - range), 0.0)];
         }
-        self.shapes[self.tool as usize].capsules.iter().map(|c| (Vector3::from(c.a), Vector3::from(c.b), c.radius)).collect()
+        self.model.shapes[self.tool as usize].capsules.iter().map(|c| (Vector3::from(c.a), Vector3::from(c.b), c.radius)).collect()
     }
 
     /// Scans the next `count` guides of the choice `c` (see [`HapticCore::choose`]), their references carried
     /// by the lattice `nodes` and the head at `head`.
     fn scan(&self, c: &mut Choice, count: usize, nodes: &[Point3<f64>], head: &Isometry3<f64>) {
-        let r = self.params.activation_radius;
+        let r = self.model.params.activation_radius;
         let caps = self.reach();
         let reach = caps.iter().map(|(a, b, rad)| a.norm().max(b.norm()) + rad).fold(0.0, f64::max);
         // The shape's box in its own frame: a point farther than d from it is farther than d from every capsule.
@@ -208,15 +253,15 @@ impl HapticCore {
         }
         let (tool, ahead, rotation) = (c.tool, c.ahead, c.rotation);
         let poses = [tool, (tool + ahead) * 0.5, ahead];
-        let end = (c.next + count).min(self.scene.guides.len());
+        let end = (c.next + count).min(self.model.scene.guides.len());
         for g in c.next..end {
             // The guide's ball farther than the radius from the swept shape: none of its samples is nearer.
-            let centre = (head * Point3::from(self.bounds.centres[g])).coords;
-            if point_segment_distance(&centre, &tool, &ahead) - reach - self.bounds.radii[g] >= r {
+            let centre = (head * Point3::from(self.model.bounds.centres[g])).coords;
+            if point_segment_distance(&centre, &tool, &ahead) - reach - self.model.bounds.radii[g] >= r {
                 continue;
             }
             let mut d = f64::INFINITY;
-            for x in self.scene.guide_points(nodes, head, g) {
+            for x in self.model.scene.guide_points(nodes, head, g) {
                 // Cheap rejection by the shape's bounding sphere swept along the way.
                 let limit = r.min(d);
                 if point_segment_distance(&x, &tool, &ahead) - reach >= limit {
@@ -249,50 +294,50 @@ impl HapticCore {
     /// The most guides a choice takes: `max_chosen`, or under a strand limit ([`HapticCore::strand_limit`])
     /// the same share of it as `max_chosen` of `max_active` (room is left for relaxing strands), at least 1.
     pub(crate) fn chosen_limit(&self) -> usize {
-        let (chosen, active) = (self.params.max_chosen, self.params.max_active.max(1));
-        if self.strand_limit >= active {
+        let (chosen, active) = (self.model.params.max_chosen, self.model.params.max_active.max(1));
+        if self.set.strand_limit >= active {
             return chosen;
         }
-        (self.strand_limit * chosen / active).clamp(1, chosen)
+        (self.set.strand_limit * chosen / active).clamp(1, chosen)
     }
 
     /// Stage 3 of the step: the choice (started when the tool, the proxy at `proxy`, m, moving at `velocity`,
     /// m/s, has moved far enough; one share of its scan per step) and the membership changes (joining, let-go
     /// strands leaving the simulation). Never while the clip holds a strand.
     pub(crate) fn update_active(&mut self, proxy: &Vector3<f64>, velocity: &Vector3<f64>, rotation: &Matrix3<f64>, nodes: &[Point3<f64>], head: &Isometry3<f64>) {
-        if self.clipped || nodes.len() != self.scene.lattice.node_count() {
+        if self.actions.clipped || nodes.len() != self.model.scene.lattice.node_count() {
             return;
         }
-        let moved = self.last_select.map_or(true, |p| (p - proxy).norm() > self.params.haptic.reselect_distance);
-        if self.choice.is_none() && moved {
-            let ahead = proxy + velocity * self.params.haptic.lookahead;
-            self.choice = Some(Choice { tool: *proxy, ahead, rotation: *rotation, next: 0, near: Vec::new() });
-            self.last_select = Some(*proxy);
+        let moved = self.set.last_select.map_or(true, |p| (p - proxy).norm() > self.model.params.haptic.reselect_distance);
+        if self.set.choice.is_none() && moved {
+            let ahead = proxy + velocity * self.model.params.haptic.lookahead;
+            self.set.choice = Some(Choice { tool: *proxy, ahead, rotation: *rotation, next: 0, near: Vec::new() });
+            self.set.last_select = Some(*proxy);
         }
-        let mut guides = self.active.clone();
-        let mut members = self.members.clone();
+        let mut guides = self.set.active.clone();
+        let mut members = self.set.members.clone();
         // Queued guides join (before any scan, so a step never pays for the scan's end and joins).
-        if !self.queued.is_empty() {
+        if !self.set.queued.is_empty() {
             self.admit(&mut guides, &mut members);
-        } else if let Some(mut c) = self.choice.take() {
+        } else if let Some(mut c) = self.set.choice.take() {
             let clock = std::time::Instant::now();
-            let n = self.scene.guides.len();
-            let share = n.div_ceil(self.params.haptic.choice_steps.max(1));
+            let n = self.model.scene.guides.len();
+            let share = n.div_ceil(self.model.params.haptic.choice_steps.max(1));
             self.scan(&mut c, share, nodes, head);
             let chosen = if c.next >= n { Some(self.chosen(c)) } else {
-                self.choice = Some(c);
+                self.set.choice = Some(c);
                 None
             };
-            self.timings.choose = clock.elapsed().as_secs_f64();
+            self.stats.timings.choose = clock.elapsed().as_secs_f64();
             if let Some(chosen) = chosen {
                 self.join(&chosen, &guides, &mut members);
             }
         }
         // Beyond the strand limit relaxing strands are let go, those nearest their place first (after a lowered
         // limit, also when no guide joins).
-        self.let_go_beyond(self.strand_limit, &mut members);
+        self.let_go_beyond(self.set.strand_limit, &mut members);
         // (The simulated strands' members come first, in order: what the rebuild measures of a leaving one.)
-        for (m, new) in self.members.iter_mut().zip(&members) {
+        for (m, new) in self.set.members.iter_mut().zip(&members) {
             m.early = new.early;
         }
         // Let-go strands leave the simulation.
@@ -305,12 +350,12 @@ impl HapticCore {
                 k += 1;
             }
         }
-        if guides != self.active {
+        if guides != self.set.active {
             let clock = std::time::Instant::now();
             self.rebuild(guides, members);
-            self.timings.rebuild = clock.elapsed().as_secs_f64();
+            self.stats.timings.rebuild = clock.elapsed().as_secs_f64();
         } else {
-            self.members = members;
+            self.set.members = members;
         }
     }
 
@@ -327,15 +372,15 @@ impl HapticCore {
                 m.phase = Phase::Relaxing { since: 0.0, still: 0.0 };
             }
         }
-        self.queued.clear();
-        self.queued.extend(chosen.iter().rev().filter(|g| !guides.contains(g)));
+        self.set.queued.clear();
+        self.set.queued.extend(chosen.iter().rev().filter(|g| !guides.contains(g)));
     }
 
     /// The next `HapticParams::joins_per_step` queued guides join (a handed-over guide is simulated again from
     /// its stored state, its offset still relaxing); beyond the strand limit, relaxing strands make room ([`HapticCore::let_go_beyond`]).
     fn admit(&mut self, guides: &mut Vec<usize>, members: &mut Vec<Member>) {
-        for _ in 0..self.params.haptic.joins_per_step {
-            let Some(g) = self.queued.pop() else { break };
+        for _ in 0..self.model.params.haptic.joins_per_step {
+            let Some(g) = self.set.queued.pop() else { break };
             if !guides.contains(&g) {
                 guides.push(g);
                 members.push(Member::joining());
@@ -371,21 +416,21 @@ impl HapticCore {
     /// nodes last seen, the hold's cache), m: what its hand-over would move it by; infinite for a slot not
     /// simulated yet.
     fn shown_offset(&self, slot: usize) -> f64 {
-        let (Some(&g), Some(s)) = (self.active.get(slot), self.interaction.strands.get(slot)) else { return f64::INFINITY };
-        let weight = self.members.get(slot).map_or(1.0, |m| m.weight);
-        let guide = &self.scene.guides[g];
-        let pts = samples_along(s, guide.model.length, self.scene.samples());
-        let mut cache = self.references.borrow_mut();
-        let ok = cache.has_nodes(self.scene.lattice.node_count());
-        pts.iter().zip(cache.bases(&self.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max)
+        let (Some(&g), Some(s)) = (self.set.active.get(slot), self.interaction.strands.get(slot)) else { return f64::INFINITY };
+        let weight = self.set.members.get(slot).map_or(1.0, |m| m.weight);
+        let guide = &self.model.scene.guides[g];
+        let pts = samples_along(s, guide.model.length, self.model.scene.samples());
+        let mut cache = self.shown.references.borrow_mut();
+        let ok = cache.has_nodes(self.model.scene.lattice.node_count());
+        pts.iter().zip(cache.bases(&self.model.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max)
     }
 
     /// Moves the strands to the new membership `guides` (`members` parallel): the staying strands move over,
     /// the joining ones come from the store at rest, the leaving ones are handed over to the global layer
     /// ([`HapticCore::hand_over`]) and go back to the store let go.
     fn rebuild(&mut self, guides: Vec<usize>, members: Vec<Member>) {
-        let old_guides = std::mem::take(&mut self.active);
-        let old_members = std::mem::take(&mut self.members);
+        let old_guides = std::mem::take(&mut self.set.active);
+        let old_members = std::mem::take(&mut self.set.members);
         let mut old: Vec<Option<Strand>> = std::mem::take(&mut self.interaction.strands).into_iter().map(Some).collect();
         let mut strands = Vec::with_capacity(guides.len());
         let mut from = Vec::with_capacity(guides.len());
@@ -409,21 +454,21 @@ impl HapticCore {
                 self.hand_over(old_guides[i], s, old_members.get(i).copied());
             }
         }
-        self.active = guides;
-        self.members = members;
+        self.set.active = guides;
+        self.set.members = members;
         self.interaction.set_strands(strands, &from);
         // Joining strands: their groomed shapes as the hair-hair contacts' rest (`HapticParams::groomed_overlap`;
         // none for a cut strand: other segments than the groom's).
-        if self.params.haptic.groomed_overlap {
-            for (i, &g) in self.active.iter().enumerate() {
-                let guide = &self.scene.guides[g];
+        if self.model.params.haptic.groomed_overlap {
+            for (i, &g) in self.set.active.iter().enumerate() {
+                let guide = &self.model.scene.guides[g];
                 let uncut = (self.interaction.strands[i].model.length - guide.model.length).abs() <= 1e-12;
                 if from[i].is_none() && uncut {
                     self.interaction.set_rest_state(i, &guide.state);
                 }
             }
         }
-        self.wet_version = u64::MAX;
+        self.wet.version = u64::MAX;
     }
 
     /// Hands the simulated strand `s` of guide `g` (its membership `m`; None: never shown) over to the global
@@ -436,22 +481,22 @@ impl HapticCore {
         let weight = m.map_or(0.0, |m| m.weight);
         let early = m.is_some_and(|m| m.early);
         if weight > 0.0 {
-            let pts = samples_along(&s, self.scene.guides[g].model.length, self.scene.samples());
-            let mut cache = self.references.borrow_mut();
-            let ok = cache.has_nodes(self.scene.lattice.node_count());
+            let pts = samples_along(&s, self.model.scene.guides[g].model.length, self.model.scene.samples());
+            let mut cache = self.shown.references.borrow_mut();
+            let ok = cache.has_nodes(self.model.scene.lattice.node_count());
             let to_head = cache.head().rotation.inverse();
-            let shown: Vec<Vector3<f64>> = pts.iter().zip(cache.bases(&self.scene, g, ok)).map(|(p, b)| self.shown((p - b) * weight)).collect();
+            let shown: Vec<Vector3<f64>> = pts.iter().zip(cache.bases(&self.model.scene, g, ok)).map(|(p, b)| self.shown((p - b) * weight)).collect();
             drop(cache);
             let carried = m.and_then(|m| m.in_place).filter(|_| !early).unwrap_or_else(|| shown.iter().map(|d| d.norm()).fold(0.0, f64::max));
             if early {
-                self.early_handover_max = self.early_handover_max.max(carried);
-                self.early_handovers += 1;
+                self.set.early_handover_max = self.set.early_handover_max.max(carried);
+                self.set.early_handovers += 1;
             } else {
-                self.handover_max = self.handover_max.max(carried);
-                self.handovers += 1;
+                self.set.handover_max = self.set.handover_max.max(carried);
+                self.set.handovers += 1;
             }
             let offset = shown.iter().map(|d| to_head * d);
-            match self.handed.iter_mut().find(|h| h.guide == g) {
+            match self.set.handed.iter_mut().find(|h| h.guide == g) {
                 Some(h) => {
                     for (a, d) in h.offset.iter_mut().zip(offset) {
                         *a = *a * h.weight + d;
@@ -462,11 +507,11 @@ impl HapticCore {
                 None => {
                     let offset: Vec<Vector3<f64>> = offset.collect();
                     let velocity = vec![Vector3::zeros(); offset.len()];
-                    self.handed.push(HandedOver { guide: g, offset, velocity, weight: 1.0 });
+                    self.set.handed.push(HandedOver { guide: g, offset, velocity, weight: 1.0 });
                 }
             }
         }
-        self.strands[g] = Some(self.let_go(g, s));
+        self.set.strands[g] = Some(self.let_go(g, s));
     }
 
     /// Stage 8's relaxation of the handed-over guides' offsets over a step `dt` (s) by the hold's law
@@ -474,10 +519,10 @@ impl HapticCore {
     /// the scene's gravity, linearly implicit Euler (the local strands' integrator; stable for every step); without
     /// a hold the weight falls by `dt / blend_time`. Offsets within [`HANDED_OVER_GONE`] are dropped.
     fn relax_handed(&mut self, dt: f64) {
-        let g = self.scene.guides.first().map_or(0.0, |g| g.model.gravity.norm());
-        let (k, c) = self.params.haptic.hold_rates(g);
-        let fade = dt / self.params.haptic.blend_time;
-        for h in &mut self.handed {
+        let g = self.model.scene.guides.first().map_or(0.0, |g| g.model.gravity.norm());
+        let (k, c) = self.model.params.haptic.hold_rates(g);
+        let fade = dt / self.model.params.haptic.blend_time;
+        for h in &mut self.set.handed {
             if k > 0.0 {
                 for (x, v) in h.offset.iter_mut().zip(&mut h.velocity) {
                     *v = (*v - *x * (dt * k)) / (1.0 + dt * c + dt * dt * k);
@@ -487,16 +532,16 @@ impl HapticCore {
                 h.weight -= fade;
             }
         }
-        self.handed.retain(|h| h.weight > 0.0 && h.offset.iter().any(|x| x.norm() * h.weight > HANDED_OVER_GONE));
+        self.set.handed.retain(|h| h.weight > 0.0 && h.offset.iter().any(|x| x.norm() * h.weight > HANDED_OVER_GONE));
     }
 
     /// Guide `g`'s stored strand, taken from the store, ready to join: at rest (zero velocities), its root on
     /// the head at rest. None if the store does not have it.
     fn joining(&mut self, g: usize) -> Option<Strand> {
-        let mut s = self.strands.get_mut(g)?.take()?;
+        let mut s = self.set.strands.get_mut(g)?.take()?;
         s.state.qdot.fill(0.0);
         let root = &mut s.state.root;
-        root.position = self.scene.guides[g].state.root.position;
+        root.position = self.model.scene.guides[g].state.root.position;
         root.velocity = Vector3::zeros();
         root.angular_velocity = Vector3::zeros();
         root.acceleration = Vector3::zeros();
@@ -507,11 +552,11 @@ impl HapticCore {
     /// farther than `rest_distance` from the groomed tip (an uncut strand; a cut one keeps its shape).
     fn let_go(&self, g: usize, mut s: Strand) -> Strand {
         s.state.qdot.fill(0.0);
-        let guide = &self.scene.guides[g];
+        let guide = &self.model.scene.guides[g];
         let uncut = s.state.q.len() == guide.state.q.len() && (s.model.length - guide.model.length).abs() < 1e-12;
         if uncut {
             let groomed = guide.reference.last().copied().unwrap_or(guide.state.root.position);
-            if (tip(&s) - groomed).norm() > self.params.haptic.rest_distance {
+            if (tip(&s) - groomed).norm() > self.model.params.haptic.rest_distance {
                 s.state.q.copy_from(&guide.state.q);
             }
         }
@@ -523,16 +568,16 @@ impl HapticCore {
     /// leaving strands' rest, and the display weights (fading in, and the let-go strands' out, over
     /// `blend_time`).
     pub(crate) fn track_active(&mut self, dt: f64, lattice: &crate::snapshot::LatticeSnapshot) {
-        let h = self.params.haptic;
+        let h = self.model.params.haptic;
         let fade = dt / h.blend_time;
-        self.max_tip_speed = 0.0;
+        self.set.max_tip_speed = 0.0;
         let mut resting = Vec::new();
-        for (k, (m, s)) in self.members.iter_mut().zip(&self.interaction.strands).enumerate() {
+        for (k, (m, s)) in self.set.members.iter_mut().zip(&self.interaction.strands).enumerate() {
             let x = self.interaction.tip_at_last_step(k).unwrap_or_else(|| tip(s));
             m.tip_speed = m.tip.map_or(0.0, |p| (x - p).norm() / dt);
             m.tip = Some(x);
             if m.tip_speed.is_finite() {
-                self.max_tip_speed = self.max_tip_speed.max(m.tip_speed);
+                self.set.max_tip_speed = self.set.max_tip_speed.max(m.tip_speed);
             }
             match m.phase {
                 Phase::Chosen => m.weight = (m.weight + fade).min(1.0),
@@ -554,8 +599,8 @@ impl HapticCore {
         for k in resting {
             let jump = self.handover_jump(k, lattice);
             if jump <= h.handover_distance {
-                self.members[k].phase = Phase::Fading;
-                self.members[k].in_place = Some(jump);
+                self.set.members[k].phase = Phase::Fading;
+                self.set.members[k].in_place = Some(jump);
             }
         }
         self.relax_handed(dt);
@@ -566,14 +611,14 @@ impl HapticCore {
     /// its guide (`Scene::guide_points`), m; 0 for a cut strand (its shape is no longer its guide's: it is let go
     /// once at rest).
     fn handover_jump(&self, slot: usize, lattice: &crate::snapshot::LatticeSnapshot) -> f64 {
-        let (g, s) = (self.active[slot], &self.interaction.strands[slot]);
-        let guide = &self.scene.guides[g];
-        if s.model.length < guide.model.length - 1e-12 || lattice.positions.len() != self.scene.lattice.node_count() {
+        let (g, s) = (self.set.active[slot], &self.interaction.strands[slot]);
+        let guide = &self.model.scene.guides[g];
+        if s.model.length < guide.model.length - 1e-12 || lattice.positions.len() != self.model.scene.lattice.node_count() {
             return 0.0;
         }
-        let weight = self.members.get(slot).map_or(1.0, |m| m.weight);
-        let pts = samples_along(s, guide.model.length, self.scene.samples());
-        pts.iter().zip(self.scene.guide_points(&lattice.positions, &lattice.head, g)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max)
+        let weight = self.set.members.get(slot).map_or(1.0, |m| m.weight);
+        let pts = samples_along(s, guide.model.length, self.model.scene.samples());
+        pts.iter().zip(self.model.scene.guide_points(&lattice.positions, &lattice.head, g)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max)
     }
 
     /// The active strands' roots move with the head, which is rigid (at the pose `HapticCore::head`): each
@@ -582,8 +627,8 @@ impl HapticCore {
     pub(crate) fn roots_follow(&mut self, dt: f64) {
         let head = self.head;
         let head_rotation = head.rotation.to_rotation_matrix().into_inner();
-        for (slot, &g) in self.active.iter().enumerate() {
-            let groomed = &self.scene.guides[g].state.root;
+        for (slot, &g) in self.set.active.iter().enumerate() {
+            let groomed = &self.model.scene.guides[g].state.root;
             let target = head * nalgebra::Point3::from(groomed.position);
             let turn = head_rotation * groomed.rotation;
             let root = &mut self.interaction.strands[slot].state.root;
@@ -658,7 +703,7 @@ mod tests {
         let check = |core: &HapticCore, when: &str| {
             assert_eq!(core.interaction.strands.len(), core.active().len(), "{when}");
             for g in 0..n {
-                assert_ne!(core.strands[g].is_some(), core.active().contains(&g), "guide {g} {when}");
+                assert_ne!(core.set.strands[g].is_some(), core.active().contains(&g), "guide {g} {when}");
             }
         };
         let (mut joined, mut left) = (0, 0);
@@ -672,7 +717,7 @@ mod tests {
             for &g in before.iter().filter(|g| !core.active().contains(g)) {
                 left += 1;
                 // Let go where it was (or back to its groom if far from it), at rest.
-                let s = core.strands[g].as_ref().unwrap();
+                let s = core.set.strands[g].as_ref().unwrap();
                 assert!(s.state.q.iter().all(|x| x.is_finite()) && s.state.qdot.iter().all(|&v| v == 0.0), "guide {g} let go at rest");
             }
         }
@@ -723,7 +768,7 @@ mod tests {
             free.step(Some(reading(k)), &snap, 1e-3);
             core.step(Some(reading(k)), &snap, 1e-3);
             for g in 0..scene.guides.len() {
-                assert_ne!(core.strands[g].is_some(), core.active().contains(&g), "guide {g} after step {k}");
+                assert_ne!(core.set.strands[g].is_some(), core.active().contains(&g), "guide {g} after step {k}");
             }
             if (800 + settle..1600).contains(&k) {
                 assert!(core.active().len() <= 20, "{} simulated at step {k}", core.active().len());
@@ -790,8 +835,8 @@ mod tests {
         eprintln!("{events} hand-overs ({early} early, carrying up to {:.2} mm): the hair drawn moved by {:.4} mm at most", carried * 1e3, change * 1e3);
         assert!(events > 5 && early > 0 && carried > 2e-3, "early hand-overs carrying {carried} m");
         assert!(change < 1e-4, "a hand-over moved the hair drawn by {change} m");
-        let left = core.handed.iter().flat_map(|h| h.offset.iter().map(|x| x.norm() * h.weight)).fold(0.0, f64::max);
-        eprintln!("1.5 s after the comb: {} strands simulated, {} offsets left, the largest {:.4} mm", core.active().len(), core.handed.len(), left * 1e3);
+        let left = core.set.handed.iter().flat_map(|h| h.offset.iter().map(|x| x.norm() * h.weight)).fold(0.0, f64::max);
+        eprintln!("1.5 s after the comb: {} strands simulated, {} offsets left, the largest {:.4} mm", core.active().len(), core.set.handed.len(), left * 1e3);
         assert!(left < 1e-3, "an offset of {left} m left 1.5 s after the comb");
     }
 
@@ -804,15 +849,15 @@ mod tests {
         let scene = small_scene();
         let mut core = HapticCore::new(scene.clone(), SessionParams::default()).unwrap();
         let g = scene.guides[0].model.gravity.norm();
-        let omega = (g / core.params.haptic.hold_distance).sqrt();
+        let omega = (g / core.model.params.haptic.hold_distance).sqrt();
         let x0 = Vector3::new(0.02, -0.01, 0.005);
-        core.handed.push(HandedOver { guide: 3, offset: vec![x0; scene.samples()], velocity: vec![Vector3::zeros(); scene.samples()], weight: 1.0 });
+        core.set.handed.push(HandedOver { guide: 3, offset: vec![x0; scene.samples()], velocity: vec![Vector3::zeros(); scene.samples()], weight: 1.0 });
         let mut worst: f64 = 0.0;
         for k in 1..=2000 {
             core.relax_handed(1e-3);
             let t = k as f64 * 1e-3;
             let want = x0 * (1.0 + omega * t) * (-omega * t).exp();
-            match core.handed.first() {
+            match core.set.handed.first() {
                 Some(h) => {
                     worst = worst.max((h.offset[0] - want).norm() / x0.norm());
                     assert!(h.offset[0].dot(&x0) > 0.0, "overshoot at {t} s");
@@ -825,7 +870,7 @@ mod tests {
         }
         eprintln!("omega {omega:.2} 1/s: largest error {:.3} % of x0", worst * 100.0);
         assert!(worst < 0.02, "off the analytic return by {worst} of x0");
-        assert!(core.handed.is_empty(), "dropped within 2 s");
+        assert!(core.set.handed.is_empty(), "dropped within 2 s");
     }
 
     #[test]
@@ -842,9 +887,9 @@ mod tests {
             let head = Isometry3::new(Vector3::new(0.0, 0.005, -0.01) * turn, Vector3::new(0.0, 0.2, 1.0) * turn);
             let nodes: Vec<Point3<f64>> = rest.iter().map(|p| head * p + Vector3::new(a * (7.0 * p.y).sin(), a * (5.0 * p.z).cos(), -a * p.x)).collect();
             for g in 0..scene.guides.len() {
-                let centre = (head * Point3::from(core.bounds.centres[g])).coords;
+                let centre = (head * Point3::from(core.model.bounds.centres[g])).coords;
                 for x in scene.guide_points(&nodes, &head, g) {
-                    assert!((x - centre).norm() <= core.bounds.radii[g], "guide {g}, a {a}");
+                    assert!((x - centre).norm() <= core.model.bounds.radii[g], "guide {g}, a {a}");
                 }
             }
             for k in 0..12 {
@@ -852,9 +897,9 @@ mod tests {
                 let tool = Vector3::new(0.11 * angle.sin(), -0.11 * angle.cos(), 0.04 - 0.01 * k as f64);
                 let ahead = tool + Vector3::new(0.0, 0.0, -0.015);
                 let with = core.choose(&tool, &ahead, &test_rot(), &nodes, &head);
-                let radii = std::mem::replace(&mut core.bounds.radii, vec![f64::INFINITY; scene.guides.len()]);
+                let radii = std::mem::replace(&mut core.model.bounds.radii, vec![f64::INFINITY; scene.guides.len()]);
                 let without = core.choose(&tool, &ahead, &test_rot(), &nodes, &head);
-                core.bounds.radii = radii;
+                core.model.bounds.radii = radii;
                 assert_eq!(with, without, "tool at {tool:?}, a {a}");
                 compared += with.len();
             }

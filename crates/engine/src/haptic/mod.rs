@@ -26,6 +26,13 @@
 //! 8. **Tracking**: each local strand's tip speed, the leaving strands' rest, the display's fade in, the
 //!    handed-over guides' offsets relaxed by the hold
 //!    ([`active`]).
+//!
+//! **Model and state** (after MuJoCo's model and data): [`HapticModel`] is what the layer is given (scene,
+//! parameters, tool shapes, guide bounds) and no step changes; the state is grouped by the stage that owns it,
+//! each in its stage's file: [`HairSetting`] (the viewer's hair, `strands.rs`), `ActiveSet` (stages 3-4 and 8,
+//! `active.rs`), `WetState` (5, `wetness.rs`), `ToolActions` (6, `actions.rs`), the local interaction (7), `Shown`
+//! (the viewer's snapshots, `reference.rs`) and [`HapticStats`]. One routine, [`HapticCore::physics_period`],
+//! is the physics side of a period for the live thread and for [`crate::lockstep::Lockstep`].
 
 pub mod actions;
 mod active;
@@ -37,6 +44,11 @@ mod wetness;
 #[cfg(test)]
 pub(crate) use strands::centreline;
 pub(crate) use strands::resting_on;
+pub use strands::HairSetting;
+pub(crate) use active::ActiveSet;
+pub(crate) use actions::ToolActions;
+pub(crate) use reference::{Shown, Staged};
+pub(crate) use wetness::WetState;
 
 use crate::command::Command;
 use crate::error::SessionError;
@@ -49,24 +61,37 @@ use haptics::coupling::{Coupling, HairReaction};
 use haptics::device::{DeviceCommand, DeviceReading};
 use nalgebra::{Matrix3, Vector3};
 use std::sync::Arc;
-use strand::{HairType, Strand};
+use strand::HairType;
 use strands::samples_along;
 use tools::contact::ToolPose;
 use tools::interaction::LocalInteraction;
 use strand::styling::SetState;
 use tools::wetness::WetnessModel;
 
-/// The haptic layer's state and step (coupling, local strands, wetness, cuts), shared by the live thread
-/// and [`replay`].
-pub struct HapticCore {
-    pub(crate) scene: Arc<Scene>,
-    pub(crate) params: SessionParams,
+/// What the haptic layer is given and keeps while it runs (after MuJoCo's model): the scene, the session's
+/// parameters, each tool's shape and each guide's bounds. No step changes it; the state a step changes is in
+/// [`HapticCore`]'s groups, each owned by the file of its stage.
+pub struct HapticModel {
+    /// The head, the guides, the render strands and the lattice (m, head frame).
+    pub scene: Arc<Scene>,
+    /// The session's parameters. `haptic.treatment` is the treatment at the start; the viewer's choice is
+    /// [`HairSetting::treatment`].
+    pub params: SessionParams,
     /// Each tool's shape (by wire id), built once.
-    pub(crate) shapes: Vec<tools::shape::ToolShape>,
+    pub shapes: Vec<tools::shape::ToolShape>,
+    /// Each guide's settled shape bounded for the active set's scan (`active::GuideBounds`).
+    pub(crate) bounds: active::GuideBounds,
+}
+
+/// The haptic layer: its model ([`HapticModel`]) and its state by stage, with the step (coupling, local strands,
+/// wetness, cuts), shared by the live thread, [`crate::lockstep::Lockstep`] and [`crate::replay`].
+pub struct HapticCore {
+    /// What the layer is given (immutable).
+    pub model: HapticModel,
+    /// The hair the viewer chose (hair type, curliness, combing ease, treatment; [`strands`]).
+    pub hair: HairSetting,
+    /// The tool selected.
     pub(crate) tool: Tool,
-    pub(crate) hair_type: HairType,
-    pub(crate) curliness: f64,
-    pub(crate) combing_ease: f64,
     /// The device loop's side (stages 1-2c: device point, coupling, body, runaway guard) as the lockstep
     /// schedule runs it ([`HapticCore::step_rates`]); the live session runs its own copy on the device thread.
     pub side: DeviceSide,
@@ -74,84 +99,41 @@ pub struct HapticCore {
     pub(crate) proxy: ProxyState,
     /// The device side's re-anchorings seen (`ProxyState::anchors`).
     pub(crate) anchors: u64,
-    /// Every guide's strand while it is not simulated (it keeps its last state there); None while it is: the
-    /// interaction has it (moved, not copied: a copy of a strand's workspaces was most of a joining step).
-    pub(crate) strands: Vec<Option<Strand>>,
-    /// Simulated guides, in the interaction's order (their strands live in the interaction meanwhile and
-    /// move back to `strands` when they leave or the set is cleared), and each one's membership.
-    pub(crate) active: Vec<usize>,
-    pub(crate) members: Vec<active::Member>,
-    /// Guides handed over to the global layer whose displacement from their carried place is still relaxing
-    /// (no longer simulated, or simulated again with it; [`active::HandedOver`]).
-    pub(crate) handed: Vec<active::HandedOver>,
-    /// The shown guides' reference samples mapped through the lattice, kept between snapshots
-    /// ([`HapticCore::snapshot`] takes `&self`, hence the cell; the core lives on one thread).
-    pub(crate) references: std::cell::RefCell<reference::ReferenceCache>,
-    /// The next snapshot's staged displacements ([`HapticCore::stage_snapshot`]), one per shown guide.
-    pub(crate) staged: std::cell::RefCell<Vec<Staged>>,
-    /// The choice of the active set in progress, if any (spread over steps).
-    pub(crate) choice: Option<active::Choice>,
-    /// Each guide's settled shape bounded for the choice's scan (fixed, from the scene).
-    pub(crate) bounds: active::GuideBounds,
-    /// Guides the last finished choice chose that have yet to join, nearest first (they join
-    /// `HapticParams::joins_per_step` at a time).
-    pub(crate) queued: Vec<usize>,
-    /// Fastest tip of the simulated strands over the last step, m/s.
-    pub(crate) max_tip_speed: f64,
+    /// Stages 3-4 and 8: which guides are simulated, the strands, the hand-overs ([`active`]).
+    pub(crate) set: ActiveSet,
+    /// Stage 5: the guides' wetness and wet sets ([`wetness`]).
+    pub(crate) wet: WetState,
+    /// Stage 6: the scissors', clip's and dryer's state ([`actions`]).
+    pub(crate) actions: ToolActions,
+    /// Stage 7: the local interaction (the simulated strands live in it while simulated).
     pub(crate) interaction: LocalInteraction,
-    /// The hair's reaction on the proxy from the last step (scaled to the real hairs), linearised.
+    /// The hair's reaction on the proxy from the last step (scaled to the real hairs), linearised: the local
+    /// force model published to the device loop.
     pub(crate) hair_force: HairReaction,
-    /// Wetness of each guide as last read from the lattice snapshot, and the version it came from
-    /// (u64::MAX: apply again).
-    pub(crate) wetness: Vec<f32>,
-    pub(crate) wet_version: u64,
-    pub(crate) wet_model: WetnessModel,
-    /// Each guide's wet set (`strand::styling`): the shape its hydrogen bonds hold, updated while it is
-    /// a local strand (one per guide, remade with the strands).
-    pub(crate) sets: Vec<SetState>,
-    /// Scissors closes so far, and whether the primary button was held in the last step.
-    pub(crate) cuts: u64,
-    pub(crate) was_pressed: bool,
-    pub(crate) last_cut_at: Option<Vector3<f64>>,
+    /// The viewer's snapshots: the reference cache and the staged displacements ([`reference`]).
+    pub(crate) shown: Shown,
+    /// Physics steps so far.
     pub(crate) step: u64,
-    pub(crate) last_contacts: u32,
-    pub(crate) last_select: Option<Vector3<f64>>,
-    pub(crate) clipped: bool,
-    /// The most strands simulated now ([`Command::LimitStrands`], the live thread's strand budget), in
-    /// 1..=`SessionParams::max_active`; `max_active` unless limited.
-    pub(crate) strand_limit: usize,
     /// The head pose (head frame to world): the roots and the body follow it. Identity unless a scenario
     /// or the viewer moves the head ([`HapticCore::set_head_pose`]).
     pub(crate) head: nalgebra::Isometry3<f64>,
+    /// Counts and timings for the outputs (no result depends on them).
+    pub stats: HapticStats,
+}
+
+/// What the haptic layer counts and times for the outputs (no result depends on it).
+#[derive(Debug, Clone, Default)]
+pub struct HapticStats {
     /// Rejected device readings (NaN, teleport), as the device side counted them up to the last physics step.
     pub rejected: u64,
     /// Steps in which the runaway guard put the proxy back on the device (`HapticParams::max_proxy_lag`).
     pub runaways: u64,
     /// Strand steps that failed (state kept).
     pub failed: u64,
-    /// The largest hand-over to the global layer so far: a let-go strand's largest shown displacement from its
-    /// place carried by the global layer when it leaves the simulation (what the hand-over carries into the
-    /// global layer, which the hold then brings back; [`active::HandedOver`]), m.
-    pub(crate) handover_max: f64,
-    /// Strands let go so far back in place (handed over to the global layer).
-    pub(crate) handovers: u64,
-    /// The same for the strands let go before they were back in place (after `HapticParams::max_relax_time`,
-    /// or by the strand limit): the largest hand-over, m, and how many.
-    pub(crate) early_handover_max: f64,
-    pub(crate) early_handovers: u64,
+    /// Tool contacts in the last step.
+    pub last_contacts: u32,
     /// Wall-clock time of the last step's stages.
-    pub(crate) timings: StepPhases,
-}
-
-/// One simulated guide's displacements staged for the next snapshot ([`HapticCore::stage_snapshot`]).
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct Staged {
-    /// The guide.
-    pub guide: usize,
-    /// The haptic step they were mapped at.
-    pub step: u64,
-    /// Its samples' shown displacements, m.
-    pub displacement: Vec<Vector3<f64>>,
+    pub timings: StepPhases,
 }
 
 /// Wall-clock time of the stages of one [`HapticCore::step`] (the numbered stages of the module
@@ -187,7 +169,7 @@ impl HapticCore {
         if ok && head != self.head {
             self.head = head;
             if let Some((body, _)) = self.interaction.body.as_mut() {
-                for (b, rest) in body.balls.iter_mut().zip(&self.scene.head.balls) {
+                for (b, rest) in body.balls.iter_mut().zip(&self.model.scene.head.balls) {
                     b.centre = head * rest.centre;
                 }
             }
@@ -203,57 +185,69 @@ impl HapticCore {
     /// At rest with the comb selected.
     pub fn new(scene: Arc<Scene>, params: SessionParams) -> Result<Self, SessionError> {
         params.validate()?;
-        let h = scene.hair_type;
-        let strands = Self::build_strands(&scene, &h, 0.0, &params.haptic)?;
+        let hair = HairSetting { hair_type: scene.hair_type, curliness: 0.0, combing_ease: 0.0, treatment: params.haptic.treatment };
+        let strands = Self::build_strands(&scene, &hair.hair_type, 0.0, &params.haptic)?;
         let sets = strands.iter().map(|s| SetState::new(&s.model)).collect();
-        let strands = strands.into_iter().map(Some).collect();
         let start = Vector3::from(params.haptic.start);
         let pose = ToolPose { position: start, rotation: Matrix3::identity() };
         let n = scene.guides.len();
         let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape(params.global.nozzle_standoff)).collect();
-        let mut interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &h, 0.0)));
+        let mut interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &hair)));
         interaction.hold_distance = params.haptic.hold_distance;
         interaction.hold_gravity = scene.guides.first().map(|g| g.model.gravity.norm());
         let bounds = active::GuideBounds::new(&scene);
         let side = DeviceSide::new(params, shapes.clone(), (scene.head.clone(), scene.lattice.params.metaball.threshold));
         Ok(Self {
-            scene, params, shapes, tool: Tool::Comb, hair_type: h, curliness: 0.0, combing_ease: 0.0, side, proxy: ProxyState::default(), anchors: 0, strands, active: Vec::new(), members: Vec::new(), handed: Vec::new(), references: Default::default(), staged: Default::default(), choice: None, bounds, queued: Vec::new(), max_tip_speed: 0.0, interaction,
-            hair_force: HairReaction::none(), wetness: vec![0.0; n], wet_version: u64::MAX, wet_model: WetnessModel::default(), sets, cuts: 0, was_pressed: false, last_cut_at: None, step: 0, last_contacts: 0, last_select: None, clipped: false, strand_limit: params.max_active, head: nalgebra::Isometry3::identity(), rejected: 0, runaways: 0, failed: 0, handover_max: 0.0, handovers: 0, early_handover_max: 0.0, early_handovers: 0, timings: StepPhases::default(),
+            model: HapticModel { scene, params, shapes, bounds },
+            hair,
+            tool: Tool::Comb,
+            side,
+            proxy: ProxyState::default(),
+            anchors: 0,
+            set: ActiveSet::new(strands, params.max_active),
+            wet: WetState { wetness: vec![0.0; n], version: u64::MAX, model: WetnessModel::default(), sets },
+            actions: ToolActions::default(),
+            interaction,
+            hair_force: HairReaction::none(),
+            shown: Shown::default(),
+            step: 0,
+            head: nalgebra::Isometry3::identity(),
+            stats: HapticStats::default(),
         })
     }
 
     /// Applies a viewer command.
     pub fn apply(&mut self, c: &Command) {
-        self.wet_version = u64::MAX;
+        self.wet.version = u64::MAX;
         match *c {
             Command::SelectTool(t) => {
                 self.clear_active();
                 self.tool = t;
-                self.clipped = false;
+                self.actions.clipped = false;
                 self.renew_interaction(Vec::new());
             }
             Command::SetHair { hair_type, curliness, combing_ease } => {
-                let h = HairType::ALL.get(hair_type as usize).copied().unwrap_or(self.hair_type);
+                let h = HairType::ALL.get(hair_type as usize).copied().unwrap_or(self.hair.hair_type);
                 let (c, e) = (if curliness.is_finite() { curliness.clamp(0.0, 1.0) } else { 0.0 }, if combing_ease.is_finite() { combing_ease.clamp(0.0, 1.0) } else { 0.0 });
                 // The simulated strands go back to the store (and are rebuilt there for a new hair).
                 self.clear_active();
-                self.clipped = false;
-                if h != self.hair_type || c != self.curliness {
-                    if let Ok(s) = Self::build_strands(&self.scene, &h, c, &self.params.haptic) {
-                        self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
-                        self.strands = s.into_iter().map(Some).collect();
+                self.actions.clipped = false;
+                if h != self.hair.hair_type || c != self.hair.curliness {
+                    if let Ok(s) = Self::build_strands(&self.model.scene, &h, c, &self.model.params.haptic) {
+                        self.wet.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
+                        self.set.strands = s.into_iter().map(Some).collect();
                     }
                 }
-                self.hair_type = h;
-                self.curliness = c;
-                self.combing_ease = e;
+                self.hair.hair_type = h;
+                self.hair.curliness = c;
+                self.hair.combing_ease = e;
                 self.renew_interaction(Vec::new());
             }
             Command::SetTreatment(t) => {
                 // The frictions follow (`force_model`, `fibre_friction`); the strands keep their shape.
                 self.clear_active();
-                self.clipped = false;
-                self.params.haptic.treatment = t;
+                self.actions.clipped = false;
+                self.hair.treatment = t;
                 self.renew_interaction(Vec::new());
             }
             Command::SetHead { position, rotation } => {
@@ -263,26 +257,26 @@ impl HapticCore {
                 }
             }
             Command::LimitStrands(n) => {
-                let n = (n as usize).clamp(1, self.params.max_active);
-                if n != self.strand_limit {
-                    self.strand_limit = n;
+                let n = (n as usize).clamp(1, self.model.params.max_active);
+                if n != self.set.strand_limit {
+                    self.set.strand_limit = n;
                     // A new choice at the next step, of as many strands as the limit leaves room for; the
                     // strands beyond it are let go from the next step on (`HapticCore::update_active`).
-                    self.last_select = None;
+                    self.set.last_select = None;
                 }
             }
             Command::Reset => {
                 // Back to the store first: if the rebuild fails, the store keeps every strand. A reset shows the
                 // groom: no hand-over's offset is kept.
                 self.clear_active();
-                self.handed.clear();
-                if let Ok(s) = Self::build_strands(&self.scene, &self.hair_type, self.curliness, &self.params.haptic) {
-                    self.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
-                    self.strands = s.into_iter().map(Some).collect();
+                self.set.handed.clear();
+                if let Ok(s) = Self::build_strands(&self.model.scene, &self.hair.hair_type, self.hair.curliness, &self.model.params.haptic) {
+                    self.wet.sets = s.iter().map(|s| SetState::new(&s.model)).collect();
+                    self.set.strands = s.into_iter().map(Some).collect();
                 }
-                self.clipped = false;
+                self.actions.clipped = false;
                 self.renew_interaction(Vec::new());
-                self.wet_version = u64::MAX;
+                self.wet.version = u64::MAX;
             }
         }
     }
@@ -303,7 +297,7 @@ impl HapticCore {
     /// start; its model is rendered in the next period (the live physics thread has the whole period to make
     /// it). `each(i, command)` sees each device step's command.
     pub fn step_rates(&mut self, commands: &[Command], readings: &[Option<DeviceReading>], lattice: &LatticeSnapshot, dt: f64, each: impl FnMut(usize, &DeviceCommand)) {
-        let h = dt / self.params.device_steps() as f64;
+        let h = dt / self.model.params.device_steps() as f64;
         self.period(commands, readings, lattice, dt, h, each);
     }
 
@@ -315,10 +309,17 @@ impl HapticCore {
             let c = self.side.step(*r, h, &published);
             each(i, &c);
         }
+        self.physics_period(commands, &proxy, lattice, dt);
+    }
+
+    /// The physics side of one period, the one routine the live physics thread and [`crate::lockstep::Lockstep`]
+    /// (through [`HapticCore::step_rates`]) run: the viewer's `commands` in order, then the physics step
+    /// ([`HapticCore::physics_step`]) of `dt` s with the proxy's state `proxy` and the lattice snapshot `lattice`.
+    pub fn physics_period(&mut self, commands: &[Command], proxy: &ProxyState, lattice: &LatticeSnapshot, dt: f64) {
         for c in commands {
             self.apply(c);
         }
-        self.physics_step(&proxy, lattice, dt);
+        self.physics_step(proxy, lattice, dt);
     }
 
     /// What the last physics step published for the device loop: its local force model, the tool and the head
@@ -333,9 +334,9 @@ impl HapticCore {
     pub fn physics_step(&mut self, proxy: &ProxyState, lattice: &LatticeSnapshot, dt: f64) {
         self.step += 1;
         let clock = std::time::Instant::now();
-        self.timings = StepPhases::default();
+        self.stats.timings = StepPhases::default();
         self.proxy = *proxy;
-        (self.rejected, self.runaways) = (proxy.rejected, proxy.runaways);
+        (self.stats.rejected, self.stats.runaways) = (proxy.rejected, proxy.runaways);
         if !proxy.present {
             // No device: nothing touches the hair (the next reading re-anchors the tool).
             self.hair_force = HairReaction::none();
@@ -348,13 +349,13 @@ impl HapticCore {
         }
         let (position, velocity, rotation) = (proxy.position, proxy.velocity, proxy.rotation);
         let t1 = clock.elapsed().as_secs_f64();
-        self.timings.coupling = t1;
+        self.stats.timings.coupling = t1;
         // 3. Active set; 4. roots.
         self.update_active(&position, &velocity, &rotation, &lattice.positions, &lattice.head);
         self.roots_follow(dt);
         self.hold_in_place(lattice);
         let t2 = clock.elapsed().as_secs_f64();
-        self.timings.active = t2 - t1;
+        self.stats.timings.active = t2 - t1;
         // 5. Wetness.
         self.apply_wetness(lattice);
         // 6. Tool actions (the primary button closes the scissors and the clip, blows the dryer).
@@ -363,37 +364,37 @@ impl HapticCore {
         // 7. Local strands.
         let pose = ToolPose { position, rotation };
         let t3 = clock.elapsed().as_secs_f64();
-        self.timings.actions = t3 - t2;
+        self.stats.timings.actions = t3 - t2;
         match self.interaction.step(dt, pose) {
             Ok(res) => {
-                self.timings.local = res.timings;
-                self.timings.hair_pairs = res.hair_pairs;
+                self.stats.timings.local = res.timings;
+                self.stats.timings.hair_pairs = res.hair_pairs;
                 let n = self.hairs_per_guide();
                 self.hair_force = HairReaction { force: res.force * n, damping: res.damping * n, velocity, position, stiffness: res.stiffness * n, torque: res.torque * n };
-                self.last_contacts = res.contacts.len() as u32;
+                self.stats.last_contacts = res.contacts.len() as u32;
             }
             Err(_) => {
-                self.failed += 1;
+                self.stats.failed += 1;
                 self.hair_force = HairReaction::none();
-                self.last_contacts = 0;
+                self.stats.last_contacts = 0;
             }
         }
         let t4 = clock.elapsed().as_secs_f64();
-        self.timings.interaction = t4 - t3;
+        self.stats.timings.interaction = t4 - t3;
         // 8. Tracking.
         self.track_active(dt, lattice);
-        self.timings.tracking = clock.elapsed().as_secs_f64() - t4;
+        self.stats.timings.tracking = clock.elapsed().as_secs_f64() - t4;
     }
 
     /// Real hairs each simulated guide stands for: the render strands times `hairs_per_render_strand`, shared
     /// among the guides (500 in the built-in scene), dimensionless, >= 1.
     pub fn hairs_per_guide(&self) -> f64 {
-        (self.scene.render.strands() as f64 * self.params.hairs_per_render_strand / self.scene.guides.len().max(1) as f64).max(1.0)
+        (self.model.scene.render.strands() as f64 * self.model.params.hairs_per_render_strand / self.model.scene.guides.len().max(1) as f64).max(1.0)
     }
 
     /// What the global layer needs of the tool now.
     pub fn tool_input(&self) -> ToolInput {
-        ToolInput { tool: self.tool, present: self.proxy.present, position: self.proxy.position, rotation: self.interaction.pose.rotation, pressed: self.was_pressed, cuts: self.cuts, head: self.head }
+        ToolInput { tool: self.tool, present: self.proxy.present, position: self.proxy.position, rotation: self.interaction.pose.rotation, pressed: self.actions.was_pressed, cuts: self.actions.cuts, head: self.head }
     }
 
     /// Stages the viewer's next snapshot, a share of it a step: the displacements of every
@@ -402,14 +403,14 @@ impl HapticCore {
     /// publishes (a cost that step alone would pay). Call once after each step where snapshots are
     /// published every `publish_every` steps; without it the snapshot maps every strand itself.
     pub fn stage_snapshot(&self, lattice: &LatticeSnapshot) {
-        let every = self.params.publish_every.max(1);
+        let every = self.model.params.publish_every.max(1);
         let share = (self.step % every) as usize;
-        let ok = lattice.positions.len() == self.scene.lattice.node_count();
-        let mut cache = self.references.borrow_mut();
+        let ok = lattice.positions.len() == self.model.scene.lattice.node_count();
+        let mut cache = self.shown.references.borrow_mut();
         cache.use_nodes(&lattice.positions, &lattice.head);
-        let mut staged = self.staged.borrow_mut();
-        for slot in (share..self.active.len()).step_by(every as usize) {
-            let g = self.active[slot];
+        let mut staged = self.shown.staged.borrow_mut();
+        for slot in (share..self.set.active.len()).step_by(every as usize) {
+            let g = self.set.active[slot];
             let i = match staged.iter().position(|e| e.guide == g) {
                 Some(i) => i,
                 None => {
@@ -428,9 +429,9 @@ impl HapticCore {
     /// references mapped through the cache's nodes (`ok`: they are the lattice's), times its blend weight, m.
     fn displacement_into(&self, slot: usize, g: usize, cache: &mut reference::ReferenceCache, ok: bool, out: &mut Vec<Vector3<f64>>) {
         let s = &self.interaction.strands[slot];
-        let weight = self.members.get(slot).map_or(1.0, |m| m.weight);
-        let pts = samples_along(s, self.scene.guides[g].model.length, self.scene.samples());
-        let bases = cache.bases(&self.scene, g, ok);
+        let weight = self.set.members.get(slot).map_or(1.0, |m| m.weight);
+        let pts = samples_along(s, self.model.scene.guides[g].model.length, self.model.scene.samples());
+        let bases = cache.bases(&self.model.scene, g, ok);
         for (p, base) in pts.into_iter().zip(bases) {
             out.push(self.shown((p - base) * weight));
         }
@@ -439,7 +440,7 @@ impl HapticCore {
     /// A displacement as the viewer may show it: zero if not finite or larger than
     /// `HapticParams::max_displacement` (a misbehaving strand must not throw the hairstyle across the scene).
     fn shown(&self, d: Vector3<f64>) -> Vector3<f64> {
-        if d.iter().all(|x| x.is_finite()) && d.norm() < self.params.haptic.max_displacement { d } else { Vector3::zeros() }
+        if d.iter().all(|x| x.is_finite()) && d.norm() < self.model.params.haptic.max_displacement { d } else { Vector3::zeros() }
     }
 
     /// Fills `out` with what the viewer needs. The simulated strands' displacements staged in the last
@@ -452,23 +453,23 @@ impl HapticCore {
         out.tool_rotation = self.interaction.pose.rotation;
         out.device_position = self.proxy.device;
         out.force = self.proxy.force;
-        out.contacts = self.last_contacts;
+        out.contacts = self.stats.last_contacts;
         out.lattice_version = lattice.version;
-        out.runaways = self.runaways;
-        out.treatment = self.params.haptic.treatment;
+        out.runaways = self.stats.runaways;
+        out.treatment = self.hair.treatment;
         out.tool_friction = match self.interaction.model {
             tools::interaction::ForceModel::Constraint { friction, .. } => friction,
             _ => 0.0,
         };
         out.active.clear();
         out.displacement.clear();
-        let ok = lattice.positions.len() == self.scene.lattice.node_count();
-        let every = self.params.publish_every.max(1);
-        let mut cache = self.references.borrow_mut();
+        let ok = lattice.positions.len() == self.model.scene.lattice.node_count();
+        let every = self.model.params.publish_every.max(1);
+        let mut cache = self.shown.references.borrow_mut();
         cache.use_nodes(&lattice.positions, &lattice.head);
-        let mut staged = self.staged.borrow_mut();
+        let mut staged = self.shown.staged.borrow_mut();
         let turn = lattice.head.rotation;
-        for (slot, &g) in self.active.iter().enumerate() {
+        for (slot, &g) in self.set.active.iter().enumerate() {
             out.active.push(g as u32);
             let at = out.displacement.len();
             match staged.iter().find(|e| e.guide == g && e.step + every > self.step) {
@@ -476,28 +477,28 @@ impl HapticCore {
                 None => self.displacement_into(slot, g, &mut cache, ok, &mut out.displacement),
             }
             // A guide simulated again while its hand-over's offset still relaxes shows both.
-            if let Some(h) = self.handed.iter().find(|h| h.guide == g) {
+            if let Some(h) = self.set.handed.iter().find(|h| h.guide == g) {
                 for (d, x) in out.displacement[at..].iter_mut().zip(&h.offset) {
                     *d = self.shown(*d + turn * x * h.weight);
                 }
             }
         }
         // The handed-over guides: their offsets from their carried places, relaxing.
-        for h in self.handed.iter().filter(|h| !self.active.contains(&h.guide)) {
+        for h in self.set.handed.iter().filter(|h| !self.set.active.contains(&h.guide)) {
             out.active.push(h.guide as u32);
             out.displacement.extend(h.offset.iter().map(|x| self.shown(turn * x * h.weight)));
         }
         cache.keep_only(&out.active);
-        staged.retain(|e| self.active.contains(&e.guide));
+        staged.retain(|e| self.set.active.contains(&e.guide));
     }
 
     /// Tool contacts of the last step.
     pub fn last_contacts(&self) -> u32 {
-        self.last_contacts
+        self.stats.last_contacts
     }
     /// Wall-clock time of the last step's stages.
     pub fn timings(&self) -> StepPhases {
-        self.timings
+        self.stats.timings
     }
     /// Force last sent to the device, N (by the lockstep device side, [`HapticCore::side`]).
     pub fn force(&self) -> Vector3<f64> {
@@ -505,7 +506,7 @@ impl HapticCore {
     }
     /// Guide indices currently simulated.
     pub fn active(&self) -> &[usize] {
-        &self.active
+        &self.set.active
     }
     /// The virtual coupling between the device and the tool proxy (the lockstep device side's, after the last
     /// device step).
@@ -518,15 +519,15 @@ impl HapticCore {
     }
     /// The most strands simulated now ([`Command::LimitStrands`]; `SessionParams::max_active` unless limited).
     pub fn strand_limit(&self) -> usize {
-        self.strand_limit
+        self.set.strand_limit
     }
     /// Wetness per guide as last read from the lattice snapshot.
     pub fn wetness(&self) -> &[f32] {
-        &self.wetness
+        &self.wet.wetness
     }
     /// Fastest tip of the simulated strands over the last step, m/s.
     pub fn max_tip_speed(&self) -> f64 {
-        self.max_tip_speed
+        self.set.max_tip_speed
     }
     /// The largest hand-over to the global layer so far, m: a let-go strand's largest shown displacement from
     /// its place carried by the global layer when it left the simulation (carried over as the guide's offset
@@ -534,17 +535,17 @@ impl HapticCore {
     /// `HapticParams::handover_distance`: the strands let go before they were back in place are counted apart,
     /// [`HapticCore::early_handovers`]).
     pub fn handover_max(&self) -> f64 {
-        self.handover_max
+        self.set.handover_max
     }
     /// Strands let go back in place (handed over to the global layer) so far.
     pub fn handovers(&self) -> u64 {
-        self.handovers
+        self.set.handovers
     }
     /// The strands let go before they were back in place (after `HapticParams::max_relax_time`, or by the strand
     /// limit, wherever they were, or by a command that empties the active set): their largest hand-over (as
     /// [`HapticCore::handover_max`], the displacement carried over), m, and how many so far.
     pub fn early_handovers(&self) -> (f64, u64) {
-        (self.early_handover_max, self.early_handovers)
+        (self.set.early_handover_max, self.set.early_handovers)
     }
     /// Length of each active strand, m (shorter than its guide's once cut).
     pub fn active_lengths(&self) -> Vec<f64> {
@@ -572,7 +573,7 @@ mod tests {
             let p = if n == 50 || n == 80 { Vector3::new(f64::NAN, 0.0, 0.0) } else { Vector3::new(0.0, -0.118, 0.05 - 0.1 * t) };
             forces.push(core.step(Some(DeviceReading { time: t, position: p, rotation: test_rot(), buttons: 0 }), &snap, 1e-3).force);
         }
-        assert_eq!(core.rejected, 2);
+        assert_eq!(core.stats.rejected, 2);
         assert_eq!(forces[50], Vector3::zeros());
         assert_eq!(forces[80], Vector3::zeros());
         assert!(forces.iter().all(|f| f.iter().all(|x| x.is_finite())));
@@ -639,7 +640,7 @@ mod tests {
             }
             assert!(f.iter().all(|x| x.is_finite()) && f.norm() <= 3.3 + 1e-9);
         }
-        assert_eq!(core.runaways, 2);
+        assert_eq!(core.stats.runaways, 2);
         // The viewer is told (FRAME carries the count).
         let mut hs = HapticSnapshot::default();
         core.snapshot(&snap, 1e-3, &mut hs);
@@ -665,11 +666,11 @@ mod tests {
             core.stage_snapshot(&snap);
             if core.step % params.publish_every == 0 && n > 300 {
                 core.snapshot(&snap, 1e-3, &mut staged);
-                let kept = core.staged.replace(Vec::new());
+                let kept = core.shown.staged.replace(Vec::new());
                 core.snapshot(&snap, 1e-3, &mut fresh);
-                core.staged.replace(kept);
+                core.shown.staged.replace(kept);
                 assert_eq!(staged.active, fresh.active);
-                let k = core.scene.samples();
+                let k = core.model.scene.samples();
                 for slot in 0..core.active().len() {
                     let (a, b) = (&staged.displacement[slot * k..(slot + 1) * k], &fresh.displacement[slot * k..(slot + 1) * k]);
                     let off = a.iter().zip(b).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max);
@@ -708,7 +709,7 @@ mod tests {
                 moved = moved.max(hs.displacement.iter().map(|d| d.norm()).fold(0.0, f64::max));
             }
         }
-        assert_eq!(core.rejected, 0);
+        assert_eq!(core.stats.rejected, 0);
         eprintln!("peak force {peak} N, largest displacement {moved} m");
         assert!(peak > 1e-3, "peak force {peak} N");
         assert!(peak <= 3.3 + 1e-12, "within the Omni's clamp: {peak} N");

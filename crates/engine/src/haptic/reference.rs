@@ -15,6 +15,27 @@ use nalgebra::{Isometry3, Point3, Vector3};
 
 use crate::scene::{follow_the_leader, Scene};
 
+/// The viewer's snapshots of the simulated strands (`HapticCore::snapshot`, `HapticCore::stage_snapshot`, which
+/// take `&self`, hence the cells; the core lives on one thread).
+#[derive(Debug, Default)]
+pub(crate) struct Shown {
+    /// The shown guides' reference samples mapped through the lattice, kept between snapshots.
+    pub references: std::cell::RefCell<ReferenceCache>,
+    /// The next snapshot's staged displacements, one per shown guide.
+    pub staged: std::cell::RefCell<Vec<Staged>>,
+}
+
+/// One simulated guide's displacements staged for the next snapshot ([`HapticCore::stage_snapshot`](super::HapticCore::stage_snapshot)).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Staged {
+    /// The guide.
+    pub guide: usize,
+    /// The haptic step they were mapped at.
+    pub step: u64,
+    /// Its samples' shown displacements, m.
+    pub displacement: Vec<Vector3<f64>>,
+}
+
 /// One guide's stencils and bases.
 #[derive(Debug, Clone)]
 struct Entry {

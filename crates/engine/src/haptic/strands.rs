@@ -19,6 +19,21 @@ pub(crate) fn resting_on(scene: &Scene, mut it: LocalInteraction) -> LocalIntera
     it
 }
 
+/// The hair the viewer chose (`Command::SetHair`, `Command::SetTreatment`): what the local strands are built
+/// of and how they rub.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HairSetting {
+    /// The hair type (Table 1); the scene's at the start.
+    pub hair_type: HairType,
+    /// Curliness added to the strands' rest shape, in [0, 1] ([`hairstyle::Curl`]); 0 at the start.
+    pub curliness: f64,
+    /// Combing ease (a detangler's lowering of the friction, `HapticParams::combing_friction`), in [0, 1]; 0 at
+    /// the start.
+    pub combing_ease: f64,
+    /// The surface treatment (`tools::treatment::Treatment`); `HapticParams::treatment` at the start.
+    pub treatment: tools::treatment::Treatment,
+}
+
 impl HapticCore {
     /// Every guide's strand in its groomed state, with the hair type's section and material and the
     /// curliness (in [0, 1], [`hairstyle::Curl`]) added to the rest twist and bend, and an air drag of at least
@@ -45,10 +60,10 @@ impl HapticCore {
                 m.gravity = Vector3::zeros();
             }
             if let Some(c) = curl.as_ref() {
-                let mut q = m.rest_coordinates();
+                let (mut q, d) = (m.rest_coordinates(), m.dofs_per_segment());
                 for i in 0..m.segments {
-                    q[2 * i] += c.twist;
-                    q[2 * i + 1] += c.bend;
+                    q[d * i] += c.twist;
+                    q[d * i + 1] += c.bend;
                 }
                 m.set_rest_coordinates(&q);
             }
@@ -62,12 +77,12 @@ impl HapticCore {
         }).collect()
     }
 
-    /// The tool's contact law on dry hair of type `h` with the surface treatment `HapticParams::treatment` at
-    /// combing ease `ease` ([`HapticParams::combing_friction`]), with the constraints' compliance of
-    /// [`contact_options`] for its fibre.
-    pub(crate) fn force_model(params: &HapticParams, h: &HairType, ease: f64) -> ForceModel {
-        let mu = h.friction_coefficient() * params.treatment.friction_factor(Contact::Tool, 0.0);
-        ForceModel::Constraint { friction: params.combing_friction(mu, ease), options: contact_options(h.bending_stiffness) }
+    /// The tool's contact law on the dry hair `hair` (its type, surface treatment and combing ease,
+    /// [`HapticParams::combing_friction`]), with the constraints' compliance of [`contact_options`] for its fibre.
+    pub(crate) fn force_model(params: &HapticParams, hair: &HairSetting) -> ForceModel {
+        let h = &hair.hair_type;
+        let mu = h.friction_coefficient() * hair.treatment.friction_factor(Contact::Tool, 0.0);
+        ForceModel::Constraint { friction: params.combing_friction(mu, hair.combing_ease), options: contact_options(h.bending_stiffness) }
     }
 
     /// Hair-hair contact between the local strands (`tools::hair_contact`; None when
@@ -76,7 +91,7 @@ impl HapticCore {
     /// [0, 1]; the wetness model's one friction law) and lowered by the combing ease (the one combing-ease
     /// law), as the tool's friction and as the tress scenarios' (`scenario::patch`).
     pub(crate) fn hair_contact(&self, wetness: f64) -> Option<HairContact> {
-        if !self.params.haptic.hair_contact {
+        if !self.model.params.haptic.hair_contact {
             return None;
         }
         Some(HairContact { fibres: self.hairs_per_guide(), friction: self.fibre_friction(wetness), ..HairContact::default() })
@@ -88,25 +103,25 @@ impl HapticCore {
     /// (`SessionParams::haptic_rate_hz / global_rate_hz` haptic steps: 10 by default), so that no step maps
     /// every strand's references through a new lattice.
     pub(crate) fn hold_in_place(&mut self, lattice: &LatticeSnapshot) {
-        let shares = (self.params.haptic_rate_hz / self.params.global_rate_hz).round().max(1.0) as u64;
-        let n = self.active.len();
+        let shares = (self.model.params.haptic_rate_hz / self.model.params.global_rate_hz).round().max(1.0) as u64;
+        let n = self.set.active.len();
         self.interaction.holds.resize(n, None);
         let share = (self.step % shares) as usize;
-        let ok = lattice.positions.len() == self.scene.lattice.node_count();
-        let mut cache = self.references.borrow_mut();
+        let ok = lattice.positions.len() == self.model.scene.lattice.node_count();
+        let mut cache = self.shown.references.borrow_mut();
         cache.use_nodes(&lattice.positions, &lattice.head);
-        for (slot, &g) in self.active.iter().enumerate() {
+        for (slot, &g) in self.set.active.iter().enumerate() {
             let hold = &mut self.interaction.holds[slot];
             if hold.is_some() && slot % shares as usize != share {
                 continue;
             }
-            let bases = cache.bases(&self.scene, g, ok);
+            let bases = cache.bases(&self.model.scene, g, ok);
             match hold {
                 Some(h) => {
                     h.points.clear();
                     h.points.extend_from_slice(bases);
                 }
-                None => *hold = Some(Hold { points: bases.to_vec(), length: self.scene.guides[g].model.length }),
+                None => *hold = Some(Hold { points: bases.to_vec(), length: self.model.scene.guides[g].model.length }),
             }
         }
     }
@@ -118,8 +133,8 @@ impl HapticCore {
     /// (`LocalInteraction::body_friction`): a strand lies on the scalp under the hair beneath it.
     pub(crate) fn fibre_friction(&self, wetness: f64) -> f64 {
         let d = HairContact::default().friction;
-        let wet = self.params.haptic.treatment.friction(&self.wet_model, Contact::Fibre, d, wetness.clamp(0.0, 1.0)).unwrap_or(d);
-        self.params.haptic.combing_friction(wet, self.combing_ease)
+        let wet = self.hair.treatment.friction(&self.wet.model, Contact::Fibre, d, wetness.clamp(0.0, 1.0)).unwrap_or(d);
+        self.model.params.haptic.combing_friction(wet, self.hair.combing_ease)
     }
 
     /// A new local interaction over `strands` with the selected tool's shape (built once) and the current
@@ -127,16 +142,16 @@ impl HapticCore {
     /// not copied in the haptic loop).
     pub(crate) fn renew_interaction(&mut self, strands: Vec<Strand>) {
         let body = self.interaction.body.take();
-        let model = Self::force_model(&self.params.haptic, &self.hair_type, self.combing_ease);
-        let mut it = LocalInteraction::new(strands, self.shapes[self.tool as usize].clone(), self.interaction.pose, model);
+        let model = Self::force_model(&self.model.params.haptic, &self.hair);
+        let mut it = LocalInteraction::new(strands, self.model.shapes[self.tool as usize].clone(), self.interaction.pose, model);
         it.body = body;
         it.body_friction = self.fibre_friction(0.0);
-        it.hold_distance = self.params.haptic.hold_distance;
+        it.hold_distance = self.model.params.haptic.hold_distance;
         // The strands' models carry no weight (the hold does, `build_strands`): the hold's spring takes the scene's gravity.
-        it.hold_gravity = self.scene.guides.first().map(|g| g.model.gravity.norm());
+        it.hold_gravity = self.model.scene.guides.first().map(|g| g.model.gravity.norm());
         it.hair_contact = self.hair_contact(0.0);
-        if self.params.haptic.entanglement {
-            it.entanglement = Some(Entanglement { wettability: self.params.haptic.treatment.wettability(), ..Entanglement::default() });
+        if self.model.params.haptic.entanglement {
+            it.entanglement = Some(Entanglement { wettability: self.hair.treatment.wettability(), ..Entanglement::default() });
         }
         self.interaction = it;
     }
@@ -195,9 +210,9 @@ mod tests {
         assert_eq!(dry.fibres, core.hairs_per_guide());
         assert!((dry.friction - 0.25).abs() < 1e-15, "{}", dry.friction);
         let wet = core.hair_contact(1.0).unwrap();
-        let want = core.wet_model.friction(0.25, 1.0).unwrap();
+        let want = core.wet.model.friction(0.25, 1.0).unwrap();
         assert!(want > 0.25 && (wet.friction - want).abs() < 1e-12, "{} vs {want}", wet.friction);
-        core.combing_ease = 1.0;
+        core.hair.combing_ease = 1.0;
         let eased = core.hair_contact(0.0).unwrap();
         assert!((eased.friction - params.haptic.combing_friction(0.25, 1.0)).abs() < 1e-15);
         core.renew_interaction(Vec::new());

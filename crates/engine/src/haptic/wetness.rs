@@ -5,6 +5,21 @@ use super::HapticCore;
 use crate::snapshot::LatticeSnapshot;
 use strand::styling::{SetModel, SetState};
 use tools::interaction::ForceModel;
+use tools::wetness::WetnessModel;
+
+/// Stage 5's state: the guides' wetness as last read and their wet sets.
+#[derive(Debug, Clone)]
+pub(crate) struct WetState {
+    /// Wetness of each guide (in [0, 1]) as last read from the lattice snapshot.
+    pub wetness: Vec<f32>,
+    /// The snapshot version it came from (u64::MAX: apply again).
+    pub version: u64,
+    /// The wetness law (friction and stiffness against wetness).
+    pub model: WetnessModel,
+    /// Each guide's wet set (`strand::styling`): the shape its hydrogen bonds hold, updated while it is
+    /// a local strand (one per guide, remade with the strands).
+    pub sets: Vec<SetState>,
+}
 
 impl HapticCore {
 
@@ -13,44 +28,44 @@ impl HapticCore {
     /// heavier, softer, and the tool's friction grows (`tools::wetness::WetnessModel`). The friction of the
     /// interaction (the tool's and the hair-hair contact's) follows the active guides' mean wetness.
     pub(crate) fn apply_wetness(&mut self, lattice: &LatticeSnapshot) {
-        if lattice.version == self.wet_version || lattice.wetness.len() != self.wetness.len() {
+        if lattice.version == self.wet.version || lattice.wetness.len() != self.wet.wetness.len() {
             return;
         }
-        self.wet_version = lattice.version;
-        self.wetness.copy_from_slice(&lattice.wetness);
-        let h = self.hair_type;
+        self.wet.version = lattice.version;
+        self.wet.wetness.copy_from_slice(&lattice.wetness);
+        let h = self.hair.hair_type;
         let (Ok(dry), Ok(section)) = (h.material(), h.section()) else { return };
         let mut mean = 0.0;
-        let set_model = SetModel { hydrogen_share: self.params.haptic.hydrogen_share };
+        let set_model = SetModel { hydrogen_share: self.model.params.haptic.hydrogen_share };
         self.interaction.wetness.clear();
-        for (slot, &g) in self.active.iter().enumerate() {
-            let w = self.wetness[g] as f64;
+        for (slot, &g) in self.set.active.iter().enumerate() {
+            let w = self.wet.wetness[g] as f64;
             // The capillary share of the tool's drag (`tools::entanglement`) follows each guide's wetness.
             self.interaction.wetness.push(w);
-            mean += w / self.active.len() as f64;
+            mean += w / self.set.active.len() as f64;
             let s = &mut self.interaction.strands[slot];
-            if let Ok(m) = self.wet_model.wet(&dry, h.friction_coefficient(), section.area(), w) {
+            if let Ok(m) = self.wet.model.wet(&dry, h.friction_coefficient(), section.area(), w) {
                 s.model.material = m.material();
             }
             // The wet set (`strand::styling`, the law the headless styling tests check): as the guide dries
             // its rest shape takes the shape it is held in. A cut strand (fewer segments) starts a new set.
-            if self.sets[g].set.len() != s.model.dofs() {
-                self.sets[g] = SetState::new(&s.model);
+            if self.wet.sets[g].set.len() != s.model.dofs() {
+                self.wet.sets[g] = SetState::new(&s.model);
             }
             // Unchanged wetness leaves the set and the rest shape as they are (the law moves the set only as the
             // wetness changes), so the update is skipped: it ran for every simulated strand at every global step.
-            if self.sets[g].wetness.iter().any(|&x| x != w) {
+            if self.wet.sets[g].wetness.iter().any(|&x| x != w) {
                 let (q, ws) = (s.state.q.clone(), vec![w; s.model.segments]);
-                if self.sets[g].update(&set_model, &mut s.model, &q, &ws).is_err() {
-                    self.failed += 1;
+                if self.wet.sets[g].update(&set_model, &mut s.model, &q, &ws).is_err() {
+                    self.stats.failed += 1;
                 }
             }
         }
-        if let Ok(m) = self.wet_model.wet(&dry, h.friction_coefficient(), section.area(), mean) {
+        if let Ok(m) = self.wet.model.wet(&dry, h.friction_coefficient(), section.area(), mean) {
             // Wet fibres are softer: their contacts' largest stiffness follows (`contact_options`).
             let options = super::strands::contact_options(m.material().young_modulus * section.i_soft());
-            let friction = m.friction * self.params.haptic.treatment.friction_factor(tools::treatment::Contact::Tool, mean);
-            self.interaction.model = ForceModel::Constraint { friction: self.params.haptic.combing_friction(friction, self.combing_ease), options };
+            let friction = m.friction * self.hair.treatment.friction_factor(tools::treatment::Contact::Tool, mean);
+            self.interaction.model = ForceModel::Constraint { friction: self.model.params.haptic.combing_friction(friction, self.hair.combing_ease), options };
         }
         self.interaction.hair_contact = self.hair_contact(mean);
         self.interaction.body_friction = self.fibre_friction(mean);
@@ -108,7 +123,7 @@ mod tests {
             ForceModel::Paper { .. } => f64::NAN,
         };
         let h = scene.hair_type;
-        let wet = dry_core.wet_model.wet(&h.material().unwrap(), h.friction_coefficient(), h.section().unwrap().area(), 1.0).unwrap();
+        let wet = dry_core.wet.model.wet(&h.material().unwrap(), h.friction_coefficient(), h.section().unwrap().area(), 1.0).unwrap();
         let want = SessionParams::default().haptic.combing_friction(wet.friction, 0.0);
         assert!((friction(&wet_core) - want).abs() < 1e-12 * want, "wet friction {} vs {want}", friction(&wet_core));
         assert!((friction(&dry_core) - SessionParams::default().haptic.combing_friction(h.friction_coefficient(), 0.0)).abs() < 1e-12);
@@ -123,7 +138,7 @@ mod tests {
         let (dry_cap, wet_cap) = (48.0 * h.bending_stiffness / span3, 48.0 * wet.material().young_modulus * h.section().unwrap().i_soft() / span3);
         assert!((cap(&dry_core) - dry_cap).abs() < 1e-9 * dry_cap && (cap(&wet_core) - wet_cap).abs() < 1e-9 * wet_cap, "caps {} and {} vs {dry_cap} and {wet_cap} N/m", cap(&dry_core), cap(&wet_core));
         assert!(wet_cap < dry_cap && dry_cap < 1.0, "{wet_cap} {dry_cap}");
-        assert!(!wet_core.active.is_empty() && dp > 1e-4, "the stroke goes through the hair");
+        assert!(!wet_core.set.active.is_empty() && dp > 1e-4, "the stroke goes through the hair");
         for (s, d) in wet_core.interaction.strands.iter().zip(&dry_core.interaction.strands) {
             assert!(s.model.material.density > d.model.material.density, "{:?} vs {:?}", s.model.material, d.model.material);
         }
@@ -152,9 +167,9 @@ mod tests {
                 let snap = if n < 300 { &wet } else { &dry };
                 core.step(Some(DeviceReading { time: t, position: p, rotation: test_rot(), buttons: 0 }), snap, 1e-3);
             }
-            assert!(!core.active.is_empty());
+            assert!(!core.set.active.is_empty());
             let (mut sq, mut cnt) = (0.0, 0usize);
-            for (slot, &g) in core.active.iter().enumerate() {
+            for (slot, &g) in core.set.active.iter().enumerate() {
                 let d = core.interaction.strands[slot].model.rest_coordinates() - built[g].model.rest_coordinates();
                 sq += d.norm_squared();
                 cnt += d.len();

@@ -97,6 +97,9 @@ pub struct LiveFit {
     pub units: Option<String>,
     /// True: only the given units and axes, no detection, no ICP, no push-out (`--no-fit`). Default false.
     pub no_fit: bool,
+    /// Follow strands drawn around each of the file's strands (`SceneOptions::follow_strands`). Default: as
+    /// many as bring the drawn strands to `[live] render_strands`.
+    pub follow_strands: Option<usize>,
 }
 
 impl LiveFit {
@@ -272,8 +275,9 @@ impl LiveScenario {
     }
 
     /// The scene: the built-in one of `coiffure serve` ([`LiveScenario::scene_options`]), or with `[live]
-    /// hairstyle` that file placed on the head by `hairstyle::fit` and carried by the built-in head and
-    /// guides ([`Scene::from_curves`], as the viewer's load), a relative name looked up in `dir`.
+    /// hairstyle` that file placed on the head by `hairstyle::fit`, its strands drawn with `[live.fit]
+    /// follow_strands` around each and guides fitted to them ([`Scene::from_curves`], as the viewer's load), a
+    /// relative name looked up in `dir`.
     pub fn scene_in(&self, dir: &std::path::Path) -> Result<Scene, ScenarioError> {
         self.validate()?;
         let opts = self.scene_options();
@@ -282,7 +286,7 @@ impl LiveScenario {
             Some(name) => {
                 let path = dir.join(name);
                 let (curves, _) = hairstyle::fit::fit_file(&path, &self.live.fit.options()?).map_err(|e| ScenarioError::File { path: path.clone(), message: format!("live.hairstyle: {e}") })?;
-                Scene::from_curves(&curves, &opts)
+                Scene::from_curves(&curves, &SceneOptions { follow_strands: self.live.fit.follow_strands, ..opts })
             }
         };
         scene.map_err(|e| ScenarioError::Invalid(format!("live scene: {e}")))
@@ -357,13 +361,13 @@ impl LiveScenario {
             let cmd = ls.haptic_step(&std::mem::take(&mut commands), &readings);
             if n >= settle_steps {
                 timing.push(t0.elapsed().as_secs_f64());
-                trace.push(t, &cmd.force, &cmd.torque, ls.haptic.last_contacts, &ls.haptic.tool_input().position);
+                trace.push(t, &cmd.force, &cmd.torque, ls.haptic.last_contacts(), &ls.haptic.tool_input().position);
                 meter.step(&ls);
             }
         }
         meter.measure(&ls);
         let wall = started.elapsed().as_secs_f64();
-        let summary = LiveSummary::new(&trace, max_force, ls.dt, &meter, &mut timing, ls.haptic.rejected, ls.haptic.failed, wall);
+        let summary = LiveSummary::new(&trace, max_force, ls.dt, &meter, &mut timing, ls.haptic.stats.rejected, ls.haptic.stats.failed, wall);
         Ok((trace, summary, ls.record.take()))
     }
 }
@@ -388,14 +392,14 @@ pub fn replay_record(scene: Arc<Scene>, params: SessionParams, record: &Record) 
         Some(c) => {
             // The haptic step's wall time (from the end of the previous step or global step).
             timing.push(last.elapsed().as_secs_f64());
-            trace.push(trace.len() as f64 * ls.dt, &c.force, &c.torque, ls.haptic.last_contacts, &ls.haptic.tool_input().position);
+            trace.push(trace.len() as f64 * ls.dt, &c.force, &c.torque, ls.haptic.last_contacts(), &ls.haptic.tool_input().position);
             meter.step(ls);
             last = Instant::now();
         }
     });
     meter.measure(&ls);
     let wall = started.elapsed().as_secs_f64();
-    Ok((trace.clone(), LiveSummary::new(&trace, params.profile.max_force, ls.dt, &meter, &mut timing, ls.haptic.rejected, ls.haptic.failed, wall)))
+    Ok((trace.clone(), LiveSummary::new(&trace, params.profile.max_force, ls.dt, &meter, &mut timing, ls.haptic.stats.rejected, ls.haptic.stats.failed, wall)))
 }
 
 #[cfg(test)]
@@ -491,6 +495,27 @@ mod tests {
         assert!(m.stroke_force_share >= 0.6 && m.stroke_steps > in_hair / 2, "share of the {} stroke steps above 5 mN {}", m.stroke_steps, m.stroke_force_share);
         assert!(m.max_force_change_n <= 0.1, "largest one-step change {} N", m.max_force_change_n);
         m
+    }
+
+    #[test]
+    fn live_comb_stroke_through_a_loaded_groom_meets_the_acceptance() {
+        // Issue 34: the acceptance stroke (live-comb.toml, issue 12's bounds) through a loaded groom that is not
+        // the built-in one: 3,000 strands of 30 cm, wavy (curliness 0.2), no parting, written as a .hair file
+        // and loaded with `[live] hairstyle` (placed by `hairstyle::fit`, 200 of its strands the guides, 32
+        // follow strands around each to 100,000 drawn strands). The comb moves the guides fitted to the file:
+        // some guide point at least 5 mm from its place during the stroke.
+        let h = hairstyle::Hairstyle::generate(&hairstyle::HairstyleParams { render_count: 3000, guide_count: 80, render_vertices: 24, length: 0.3, curliness: 0.2, fringe_flow: None, seed: 21, ..Default::default() }).unwrap();
+        let dir = std::env::temp_dir().join(format!("coiffure-loaded-comb-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("groom.hair");
+        hairstyle::write_file(&path, &h.to_curves()).unwrap();
+        let mut s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-comb.toml")).unwrap();
+        s.live.hairstyle = Some(path.clone());
+        let scene = s.scene_in(&dir).unwrap();
+        assert_eq!(scene.render.strands(), 3000 * 33);
+        let m = meets_the_comb_acceptance(&s, 300);
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(m.stroke_max_displacement_m >= 5e-3, "the comb moves the fitted guides: {} m", m.stroke_max_displacement_m);
     }
 
     #[test]

@@ -144,7 +144,7 @@ impl Meter {
     /// of a settled guide point), the fastest strand tip.
     pub(crate) fn step(&mut self, ls: &Lockstep) {
         let input = ls.haptic.tool_input();
-        let shape = &ls.haptic.shapes[input.tool as usize];
+        let shape = &ls.haptic.model.shapes[input.tool as usize];
         let reach = shape.capsules.iter().flat_map(|c| [Vector3::from(c.a).norm(), Vector3::from(c.b).norm()].map(|r| r + c.radius)).fold(0.0, f64::max) + self.params.in_hair_distance;
         let inside = input.present && self.settled.iter().any(|p| {
             let d = p - input.position;

@@ -33,14 +33,7 @@ impl Scene {
         let hair_type = HairType::by_name(&opts.hair_type).ok_or_else(|| SessionError::Param(format!("unknown hair type {:?}", opts.hair_type)))?;
         let mesh = style.head.mesh();
         let head_mesh = Mesh { positions: mesh.positions, indices: mesh.indices };
-        let guides: Vec<Guide> = style
-            .guides
-            .iter()
-            .map(|g| {
-                let reference = strand::kinematics::centerline(&g.model, &g.state, opts.samples).into_iter().map(|(_, p)| p).collect();
-                Guide { model: g.model.clone(), state: g.state.clone(), reference, stable: g.stable }
-            })
-            .collect();
+        let guides: Vec<Guide> = style.guides.iter().map(|g| scene_guide(g, opts.samples)).collect();
         let r = &style.render;
         let render = RenderHair { vertices_per_strand: r.vertices_per_strand, guides_per_strand: r.guides_per_strand, positions: r.positions.clone(), guide: r.guide_indices.clone(), weight: r.guide_weights.clone(), span: r.span.clone() };
         // Lattice around the hair and head.
@@ -53,6 +46,13 @@ impl Scene {
         let lattice = lattice_for_hair(ffd, &render.positions, hair_mass.max(1e-6), &style.head.body, rad)?;
         Ok(Scene { head: style.head.body.clone(), head_mesh, render, guides, hair_type, lattice, root_hold: HairLatticeParams::default().root_hold })
     }
+}
+
+/// The scene's guide of a hairstyle's guide (generated, or fitted to a file's strand): its model, groomed
+/// state and stability flag, and its reference centreline of `samples` points.
+pub(super) fn scene_guide(g: &hairstyle::Guide, samples: usize) -> Guide {
+    let reference = strand::kinematics::centerline(&g.model, &g.state, samples).into_iter().map(|(_, p)| p).collect();
+    Guide { model: g.model.clone(), state: g.state.clone(), reference, stable: g.stable }
 }
 
 /// The lattice `ffd` carrying the render strands' vertices `positions` (m, head frame), `hair_mass` (kg)

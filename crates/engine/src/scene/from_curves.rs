@@ -1,7 +1,8 @@
-//! A scene carrying a file's render strands on the built-in head and guides.
+//! A scene of a loaded hairstyle (issue 34): the file's strands are drawn, with follow strands around them,
+//! and the simulated guides are chosen among them, each a Super-Helix fitted to its strand's shape.
 
-use super::builtin::lattice_for_hair;
-use super::{RenderHair, Scene, SceneOptions};
+use super::builtin::{lattice_for_hair, scene_guide};
+use super::{Guide, RenderHair, Scene, SceneOptions};
 use crate::error::SessionError;
 use lattice::ffd::FfdLattice;
 
@@ -11,24 +12,104 @@ pub const MAX_LATTICE_NODES: usize = 20_000;
 use nalgebra::Point3;
 pub use hairstyle::LoadLimits;
 
+/// What a load made of a file's strands ([`Scene::load`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LoadReport {
+    /// Strands of the file.
+    pub file_strands: usize,
+    /// Follow strands drawn around each of them.
+    pub follow_per_strand: usize,
+    /// The guides fitted to the file's strands: `(file strand, RMS distance m, largest distance m, stable)`,
+    /// the distances between the guide's rest centreline and its strand at evenly spaced arc lengths. Empty
+    /// when no strand is rooted on the scalp: the built-in guides then carry the file.
+    pub guides: Vec<(usize, f64, f64, bool)>,
+}
+
+impl LoadReport {
+    /// One line for a status bar or a log: strands, follow strands, guides and their fit (mm).
+    pub fn summary(&self) -> String {
+        let drawn = format!("{} strands + {} follow strands each", self.file_strands, self.follow_per_strand);
+        if self.guides.is_empty() {
+            return format!("{drawn}; no strand rooted on the scalp: the built-in guides carry them");
+        }
+        let mut rms: Vec<f64> = self.guides.iter().map(|g| g.1).collect();
+        rms.sort_by(f64::total_cmp);
+        let q = |f: f64| rms[((rms.len() - 1) as f64 * f).round() as usize] * 1e3;
+        let worst = self.guides.iter().max_by(|a, b| a.2.total_cmp(&b.2)).expect("not empty");
+        let stable = self.guides.iter().filter(|g| g.3).count();
+        format!(
+            "{drawn}; {} guides fitted to the file's strands, distance median {:.2} mm, p95 {:.2} mm, largest {:.2} mm (strand {}); {stable} stable",
+            self.guides.len(),
+            q(0.5),
+            q(0.95),
+            worst.2 * 1e3,
+            worst.0
+        )
+    }
+}
+
 impl Scene {
-    /// The built-in head and guides of `opts` carrying the render strands of `curves` instead of generated
-    /// ones (positions in m in the head frame, root first, as the viewer saves them; at most
-    /// `opts.load` strands and points, every point in its box around the head): each strand resampled to `opts.render_vertices` points evenly along its
-    /// length, bound to the guides whose roots are nearest its root (`hairstyle::generate::nearest_guides`), spanning
-    /// its length over the nearest guide's length (capped at 1), and a lattice enclosing them all whose
-    /// node masses come from the strands (the guides' linear density times their lengths).
-    /// Errors name the bad strand (empty, non-finite or outside the box) or the bound or parameter.
+    /// [`Scene::load`] without its report.
     pub fn from_curves(curves: &hairstyle::HairCurves, opts: &SceneOptions) -> Result<Scene, SessionError> {
+        Scene::load(curves, opts).map(|(s, _)| s)
+    }
+
+    /// The built-in head carrying the hairstyle `curves` (positions in m in the head frame, root first, as
+    /// the viewer saves them; at most `opts.load` strands and points, every point in its box around the
+    /// head). Stages:
+    /// 1. Guides: up to `opts.guides` of the file's strands rooted on the scalp, spread over it, each a
+    ///    Super-Helix of `opts.hair_type` fitted to its shape with its sag-free rest
+    ///    (`hairstyle::fitted::guides_from_curves`, at least `opts.segments` segments); the built-in guides
+    ///    if no strand is rooted on the scalp.
+    /// 2. Drawn strands: each file strand resampled to `opts.render_vertices` points evenly along its length,
+    ///    then `opts.follow_strands` follow strands around each (`hairstyle::follow`), within
+    ///    `opts.load.max_strands` in all.
+    /// 3. Binding: each drawn strand bound to the guides whose roots are nearest its root
+    ///    (`hairstyle::generate::nearest_guides`, the one law), spanning its length over the nearest guide's
+    ///    length (capped at 1).
+    /// 4. Lattice: enclosing them all, node masses from the strands (the guides' linear density times their
+    ///    lengths).
+    ///
+    /// Errors name the bad strand (empty, non-finite or outside the box) or the bound or parameter.
+    pub fn load(curves: &hairstyle::HairCurves, opts: &SceneOptions) -> Result<(Scene, LoadReport), SessionError> {
         let bad = |m: String| SessionError::Scene(m);
         opts.load.check_counts(curves).map_err(bad)?;
         opts.load.check_box(curves).map_err(bad)?;
-        let base = Scene::builtin(&SceneOptions { render_strands: 1, ..opts.clone() })?;
+        let n = curves.strands.len();
+        let follow = match opts.follow_strands {
+            Some(f) if n.saturating_mul(f + 1) > opts.load.max_strands => {
+                return Err(bad(format!("{f} follow strands for each of {n} strands make {} drawn strands; at most {} may be loaded", n.saturating_mul(f + 1), opts.load.max_strands)));
+            }
+            Some(f) => f,
+            None => (opts.render_strands / n).saturating_sub(1).min((opts.load.max_strands / n).saturating_sub(1)),
+        };
+        // 1. Guides.
+        let params = hairstyle::HairstyleParams { hair_type: opts.hair_type.clone(), guide_segments: opts.segments, ..Default::default() };
+        let head = hairstyle::Head::new(params.head).map_err(|e| bad(e.to_string()))?;
+        let fit = hairstyle::fitted::GuideFitParams { budget: opts.guides, ..Default::default() };
+        let fitted = hairstyle::fitted::guides_from_curves(curves, &params, &head, &fit).map_err(|e| bad(e.to_string()))?;
+        let hair_type = strand::HairType::by_name(&opts.hair_type).ok_or_else(|| SessionError::Param(format!("unknown hair type {:?}", opts.hair_type)))?;
+        let guides: Vec<Guide> = if fitted.is_empty() {
+            Scene::builtin(&SceneOptions { render_strands: 1, ..opts.clone() })?.guides
+        } else {
+            fitted.iter().map(|f| scene_guide(&f.guide, opts.samples)).collect()
+        };
+        let report = LoadReport { file_strands: n, follow_per_strand: follow, guides: fitted.iter().map(|f| (f.strand, f.rms, f.max, f.guide.stable)).collect() };
+        // 2. Drawn strands.
         let v = opts.render_vertices;
-        let curves = hairstyle::formats::tfx::resample(&hairstyle::HairCurves::from_strands(curves.strands.clone()), v).map_err(|e| bad(e.to_string()))?;
-        let k = base.render.guides_per_strand.min(base.guides.len()).max(1);
-        let roots: Vec<Point3<f64>> = base.guides.iter().map(|g| Point3::from(g.state.root.position)).collect();
-        let density = base.guides.first().map_or(0.0, |g| g.model.mass() / g.model.length);
+        let mut curves = hairstyle::formats::tfx::resample(&hairstyle::HairCurves::from_strands(curves.strands.clone()), v).map_err(|e| bad(e.to_string()))?;
+        if follow > 0 {
+            let scalp = hairstyle::fit::ScalpIndex::new(&head, hairstyle::fit::FitParams::default().scalp_samples);
+            let fp = hairstyle::follow::FollowParams { per_strand: follow, seed: opts.seed, ..Default::default() };
+            let more = hairstyle::follow::follow_strands(&curves.strands, &head, &scalp, fit.rooted_distance, &fp);
+            // Follow strands stay in the box around the head (a strand at its edge fans out of it).
+            let (lo, hi) = (opts.load.box_min, opts.load.box_max);
+            curves.strands.extend(more.into_iter().map(|s| s.into_iter().map(|p| std::array::from_fn(|a| p[a].clamp(lo[a] as f32, hi[a] as f32))).collect()));
+        }
+        // 3. Binding.
+        let k = hairstyle::HairstyleParams::default().guides_per_render.min(guides.len()).max(1);
+        let roots: Vec<Point3<f64>> = guides.iter().map(|g| Point3::from(g.state.root.position)).collect();
+        let density = guides.first().map_or(0.0, |g| g.model.mass() / g.model.length);
         let n = curves.strands.len();
         let (mut positions, mut guide, mut weight, mut span) = (Vec::with_capacity(n * v), Vec::with_capacity(n * k), Vec::with_capacity(n * k), Vec::with_capacity(n));
         let mut hair_mass = 0.0;
@@ -39,16 +120,17 @@ impl Scene {
             guide.extend_from_slice(&near);
             weight.extend_from_slice(&w);
             let length: f64 = st.windows(2).map(|p| (0..3).map(|a| ((p[1][a] - p[0][a]) as f64).powi(2)).sum::<f64>().sqrt()).sum();
-            span.push((length / base.guides[near[0] as usize].model.length).min(1.0) as f32);
+            span.push((length / guides[near[0] as usize].model.length).min(1.0) as f32);
             hair_mass += density * length;
             positions.extend_from_slice(st);
         }
         let render = RenderHair { vertices_per_strand: v, guides_per_strand: k, positions, guide, weight, span };
-        // The lattice encloses the strands and what the built-in one enclosed (head, guides).
-        let (mut lo, mut hi) = (Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY), Point3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY));
-        let base_points = base.lattice.rest.iter().copied();
+        // 4. The lattice encloses the strands, the guides and the head (a cube of its radius, as the built-in one).
+        let radius = head.params.head_radius;
+        let (mut lo, mut hi) = (Point3::new(-radius, -radius, -radius), Point3::new(radius, radius, radius));
         let hair_points = render.positions.iter().map(|p| Point3::new(p[0] as f64, p[1] as f64, p[2] as f64));
-        for p in base_points.chain(hair_points) {
+        let guide_points = guides.iter().flat_map(|g| g.reference.iter().map(|p| Point3::from(*p)));
+        for p in hair_points.chain(guide_points) {
             lo = lo.inf(&p);
             hi = hi.sup(&p);
         }
@@ -58,9 +140,10 @@ impl Scene {
         if ffd.node_count() > MAX_LATTICE_NODES {
             return Err(bad(format!("the strands span {:?} to {:?} m: a lattice of {} nodes at {} m cells is too large", lo, hi, ffd.node_count(), opts.cell)));
         }
-        let radius = hairstyle::HeadParams::default().head_radius;
-        let lattice = lattice_for_hair(ffd, &render.positions, hair_mass.max(1e-6), &base.head, radius)?;
-        Ok(Scene { head: base.head, head_mesh: base.head_mesh, render, guides: base.guides, hair_type: base.hair_type, lattice, root_hold: base.root_hold })
+        let lattice = lattice_for_hair(ffd, &render.positions, hair_mass.max(1e-6), &head.body, radius)?;
+        let mesh = head.mesh();
+        let head_mesh = super::Mesh { positions: mesh.positions, indices: mesh.indices };
+        Ok((Scene { head: head.body, head_mesh, render, guides, hair_type, lattice, root_hold: crate::params::HairLatticeParams::default().root_hold }, report))
     }
 }
 

@@ -6,8 +6,10 @@
 mod builtin;
 mod from_curves;
 mod render;
+#[cfg(test)]
+mod loaded_tests;
 
-pub use from_curves::{LoadLimits, MAX_LATTICE_NODES};
+pub use from_curves::{LoadLimits, LoadReport, MAX_LATTICE_NODES};
 pub use render::GuideDisplacements;
 
 use lattice::ffd::FfdLattice;
@@ -65,11 +67,16 @@ pub struct SceneOptions {
     pub seed: u64,
     /// Bounds on a loaded hairstyle ([`Scene::from_curves`], `coiffure serve`'s LOAD). Default [`LoadLimits::default`].
     pub load: LoadLimits,
+    /// Follow strands drawn around each strand of a loaded hairstyle (`hairstyle::follow`; `[live.fit]
+    /// follow_strands`, the viewer's load bar, `coiffure fit --follow-strands`). Default None: as many as
+    /// bring the drawn strands to `render_strands` (none for a file with that many), within
+    /// `load.max_strands`.
+    pub follow_strands: Option<usize>,
 }
 
 impl Default for SceneOptions {
     fn default() -> Self {
-        Self { render_strands: 100_000, render_vertices: 12, guides: 200, segments: 8, samples: 16, length: 0.2, curliness: 0.0, cell: 0.05, hair_type: "caucasian".into(), seed: 1, load: LoadLimits::default() }
+        Self { render_strands: 100_000, render_vertices: 12, guides: 200, segments: 8, samples: 16, length: 0.2, curliness: 0.0, cell: 0.05, hair_type: "caucasian".into(), seed: 1, load: LoadLimits::default(), follow_strands: None }
     }
 }
 

@@ -230,14 +230,8 @@ pub fn resample(curves: &HairCurves, n: usize) -> Result<HairCurves, FormatError
         if s.is_empty() {
             return Err(unwritable(format!("strand {i} has no vertex to resample")));
         }
-        let mut cum = vec![0.0f64];
-        for w in s.windows(2) {
-            let d: f64 = (0..3)
-                .map(|k| ((w[1][k] - w[0][k]) as f64).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            cum.push(cum.last().unwrap() + d);
-        }
+        let points: Vec<nalgebra::Vector3<f64>> = s.iter().map(|p| nalgebra::Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64)).collect();
+        let cum = strand::samples::cumulative_lengths(&points);
         // Segment j and fraction t where each target length falls (`strand::samples::stations`); a
         // strand of one vertex or of zero length: n copies of its root.
         let at = strand::samples::stations(&cum, n).unwrap_or_else(|| vec![(0, 0.0); n]);

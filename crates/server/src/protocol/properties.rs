@@ -66,7 +66,7 @@ proptest! {
             Ok(ClientMessage::Command(Command::SetHead { position, rotation })) => {
                 prop_assert!(engine::command::head_pose(&position, &rotation).is_some());
             }
-            Ok(ClientMessage::Load(format, opts, _)) => {
+            Ok(ClientMessage::Load(format, opts, _, _)) => {
                 prop_assert!(format < FORMATS.len());
                 prop_assert!(opts.units.is_none_or(|u| u.is_finite() && u > 0.0));
             }
@@ -119,6 +119,6 @@ proptest! {
             (vec![client::LOAD, VERSION, format], FitOptions::default())
         };
         b.extend_from_slice(&file);
-        prop_assert_eq!(parse_client(&b).unwrap(), ClientMessage::Load(format as usize, opts, file));
+        prop_assert_eq!(parse_client(&b).unwrap(), ClientMessage::Load(format as usize, opts, None, file));
     }
 }

@@ -87,7 +87,7 @@ pub(super) fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
                 Err(e) => Some(protocol::encode_error(&WireError { code: protocol::code::FILE, message: e })),
             }
         }
-        ClientMessage::Load(format, opts, bytes) => {
+        ClientMessage::Load(format, opts, follow, bytes) => {
             if !controls {
                 return not_controller();
             }
@@ -104,7 +104,7 @@ pub(super) fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
                         return file_error(message);
                     }
                     tracing::info!("loaded hairstyle fitted: scale {:.5} m per unit, up {} front {} ({}), {:.1} % of the strands rooted on the scalp (roots median {:.2} mm, p95 {:.2} mm from it)", report.transform.scale, report.up.name(), report.front.name(), report.orientation_source.name(), 100.0 * report.rooted, 1e3 * report.rooted_distance.median, 1e3 * report.rooted_distance.p95);
-                    match load(app, &c, start) {
+                    match load(app, &c, follow, start) {
                         Ok(()) => {
                             let msg = protocol::encode_fit(&report);
                             for v in app.viewers() {
@@ -122,15 +122,19 @@ pub(super) fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
     }
 }
 
-/// Replaces the live hairstyle by `curves` (m, head frame, as `hairstyle::fit` leaves them): a scene of the built-in head and guides
-/// carrying them ([`Scene::from_curves`]), a new session on it, the new SCENE sent to every viewer, then
+/// Replaces the live hairstyle by `curves` (m, head frame, as `hairstyle::fit` leaves them): a scene of the built-in head
+/// with guides fitted to the file's strands and `follow` follow strands around each (default the server's
+/// `SceneOptions::follow_strands`; [`Scene::load`]), a new session on it, the new SCENE sent to every viewer, then
 /// the frame thread switched to the new session's snapshots. The old session stops. Refused while
 /// recording (a record is of one scene).
-fn load(app: &App, curves: &hairstyle::HairCurves, t0: Instant) -> Result<(), String> {
+fn load(app: &App, curves: &hairstyle::HairCurves, follow: Option<usize>, t0: Instant) -> Result<(), String> {
     if app.record.is_some() {
         return Err("cannot load a hairstyle while recording (--record): a record replays one scene".into());
     }
-    let scene = Arc::new(Scene::from_curves(curves, &app.opts).map_err(|e| format!("cannot use the loaded hairstyle: {e}"))?);
+    let opts = engine::scene::SceneOptions { follow_strands: follow.or(app.opts.follow_strands), ..app.opts.clone() };
+    let (scene, report) = Scene::load(curves, &opts).map_err(|e| format!("cannot use the loaded hairstyle: {e}"))?;
+    let scene = Arc::new(scene);
+    tracing::info!("loaded hairstyle: {}", report.summary());
     // Over the budget the new scene is dropped before anything live changes.
     app.opts.load.check_time(t0, "building the scene")?;
     let (session, io) = Session::start_with_device(scene.clone(), app.params, app.session_device()?).map_err(|e| e.to_string())?;

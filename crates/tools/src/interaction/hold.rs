@@ -14,6 +14,14 @@ pub const HOLD_LOADS: usize = 4;
 /// spring.
 pub const HOLD_EVERY: usize = 4;
 
+/// The hold's spring per unit mass, `omega^2 = |g| / hold_distance`, 1/s^2, for gravity `g` (m/s^2) and the
+/// hold distance (m): each piece of a held strand is pulled towards its place with its own weight per hold
+/// distance. 0 without a hold (the distance not finite or not positive). The one hold law: the local strands'
+/// loads ([`LocalInteraction::hold_strands`]) and the engine's relaxation of handed-over guides both use it.
+pub fn hold_rate(gravity: f64, hold_distance: f64) -> f64 {
+    if hold_distance.is_finite() && hold_distance > 0.0 { gravity.abs() / hold_distance } else { 0.0 }
+}
+
 /// Where the hair volume holds a simulated strand: its place among the unsimulated neighbours (e.g. the
 /// groomed strand carried by the global layer's lattice), as points evenly spaced in arc length.
 #[derive(Debug, Clone, PartialEq)]
@@ -68,7 +76,7 @@ impl LocalInteraction {
         let mut loads = [None; HOLD_LOADS];
         let (Some(Some(hold)), Some(strand)) = (self.holds.get(k), self.strands.get(k)) else { return loads };
         // Spring per unit length, N/m per m, times HOLD_EVERY (this strand's turn stands for that many steps).
-        let stiffness = HOLD_EVERY as f64 * strand.model.linear_density() * self.hold_gravity.unwrap_or_else(|| strand.model.gravity.norm()) / self.hold_distance;
+        let stiffness = HOLD_EVERY as f64 * strand.model.linear_density() * hold_rate(self.hold_gravity.unwrap_or_else(|| strand.model.gravity.norm()), self.hold_distance);
         let length = strand.model.length.max(1e-9);
         // Per run along the strand: sum of s x piece length (m^2), of piece lengths (m), of forces (N).
         let mut runs = [(0.0, 0.0, Vector3::zeros()); HOLD_LOADS];

@@ -33,7 +33,7 @@ mod warm;
 
 pub use crate::entanglement::Entanglement;
 pub use crate::hair_contact::HairContact;
-pub use hold::{Hold, HOLD_EVERY, HOLD_LOADS};
+pub use hold::{hold_rate, Hold, HOLD_EVERY, HOLD_LOADS};
 pub use model::ForceModel;
 pub use result::{StepResult, StepTimings};
 

@@ -6,6 +6,27 @@ import { readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { artifacts, binary, dragWorld, launchBrowser, strokeWorld, openViewer, repoDir, startServer, stopServer } from './harness.mjs';
 
+/** A Cem Yuksel .hair file written from its specification: `n` strands of `pts` points (points only) rooted on
+ * a sphere of radius `r` (file units) at azimuths from `a0` over `da` and elevations from `b0` over `db` (rad),
+ * hanging down by `down` per point, `back` per point towards -y and a little away from the head. */
+function hairFile(n, pts, a0, da, b0, db, r, back, down) {
+  const buf = Buffer.alloc(128 + n * pts * 12);
+  buf.write('HAIR', 0, 'ascii');
+  buf.writeUInt32LE(n, 4); buf.writeUInt32LE(n * pts, 8); buf.writeUInt32LE(2, 12); buf.writeUInt32LE(pts - 1, 16);
+  buf.writeFloatLE(1, 20); buf.writeFloatLE(0, 24);
+  let o = 128;
+  for (let i = 0; i < n; i++) {
+    const a = a0 + da * (i / n), b = b0 + db * ((i * 7919) % n) / n; // azimuth, elevation (rad)
+    const root = [r * Math.sin(a) * Math.cos(b), -r * Math.cos(a) * Math.cos(b), r * Math.sin(b)];
+    for (let j = 0; j < pts; j++) {
+      const out = 0.004 * j; // hangs down, a little away from the head
+      buf.writeFloatLE(root[0] * (1 + out), o); buf.writeFloatLE(root[1] * (1 + out) - back * j, o + 4); buf.writeFloatLE(root[2] - down * j, o + 8);
+      o += 12;
+    }
+  }
+  return buf;
+}
+
 describe('the default scene (100k render strands)', () => {
   let server, browser;
   before(async () => { server = await startServer(); browser = await launchBrowser(); });
@@ -269,24 +290,11 @@ describe('interaction (5k render strands for speed in software rendering)', () =
   });
 
   test('loading a hairstyle file replaces the live hairstyle; a malformed one is answered with an error', async () => {
-    // A Cem Yuksel .hair file written here from its specification: 2000 strands of 12 points hanging
-    // down from the back of the scalp (points only, default segment count 11).
+    // A Cem Yuksel .hair file: 2000 strands of 12 points hanging down from the back of the scalp.
     const n = 2000, pts = 12;
-    const buf = Buffer.alloc(128 + n * pts * 12);
-    buf.write('HAIR', 0, 'ascii');
-    buf.writeUInt32LE(n, 4); buf.writeUInt32LE(n * pts, 8); buf.writeUInt32LE(2, 12); buf.writeUInt32LE(pts - 1, 16);
-    buf.writeFloatLE(1, 20); buf.writeFloatLE(0, 24);
-    let o = 128;
-    for (let i = 0; i < n; i++) {
-      const a = -1.2 + 2.4 * (i / n), b = 0.2 + 0.6 * ((i * 7919) % n) / n; // azimuth, elevation (rad)
-      const root = [0.1 * Math.sin(a) * Math.cos(b), -0.1 * Math.cos(a) * Math.cos(b), 0.1 * Math.sin(b)];
-      for (let j = 0; j < pts; j++) {
-        const out = 0.004 * j; // hangs down, a little away from the head
-        buf.writeFloatLE(root[0] * (1 + out), o); buf.writeFloatLE(root[1] * (1 + out) - 0.002 * j, o + 4); buf.writeFloatLE(root[2] - 0.018 * j, o + 8);
-        o += 12;
-      }
-    }
+    const buf = hairFile(n, pts, -1.2, 2.4, 0.2, 0.6, 0.1, 0.002, 0.018);
     const errorsBefore = await page.evaluate(() => window.coiffure.errors.length);
+    await page.fill('#fit-follow', '0'); // the file's strands only (issue 34's follow strands: the next tests)
     await page.setInputFiles('#load', { name: 'tress.hair', mimeType: 'application/octet-stream', buffer: buf });
     await page.waitForFunction((k) => window.coiffure.strands === k, n, { timeout: 60_000 });
     const frames = await page.evaluate(() => window.coiffure.framesReceived);
@@ -311,6 +319,7 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     // The load took 19 s on a quiet CI machine and over 120 s on a loaded one: the wait polls on a timer (a
     // software-rendered frame takes seconds) for up to 5 minutes.
     await page.evaluate(() => { window.coiffure.fit = null; });
+    await page.fill('#fit-follow', '0');
     await page.setInputFiles('#load', { name: 'Ratboy_mohawk.tfx', mimeType: 'application/octet-stream', buffer: buf });
     await page.waitForFunction(() => window.coiffure.strands === 2228 && window.coiffure.fit !== null, null, { timeout: 300_000, polling: 250 });
     const fit = await page.evaluate(() => window.coiffure.fit);
@@ -332,6 +341,43 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     assert.ok(fit.rooted > 0.15 && fit.rooted < 0.3, `fraction of strands rooted on the scalp ${fit.rooted}`);
     assert.ok(fit.rootedMedian < 0.005, `rooted roots to the scalp: median ${fit.rootedMedian} m`);
     assert.ok(fit.scale >= 0.8 - 1e-6 && fit.scale <= 1.0, `scale ${fit.scale}`);
+  });
+
+  test('a guide-only groom is drawn as a full head with follow strands (issue 34)', async () => {
+    // Sintel's TressFX hair (Blender Institute, CC-BY; 228 guide strands; not in the repository: give its path in
+    // COIFFURE_SINTEL_TFX, e.g. assets/sintel_lite_v2_1/GEO-sintel_hair_emit.001-sintel_hair.tfx of
+    // github.com/Scthe/TressFX-OpenGL), else a guide-only groom written here: 228 strands of 16 points over the
+    // back and top of the scalp, in centimetres. Loaded with the default follow strands (the load bar's field
+    // empty: as many per strand as bring the head to the server's 5,000 render strands, 20 here), the viewer
+    // draws the file's strands and 20 around each one rooted on the scalp.
+    const sintel = process.env.COIFFURE_SINTEL_TFX;
+    let buf, name;
+    if (sintel) {
+      buf = readFileSync(sintel);
+      name = 'sintel.tfx';
+    } else {
+      buf = hairFile(228, 16, -2.4, 4.8, 0.15, 1.2, 10, 0.2, 1.6);
+      name = 'guides.hair';
+    }
+    await page.evaluate(() => { window.coiffure.fit = null; });
+    await page.fill('#fit-follow', '');
+    await page.setInputFiles('#load', { name, mimeType: 'application/octet-stream', buffer: buf });
+    await page.waitForFunction(() => window.coiffure.fit !== null && window.coiffure.strands > 228, null, { timeout: 300_000, polling: 250 });
+    const fit = await page.evaluate(() => window.coiffure.fit);
+    const strands = await page.evaluate(() => window.coiffure.strands);
+    const frames = await page.evaluate(() => window.coiffure.framesReceived);
+    await page.waitForFunction((f) => window.coiffure.framesReceived > f + 3, frames, { timeout: 60_000, polling: 250 });
+    const shot = sintel ? 'sintel-follow-strands.png' : 'guide-groom-follow-strands.png';
+    await page.screenshot({ path: join(artifacts, shot), timeout: 180_000 });
+    const info = await page.evaluate(() => document.getElementById('fit-info')?.textContent ?? '');
+    writeFileSync(join(artifacts, shot.replace('.png', '.json')), JSON.stringify({ file: sintel ?? name, strands, fit, status: info }, null, 1));
+    console.log('guide-only groom with follow strands', { file: sintel ?? name, strands, rooted: fit.rooted, status: info });
+    // 228 strands + 20 around each rooted one: the rooted share of the file decides the count.
+    const rooted = Math.round((strands - 228) / 20);
+    assert.equal(strands, 228 + 20 * rooted, `${strands} strands drawn`);
+    assert.ok(rooted >= 0.5 * 228 * fit.rooted && rooted <= 228, `${rooted} strands with follow strands, ${fit.rooted} of the file rooted`);
+    assert.match(info, /units cm \(0\.01 m\)/, 'the units named, not the f32 0.009999999776');
+    await page.fill('#fit-follow', '');
   });
 
   test('a second viewer watches; it controls only after TAKE_CONTROL', async () => {

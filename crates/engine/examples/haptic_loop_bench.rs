@@ -86,9 +86,9 @@ fn bench(n: usize, segments: usize, kind: ModelKind, batches: bool, hair: bool, 
         .collect();
     let pose = ToolPose { position: Vector3::new(0.0004, -0.02, 0.22), rotation: Matrix3::identity() };
     let mut it = LocalInteraction::new(strands, ToolShape::builtin("comb").unwrap(), pose, ForceModel::Constraint { friction: h.friction_coefficient(), options: Default::default() });
-    it.use_batches = batches;
+    it.params.use_batches = batches;
     if hair {
-        it.hair_contact = Some(tools::interaction::HairContact { fibres: 100.0, max_per_strand: cap, ..Default::default() });
+        it.params.hair_contact = Some(tools::interaction::HairContact { fibres: 100.0, max_per_strand: cap, ..Default::default() });
     }
     let script = |t: f64| Some(DeviceReading { time: t, position: Vector3::new(0.0004, -0.02 + 0.2 * t, 0.22), rotation: Matrix3::identity(), buttons: 0 });
     let steps = 2000;

@@ -36,7 +36,7 @@ fn main() {
         let strands: Vec<strand::Strand> = near.iter().map(|&i| { let g = &scene.guides[i]; let mut m = g.model.clone(); m.air_drag = m.air_drag.max(2e-5); let mut s = strand::Strand::new(m, g.state.root.clone()).unwrap(); s.state.q.copy_from(&g.state.q); s }).collect();
         let far = tools::contact::ToolPose { position: nalgebra::Vector3::new(5.0, 5.0, 5.0), rotation: nalgebra::Matrix3::identity() };
         let mut it = LocalInteraction::new(strands, tools::shape::ToolShape::builtin("comb").unwrap(), far, ForceModel::Constraint { friction: 0.2, options: Default::default() });
-        if fibres > 0.0 { it.hair_contact = Some(HairContact { fibres, ..Default::default() }); }
+        if fibres > 0.0 { it.params.hair_contact = Some(HairContact { fibres, ..Default::default() }); }
         if rest { for k in 0..near.len() { let r = it.strands[k].clone(); it.set_rest_shape(k, &r); } }
         let mut worst = 0.0f64; let mut pairs = 0;
         for n in 0..1500 {

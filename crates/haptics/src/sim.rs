@@ -245,9 +245,8 @@ pub fn run(server: SocketAddr, path: &dyn Fn(f64) -> DeviceReading, p: &SimParam
         take(&mut client, &mut rows, &sent_at, &mut force, &mut force_at, &mut model);
         // The device samples on its own clock (a device's servo loop: every `dt`, stamped with that clock),
         // whenever this loop gets to send it. Sampled at the wall clock's late wake-ups instead, the rigid hand's
-        // steps were uneven (a loaded host wakes the loop 0.05-0.5 ms late) while the rendering took them over the
-        // nominal `dt`: its velocity, and the coupling's damper force, jumped every step (0.30 N median one-step
-        // change of the felt force, bench/RESULTS.md).
+        // steps were uneven on a loaded host while the rendering took them over the nominal `dt`: its velocity,
+        // and the coupling's damper force, jumped every step (bench/RESULTS.md, device-sim --render).
         let t = nominal;
         let reading = path(t);
         let target = ws.to_device(&reading.position);

@@ -168,7 +168,7 @@ impl HapticCore {
         let ok = crate::command::is_finite_pose(&head);
         if ok && head != self.head {
             self.head = head;
-            if let Some((body, _)) = self.interaction.body.as_mut() {
+            if let Some((body, _)) = self.interaction.params.body.as_mut() {
                 for (b, rest) in body.balls.iter_mut().zip(&self.model.scene.head.balls) {
                     b.centre = head * rest.centre;
                 }
@@ -193,8 +193,8 @@ impl HapticCore {
         let n = scene.guides.len();
         let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape(params.global.nozzle_standoff)).collect();
         let mut interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &hair)));
-        interaction.hold_distance = params.haptic.hold_distance;
-        interaction.hold_gravity = scene.guides.first().map(|g| g.model.gravity.norm());
+        interaction.params.hold_distance = params.haptic.hold_distance;
+        interaction.params.hold_gravity = scene.guides.first().map(|g| g.model.gravity.norm());
         let bounds = active::GuideBounds::new(&scene);
         let side = DeviceSide::new(params, shapes.clone(), (scene.head.clone(), scene.lattice.params.metaball.threshold));
         Ok(Self {
@@ -733,7 +733,7 @@ mod tests {
                 let p = Vector3::new(0.0, -0.13 + 0.06 * (t / 0.6).min(1.0), 0.0);
                 core.step(Some(DeviceReading { time: t, position: p, rotation: test_rot(), buttons: 0 }), &snap, 1e-3);
                 if !body {
-                    core.interaction.body = None;
+                    core.interaction.params.body = None;
                     core.side.body = None;
                 }
                 if n % 100 == 99 {

@@ -15,7 +15,7 @@ use tools::treatment::Contact;
 /// `it` with the scene's body (head, neck, shoulders; the live head frame is the world frame) for its strands
 /// to rest on.
 pub(crate) fn resting_on(scene: &Scene, mut it: LocalInteraction) -> LocalInteraction {
-    it.body = Some((scene.head.clone(), scene.lattice.params.metaball.threshold));
+    it.params.body = Some((scene.head.clone(), scene.lattice.params.metaball.threshold));
     it
 }
 
@@ -141,17 +141,17 @@ impl HapticCore {
     /// hair's contact laws (tool on hair, hair on hair); the body the strands rest on moves over from the previous interaction (it is
     /// not copied in the haptic loop).
     pub(crate) fn renew_interaction(&mut self, strands: Vec<Strand>) {
-        let body = self.interaction.body.take();
+        let body = self.interaction.params.body.take();
         let model = Self::force_model(&self.model.params.haptic, &self.hair);
         let mut it = LocalInteraction::new(strands, self.model.shapes[self.tool as usize].clone(), self.interaction.pose, model);
-        it.body = body;
-        it.body_friction = self.fibre_friction(0.0);
-        it.hold_distance = self.model.params.haptic.hold_distance;
+        it.params.body = body;
+        it.params.body_friction = self.fibre_friction(0.0);
+        it.params.hold_distance = self.model.params.haptic.hold_distance;
         // The strands' models carry no weight (the hold does, `build_strands`): the hold's spring takes the scene's gravity.
-        it.hold_gravity = self.model.scene.guides.first().map(|g| g.model.gravity.norm());
-        it.hair_contact = self.hair_contact(0.0);
+        it.params.hold_gravity = self.model.scene.guides.first().map(|g| g.model.gravity.norm());
+        it.params.hair_contact = self.hair_contact(0.0);
         if self.model.params.haptic.entanglement {
-            it.entanglement = Some(Entanglement { wettability: self.hair.treatment.wettability(), ..Entanglement::default() });
+            it.params.entanglement = Some(Entanglement { wettability: self.hair.treatment.wettability(), ..Entanglement::default() });
         }
         self.interaction = it;
     }
@@ -202,7 +202,7 @@ mod tests {
         let scene = small_scene();
         let mut off = SessionParams::default();
         off.haptic.hair_contact = false;
-        assert!(HapticCore::new(scene.clone(), off).unwrap().interaction.hair_contact.is_none());
+        assert!(HapticCore::new(scene.clone(), off).unwrap().interaction.params.hair_contact.is_none());
         let params = SessionParams::default();
         assert!(params.haptic.hair_contact);
         let mut core = HapticCore::new(scene, params).unwrap();
@@ -216,6 +216,6 @@ mod tests {
         let eased = core.hair_contact(0.0).unwrap();
         assert!((eased.friction - params.haptic.combing_friction(0.25, 1.0)).abs() < 1e-15);
         core.renew_interaction(Vec::new());
-        assert_eq!(core.interaction.hair_contact, Some(eased));
+        assert_eq!(core.interaction.params.hair_contact, Some(eased));
     }
 }

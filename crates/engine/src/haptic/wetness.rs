@@ -67,8 +67,8 @@ impl HapticCore {
             let friction = m.friction * self.hair.treatment.friction_factor(tools::treatment::Contact::Tool, mean);
             self.interaction.model = ForceModel::Constraint { friction: self.model.params.haptic.combing_friction(friction, self.hair.combing_ease), options };
         }
-        self.interaction.hair_contact = self.hair_contact(mean);
-        self.interaction.body_friction = self.fibre_friction(mean);
+        self.interaction.params.hair_contact = self.hair_contact(mean);
+        self.interaction.params.body_friction = self.fibre_friction(mean);
     }
 }
 

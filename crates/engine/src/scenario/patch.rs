@@ -441,12 +441,12 @@ impl Scenario {
             hair_friction = ease.combing_friction(p.treatment.friction(&wet_model, Contact::Fibre, dry, p.wetness).map_err(wet_error)?, self.tool.combing_ease);
             let hc = HairContact { fibres: k.max(1.0), packing: p.packing.unwrap_or(d.packing), friction: hair_friction, ..d };
             hair_contact_distance = hc.distance(hair.major_diameter / 2.0);
-            it.hair_contact = Some(hc);
+            it.params.hair_contact = Some(hc);
         }
         if p.entanglement {
             let d = Entanglement::default();
             // The treatment's wettability: its capillary forces over virgin hair's (`Treatment::wettability`).
-            it.entanglement = Some(Entanglement { span: p.entanglement_span.unwrap_or(d.span), wettability: p.treatment.wettability(), ..d });
+            it.params.entanglement = Some(Entanglement { span: p.entanglement_span.unwrap_or(d.span), wettability: p.treatment.wettability(), ..d });
             it.wetness = vec![p.wetness; it.strands.len()];
         }
         // Settle under gravity (and the strands' contacts), the tool held at its start.

@@ -173,3 +173,59 @@ fn loaded_strands_become_guides_that_reproduce_them_and_hold_at_rest() {
     }
     println!("worst: median {:.3} mm, p95 {:.3} mm, drift live {:.4} mm, sag-free {:.4} mm", worst.0 * 1e3, worst.1 * 1e3, worst.2 * 1e3, worst.3 * 1e3);
 }
+
+/// Pooled distances (m) of each guide's rest centreline from the strand of `curves` it was fitted to (4 points
+/// per segment, evenly in arc length).
+fn guide_distances(scene: &Scene, report: &super::LoadReport, curves: &HairCurves) -> Vec<f64> {
+    let mut d = Vec::new();
+    for (g, &(strand, ..)) in scene.guides.iter().zip(&report.guides) {
+        let points: Vec<Vector3<f64>> = curves.strands[strand].iter().map(|p| Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64)).collect();
+        let n = 4 * g.model.segments + 1;
+        let want = strand::samples::resample(&points, n).unwrap();
+        d.extend(strand::kinematics::centerline(&g.model, &g.state, n).iter().zip(&want).map(|((_, a), b)| (a - b).norm()));
+    }
+    d
+}
+
+/// SAVE and load back (issue 34): a wavy groom of 300 strands loaded with its default follow strands (3 each,
+/// to 1,200 drawn), three of its guides displaced as a comb leaves them (up to 1 cm at the tip), saved as the
+/// server's SAVE writes it (`Scene::render_curves`: the drawn strands following the guides' current shapes)
+/// through a .tfx file, and loaded back. The reloaded scene draws the same strands (every vertex within
+/// 1e-5 m of its saved polyline: resampling evenly in arc length moves vertices along it), adds no follow strands (the file has the 1,200), and its guides are
+/// fitted to the saved shapes within the family's bounds (1 mm median, 3 mm p95).
+#[test]
+fn a_saved_hairstyle_loads_back_as_the_scene_it_was() {
+    let h = Hairstyle::generate(&HairstyleParams { render_count: 300, guide_count: 30, render_vertices: 16, curliness: 0.3, length: 0.25, seed: 9, ..Default::default() }).unwrap();
+    let opts = SceneOptions { render_strands: 1200, guides: 24, ..SceneOptions::default() };
+    let (a, ra) = Scene::load(&h.to_curves(), &opts).unwrap();
+    assert_eq!((ra.follow_per_strand, a.render.strands()), (3, 1200));
+    let samples = a.samples();
+    let active = [0u32, 5, 11];
+    let displacement: Vec<Vector3<f64>> = active.iter().flat_map(|_| (0..samples).map(|k| Vector3::new(0.01, 0.0, 0.004) * (k as f64 / (samples - 1) as f64))).collect();
+    let guides = super::GuideDisplacements { active: &active, displacement: &displacement, samples };
+    let saved = a.render_curves(&[], &nalgebra::Isometry3::identity(), &[], &guides);
+    let bytes = hairstyle::formats::Format::Tfx.write(&saved).unwrap();
+    let back = hairstyle::formats::Format::Tfx.read(&bytes).unwrap();
+    let (b, rb) = Scene::load(&back, &opts).unwrap();
+    assert_eq!((rb.follow_per_strand, b.render.strands()), (0, 1200));
+    let moved = saved.strands.iter().flatten().zip(a.render.positions.iter()).map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f32>().sqrt()).fold(0.0f32, f32::max);
+    assert!(moved > 5e-3, "the displaced guides moved the saved strands: {moved} m");
+    // Each reloaded vertex on its saved polyline (resampling moves vertices along it, evenly in arc length).
+    let v3 = |p: &[f32; 3]| Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+    let to_polyline = |q: Vector3<f64>, line: &[[f32; 3]]| {
+        line.windows(2)
+            .map(|w| {
+                let (a, b) = (v3(&w[0]), v3(&w[1]));
+                let t = ((q - a).dot(&(b - a)) / (b - a).norm_squared().max(1e-30)).clamp(0.0, 1.0);
+                (a + (b - a) * t - q).norm()
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    let v = b.render.vertices_per_strand;
+    let gap = saved.strands.iter().enumerate().flat_map(|(i, line)| b.render.positions[i * v..(i + 1) * v].iter().map(move |q| (v3(q), line))).map(|(q, line)| to_polyline(q, line)).fold(0.0f64, f64::max);
+    assert!(gap < 1e-5, "the reloaded scene draws the saved strands: {gap} m");
+    let d = guide_distances(&b, &rb, &back);
+    let (median, p95) = (quantile(d.clone(), 0.5), quantile(d, 0.95));
+    println!("SAVE and load back: {} | guides median {:.3} mm, p95 {:.3} mm from the saved strands; drawn strands within {gap:e} m", rb.summary(), median * 1e3, p95 * 1e3);
+    assert!(median <= 1e-3 && p95 <= 3e-3, "median {median} m, p95 {p95} m");
+}

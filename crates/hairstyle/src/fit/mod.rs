@@ -45,12 +45,14 @@
 
 pub mod scalp_index;
 pub mod similarity;
+pub mod units;
 
 use crate::formats::{Format, HairCurves, Metadata};
 use crate::head::Head;
 use nalgebra::{Matrix3, Point3, Vector3};
 pub use scalp_index::ScalpIndex;
 pub use similarity::Similarity;
+pub use units::{parse_units, units_name};
 
 /// A signed coordinate axis of the file's frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -105,35 +107,6 @@ impl Axis {
         };
         Ok(Axis::ALL[i + neg as usize])
     }
-}
-
-/// Parses a unit: "m", "cm", "mm", "in" (inch), "ft", or a number of metres per unit.
-pub fn parse_units(s: &str) -> Result<f64, String> {
-    let v = match s.trim().to_ascii_lowercase().as_str() {
-        "m" => 1.0,
-        "dm" => 0.1,
-        "cm" => 0.01,
-        "mm" => 0.001,
-        "in" | "inch" => 0.0254,
-        "ft" => 0.3048,
-        t => t.parse::<f64>().map_err(|_| format!("units `{s}`: expected m, cm, mm, in, ft or metres per unit (a number)"))?,
-    };
-    if !(v > 0.0 && v.is_finite()) {
-        return Err(format!("units `{s}`: metres per unit must be a positive number"));
-    }
-    Ok(v)
-}
-
-/// Metres per file unit written for people: a unit [`parse_units`] knows by name ("cm (0.01 m)") when within
-/// 1e-6 of it (a file's f32 gives 0.009999999776 for 0.01), else the number to 4 significant digits ("0.02 m").
-pub fn units_name(meters_per_unit: f64) -> String {
-    for (name, v) in [("m", 1.0), ("dm", 0.1), ("cm", 0.01), ("mm", 0.001), ("in", 0.0254), ("ft", 0.3048)] {
-        if (meters_per_unit / v - 1.0).abs() < 1e-6 {
-            return if name == "m" { "m".into() } else { format!("{name} ({v} m)") };
-        }
-    }
-    let digits = 3 - meters_per_unit.abs().log10().floor() as i32;
-    format!("{} m", format!("{:.*}", digits.clamp(0, 12) as usize, meters_per_unit).parse::<f64>().unwrap_or(meters_per_unit))
 }
 
 /// What the caller imposes (command-line `--units`, `--up`, `--front`, `--no-fit`).
@@ -713,17 +686,6 @@ pub fn fit_file(path: impl AsRef<std::path::Path>, opts: &FitOptions) -> Result<
 mod tests {
     use super::*;
 
-    #[test]
-    fn units_are_named_for_people() {
-        // Every named unit, also through a file's f32, comes back by name; other values to 4 significant digits.
-        for (name, v) in [("m", 1.0), ("cm (0.01 m)", 0.01), ("mm (0.001 m)", 0.001), ("in (0.0254 m)", 0.0254), ("ft (0.3048 m)", 0.3048)] {
-            assert_eq!(units_name(v), name);
-            assert_eq!(units_name(v as f32 as f64), name);
-        }
-        assert_eq!(units_name(0.02), "0.02 m");
-        assert_eq!(units_name(0.0123456), "0.01235 m");
-        assert_eq!(units_name(12.5), "12.5 m");
-    }
 
     /// Exact pairs (points on planes through s a + t, and points matched point to point) give
     /// back s and t; a scale outside the range is clamped and t re-solved for it.

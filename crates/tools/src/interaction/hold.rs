@@ -49,7 +49,7 @@ impl LocalInteraction {
     /// strongly: the same impulse over that time, at a quarter of the cost per step.
     pub(super) fn hold_strands(&mut self) {
         self.hold_phase = (self.hold_phase + 1) % HOLD_EVERY;
-        if !(self.hold_distance > 0.0 && self.hold_distance.is_finite()) || self.rebuild_tree || self.holds.is_empty() {
+        if !(self.params.hold_distance > 0.0 && self.params.hold_distance.is_finite()) || self.ws.rebuild_tree || self.holds.is_empty() {
             return;
         }
         let mut i = 0;
@@ -76,7 +76,7 @@ impl LocalInteraction {
         let mut loads = [None; HOLD_LOADS];
         let (Some(Some(hold)), Some(strand)) = (self.holds.get(k), self.strands.get(k)) else { return loads };
         // Spring per unit length, N/m per m, times HOLD_EVERY (this strand's turn stands for that many steps).
-        let stiffness = HOLD_EVERY as f64 * strand.model.linear_density() * hold_rate(self.hold_gravity.unwrap_or_else(|| strand.model.gravity.norm()), self.hold_distance);
+        let stiffness = HOLD_EVERY as f64 * strand.model.linear_density() * hold_rate(self.params.hold_gravity.unwrap_or_else(|| strand.model.gravity.norm()), self.params.hold_distance);
         let length = strand.model.length.max(1e-9);
         // Per run along the strand: sum of s x piece length (m^2), of piece lengths (m), of forces (N).
         let mut runs = [(0.0, 0.0, Vector3::zeros()); HOLD_LOADS];

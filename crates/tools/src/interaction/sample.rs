@@ -1,6 +1,7 @@
 //! Sampling the strands' centrelines into straight collision pieces (from the prepared step's sweep when there
 //! is one), and the radii the contacts use (a fibre's, a wisp's, the reach).
 
+use super::frame::StepFrame;
 use super::{ForceModel, LocalInteraction};
 use crate::bvh::Piece;
 use nalgebra::Vector3;
@@ -16,13 +17,13 @@ impl LocalInteraction {
     /// Radius of the wisp each strand stands for, m: half the hair-hair contact distance, or the fibre's radius
     /// without hair contact.
     pub(super) fn wisp_radius(&self, fibre_radius: f64) -> f64 {
-        self.hair_contact.map_or(fibre_radius, |hc| 0.5 * hc.distance(fibre_radius)).max(fibre_radius)
+        self.params.hair_contact.map_or(fibre_radius, |hc| 0.5 * hc.distance(fibre_radius)).max(fibre_radius)
     }
 
     /// Distance from a strand's centreline within which the tool's capsules are looked for, m: the wisp's radius
     /// with the entanglement drag, else the fibre's.
     pub(super) fn reach_radius(&self, fibre_radius: f64) -> f64 {
-        if self.entanglement.is_some() && matches!(self.model, ForceModel::Constraint { .. }) {
+        if self.params.entanglement.is_some() && matches!(self.model, ForceModel::Constraint { .. }) {
             self.wisp_radius(fibre_radius)
         } else {
             fibre_radius
@@ -83,5 +84,38 @@ impl LocalInteraction {
             }
         }
         push(strand.model.length, dy.frames[strand.model.segments].position);
+    }
+
+    /// Stage 3: every strand's pieces this step (read from its prepared sweep, else from its kinematics), each
+    /// strand's tip, the fibre radius and the tool's reach (`frame.radius`, `frame.reach`), and the tree refitted
+    /// (rebuilt when the pieces or the reach changed).
+    pub(super) fn sample_pieces(&mut self, frame: &mut StepFrame) {
+        self.pieces.clear();
+        for (k, strand) in self.strands.iter().enumerate() {
+            if self.ws.prepared[k] {
+                Self::sample_strand_from_sweep(k, strand, &mut self.pieces);
+            } else {
+                Self::sample_strand(k, strand, &mut self.pieces);
+            }
+        }
+        self.tips.clear();
+        self.tips.resize(self.strands.len(), Vector3::repeat(f64::NAN));
+        for p in &self.pieces {
+            // Contiguous per strand, root to tip: the last one written is the tip.
+            self.tips[p.strand] = p.b;
+        }
+        let radius = Self::hair_radius(&self.strands);
+        let reach = self.reach_radius(radius);
+        if self.pieces.len() == self.ws.bvh.len() && self.ws.bvh.margin() == reach && !self.ws.rebuild_tree {
+            self.ws.bvh.refit(&self.pieces);
+        } else {
+            // A strand changed its number of pieces (cut by the scissors, or replaced), or the reach changed: new
+            // tree.
+            self.ws.bvh.rebuild(&self.pieces, reach);
+            self.ws.rebuild_tree = false;
+        }
+        frame.radius = radius;
+        frame.reach = reach;
+        frame.timings.sample = frame.clock.elapsed().as_secs_f64() - frame.timings.dynamics;
     }
 }

@@ -33,7 +33,7 @@ fn the_hold_pulls_a_strand_towards_its_place_with_its_weight_per_hold_distance()
         it.step(1e-3, comb_at(0.5)).unwrap();
         if held {
             it.holds = vec![Some(Hold { points: (0..16).map(|i| line(0.1 * i as f64 / 15.0) + d).collect(), length: 0.1 })];
-            it.hold_distance = 0.03;
+            it.params.hold_distance = 0.03;
         }
         let (mut total, mut turns) = (Vector3::zeros(), 0);
         for _ in 0..HOLD_EVERY {
@@ -137,7 +137,7 @@ fn batched_steps_give_the_scalar_results() {
         strands.push(Strand::new(short, RootFrame::new(Vector3::new(-0.0095, 0.0, 0.3), -Vector3::z(), Vector3::x()).unwrap()).unwrap());
         let model = ForceModel::Constraint { friction: h.friction_coefficient(), options: ConstraintOptions::default() };
         let mut it = LocalInteraction::new(strands, ToolShape::builtin("comb").unwrap(), comb_at(-0.01), model);
-        it.use_batches = batches;
+        it.params.use_batches = batches;
         let mut trace = Vec::new();
         let mut touched = 0;
         let mut y = -0.01;
@@ -353,7 +353,7 @@ fn strands_in_hair_contact_push_each_other() {
         let mut it = LocalInteraction::new(strands, bar.clone(), pose(-0.0011), model);
         let contact = HairContact { fibres: 100.0, ..Default::default() };
         if hair {
-            it.hair_contact = Some(contact);
+            it.params.hair_contact = Some(contact);
         }
         let distance = contact.distance(h.major_diameter / 2.0);
         let (mut closest, mut pairs) = (f64::INFINITY, 0usize);
@@ -401,7 +401,7 @@ fn hair_hair_friction_holds_the_neighbour_against_sliding() {
         let pose = |y: f64| ToolPose { position: Vector3::new(0.0, y, 0.28), rotation: Matrix3::identity() };
         let model = ForceModel::Constraint { friction: 0.0, options: ConstraintOptions::default() };
         let mut it = LocalInteraction::new(strands, clip.clone(), pose(0.0), model);
-        it.hair_contact = Some(HairContact { fibres: 100.0, friction, ..Default::default() });
+        it.params.hair_contact = Some(HairContact { fibres: 100.0, friction, ..Default::default() });
         let (k, _) = it.clip(0.0005).expect("the first strand is within reach");
         assert_eq!(k, 0);
         let mut pairs = 0;

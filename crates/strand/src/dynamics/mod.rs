@@ -209,8 +209,8 @@ pub struct Dynamics {
     /// All generalized forces at the evaluated state (elastic, damping, gravity, drag, point forces and
     /// minus the velocity-product terms), conjugate to q, so that `qdot . forces` is a power in W.
     pub forces: DVector<f64>,
-    /// Diagonal geometric stiffness of the last step's constraint loads, per coordinate (N m^3, as the elastic
-    /// `K`): see [`Dynamics::geometric_stiffness`]. Zero without loads.
+    /// Diagonal geometric stiffness of the last step's constraint loads (the Gershgorin bound of their Hessian),
+    /// per coordinate (N m^3, as the elastic `K`): see [`Dynamics::geometric_stiffness`]. Zero without loads.
     pub geometric: DVector<f64>,
     /// Kinetic energy, J.
     pub kinetic_energy: f64,
@@ -425,15 +425,17 @@ impl Dynamics {
 
     /// The diagonal geometric stiffness of point loads `loads` (arc length from the root, m; force on the strand,
     /// N) held fixed in space, at the state of the last [`Dynamics::sweep`] with sums, into
-    /// [`Dynamics::geometric`]: for each coordinate the magnitude of the second derivative of the loads'
-    /// potential `-sum f . x` along that coordinate, the part of the strand beyond the coordinate's segment
-    /// turning rigidly with the segment's end, `|sum f . (w x (v + w x x))|` for the coordinate's twist
-    /// `(w, v)` (N m^3 per (rad/m)^2). The linearly implicit step adds `h^2` times it to its matrix, as it
-    /// does the elastic `K` (the load's stiffness taken implicitly, on the diagonal and positive: Andrews,
-    /// Teichmann and Kry, "Geometric stiffness for real-time constrained multibody dynamics", Computer Graphics
-    /// Forum 36(2), 2017). Without it, a contact's or tool's load on a curled strand whose twist is soft (wet
-    /// hair: shear modulus x 0.1) is an explicit stiffness far above the elastic one on a coordinate of little
-    /// inertia, and the step diverges.
+    /// [`Dynamics::geometric`]: the Gershgorin bound of the loads' Hessian `H = -sum f . d2x/dq2` (N m^3 per
+    /// (rad/m)^2), each coordinate's row summed in magnitude, `K_g[a] = sum_b |H_ab|`, with `d2x / dq_a dq_b =
+    /// w_a x (w_b x x + v_b)` for the twists `(w, v)` of the coordinates (`a` the inner one; the part of the strand
+    /// beyond a coordinate's segment turning rigidly with the segment's end). `K_g - H` is then positive
+    /// semidefinite: the linearly implicit step adds `h^2` times it to its matrix, as it does the elastic `K`, and
+    /// takes every mode of the loads' stiffness implicitly, the couplings of a curled strand's twist and bends
+    /// included (Andrews, Teichmann and Kry, "Geometric stiffness for real-time constrained multibody dynamics",
+    /// Computer Graphics Forum 36(2), 2017, take a diagonal of the same stiffness). Without it, a contact's or
+    /// tool's load on a curled strand whose twist is soft (wet hair: shear modulus x 0.1) is an explicit stiffness
+    /// far above the elastic one on a coordinate of little inertia, and the step diverges; with the diagonal
+    /// `|H_aa|` alone, a tooth's drag on a heavy wet wavy tress still did (docs/physics.md).
     pub fn geometric_stiffness(&mut self, model: &StrandModel, state: &StrandState, loads: &[(f64, Vector3<f64>)]) {
         self.geometric.fill(0.0);
         if loads.is_empty() || self.frames.len() != model.segments + 1 {
@@ -444,16 +446,24 @@ impl Dynamics {
         for (s, f) in loads.iter().filter(|(s, f)| s.is_finite() && f.iter().all(|x| x.is_finite())) {
             let x = crate::kinematics::frame_at(model, &state.q, &self.frames, *s).position - state.root.position;
             let (seg, _) = crate::kinematics::locate(model, *s);
-            for i in 0..=seg.min(model.segments - 1) {
-                for k in 0..d {
-                    let col = self.motion[i].column(k);
-                    let w = Vector3::new(col[0], col[1], col[2]);
-                    let v = Vector3::new(col[3], col[4], col[5]);
-                    self.geometric[i * d + k] -= f.dot(&w.cross(&(v + w.cross(&x))));
+            // Each coordinate's row of the loads' second derivative, summed in magnitude: the coordinates up to
+            // the load's segment, `a` the inner one of a pair, d2 x / dq_a dq_b = w_a x (w_b x x + v_b).
+            let m = (seg.min(model.segments - 1) + 1) * d;
+            let twist = |j: usize| {
+                let col = self.motion[j / d].column(j % d);
+                (Vector3::new(col[0], col[1], col[2]), Vector3::new(col[3], col[4], col[5]))
+            };
+            for a in 0..m {
+                let (wa, va) = twist(a);
+                let mut row = 0.0;
+                for b in 0..m {
+                    let (wb, vb) = twist(b);
+                    let (inner, (wo, vo)) = if a <= b { (wa, (wb, vb)) } else { (wb, (wa, va)) };
+                    row += f.dot(&inner.cross(&(vo + wo.cross(&x)))).abs();
                 }
+                self.geometric[a] += row;
             }
         }
-        self.geometric.apply(|g| *g = g.abs());
     }
 
     /// Jacobian `dr(s)/dq` (3 x 2N or 3 x 3N, m per (rad/m)) of the centreline point at arc length `s` and its
@@ -621,6 +631,47 @@ mod tests {
             old.sweep_reference(&m, &st, &pf, true);
             old.assemble_mass(&m);
             assert!((&fast.mass - &old.mass).norm() <= 1e-12 * old.mass.norm(), "{kind:?}: mass matrix");
+        }
+    }
+
+    #[test]
+    fn the_geometric_stiffness_bounds_the_loads_hessian() {
+        // The loads' potential V(q) = -sum f . x(s) has the Hessian H (central differences of the kinematic
+        // Jacobian, step 1e-6 1/m); the diagonal K_g bounds each row of it, K_g[a] >= sum_b |H_ab| (Gershgorin: K_g
+        // - H is positive semidefinite, so the implicit K_g damps every mode the loads' stiffness can drive), to
+        // 1e-6 relative; and it is not loose by more than the row's count of terms.
+        for kind in [ModelKind::Reduced, ModelKind::Full] {
+            let (m, st) = curly(kind);
+            let mut dy = Dynamics::new(&m);
+            dy.sweep(&m, &st, &[], true);
+            let loads = [(0.043, Vector3::new(1e-3, -2e-3, 5e-4)), (0.1, Vector3::new(-2e-3, 1e-3, 3e-3)), (0.02, Vector3::new(0.0, 4e-3, -1e-3))];
+            dy.geometric_stiffness(&m, &st, &loads);
+            let n = m.dofs();
+            let eps = 1e-6;
+            let grad = |q: &DVector<f64>| {
+                let mut at = st.clone();
+                at.q.copy_from(q);
+                let mut g = DVector::zeros(n);
+                for (s, f) in &loads {
+                    let j = jacobian(&m, &at, *s);
+                    g -= j.transpose() * f;
+                }
+                g
+            };
+            let mut rows = DVector::<f64>::zeros(n);
+            for a in 0..n {
+                let (mut qp, mut qm) = (st.q.clone(), st.q.clone());
+                qp[a] += eps;
+                qm[a] -= eps;
+                let column = (grad(&qp) - grad(&qm)) / (2.0 * eps);
+                for b in 0..n {
+                    rows[b] += column[b].abs();
+                }
+            }
+            for a in 0..n {
+                assert!(dy.geometric[a] >= rows[a] * (1.0 - 1e-6) - 1e-12, "{kind:?} coordinate {a}: {} < {}", dy.geometric[a], rows[a]);
+                assert!(dy.geometric[a] <= n as f64 * rows[a].max(1e-12), "{kind:?} coordinate {a}: {} vs {}", dy.geometric[a], rows[a]);
+            }
         }
     }
 

@@ -12,7 +12,15 @@
 use nalgebra::{Matrix3, RealField, Vector3};
 
 /// Below this `u = theta^2` the series forms are used (their truncation error is below 1e-15 relative).
-const SERIES_BELOW: f64 = 0.1;
+pub(crate) const SERIES_BELOW: f64 = 0.1;
+
+/// The Taylor series (ascending powers of `u`) of the helix coefficients `a`, `b`, `c` and of `db/du`, `dc/du`,
+/// used below [`SERIES_BELOW`] by the scalar kinematics and by the lane-wise one (`batch::lanes`).
+pub(crate) const SERIES_A: [f64; 6] = [1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0];
+pub(crate) const SERIES_B: [f64; 6] = [0.5, -1.0 / 24.0, 1.0 / 720.0, -1.0 / 40320.0, 1.0 / 3628800.0, -1.0 / 479001600.0];
+pub(crate) const SERIES_C: [f64; 6] = [1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0, -1.0 / 6227020800.0];
+pub(crate) const SERIES_DB: [f64; 5] = [-1.0 / 24.0, 2.0 / 720.0, -3.0 / 40320.0, 4.0 / 3628800.0, -5.0 / 479001600.0];
+pub(crate) const SERIES_DC: [f64; 5] = [-1.0 / 120.0, 2.0 / 5040.0, -3.0 / 362880.0, 4.0 / 39916800.0, -5.0 / 6227020800.0];
 
 /// `(a, b, c)` with `a = sin t / t`, `b = (1 - cos t)/t^2`, `c = (t - sin t)/t^3`, `t = sqrt(u)`.
 pub fn coefficients<T: RealField + Copy>(u: T) -> (T, T, T) {
@@ -116,11 +124,6 @@ fn coefficients_with_rates(u: f64, u_dot: f64) -> [f64; 9] {
     let (b, c, db, dc, a) = if u < SERIES_BELOW {
         // The Taylor series of `coefficients` and `coefficient_derivatives` (ascending powers of u), with
         // their u-derivatives by Horner's scheme in plain floating point.
-        const A: [f64; 6] = [1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0];
-        const B: [f64; 6] = [0.5, -1.0 / 24.0, 1.0 / 720.0, -1.0 / 40320.0, 1.0 / 3628800.0, -1.0 / 479001600.0];
-        const C: [f64; 6] = [1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0, -1.0 / 6227020800.0];
-        const DB: [f64; 5] = [-1.0 / 24.0, 2.0 / 720.0, -3.0 / 40320.0, 4.0 / 3628800.0, -5.0 / 479001600.0];
-        const DC: [f64; 5] = [-1.0 / 120.0, 2.0 / 5040.0, -3.0 / 362880.0, 4.0 / 39916800.0, -5.0 / 6227020800.0];
         let horner = |k: &[f64]| {
             let (mut p, mut dp) = (k[k.len() - 1], 0.0);
             for &c in k[..k.len() - 1].iter().rev() {
@@ -129,7 +132,7 @@ fn coefficients_with_rates(u: f64, u_dot: f64) -> [f64; 9] {
             }
             Dual64::new(p, dp * u_dot)
         };
-        (horner(&B), horner(&C), horner(&DB), horner(&DC), horner(&A).re)
+        (horner(&SERIES_B), horner(&SERIES_C), horner(&SERIES_DB), horner(&SERIES_DC), horner(&SERIES_A).re)
     } else {
         // The closed forms of `coefficients` and `coefficient_derivatives`, with one sin/cos for all.
         let t = num_dual::DualNum::sqrt(&ud);

@@ -2,6 +2,7 @@
 //! matrices of lanes, and the lane-wise helix kinematics (a segment's closed-form frame and its rates).
 
 use super::LANES;
+use crate::helix::{SERIES_A, SERIES_B, SERIES_BELOW, SERIES_C, SERIES_DB, SERIES_DC};
 use crate::dynamics::Motion;
 use nalgebra::{Matrix3, Vector3};
 use std::ops::{Add, AddAssign, Mul, Neg, Sub};
@@ -162,8 +163,6 @@ pub(super) struct PointL {
     pub(super) u_cols: [V3; 2],
 }
 
-/// Below this `u` the Taylor series of the helix coefficients are used (as in [`crate::helix`]).
-const SERIES_BELOW: f64 = 0.1;
 
 /// `helix::coefficients_with_rates`, lane-wise: `[a, b, c, db, dc, b_dot, c_dot, db_dot, dc_dot]`. Each lane
 /// takes the series or the closed form as the scalar code does; a branch no lane needs is skipped.
@@ -171,11 +170,6 @@ const SERIES_BELOW: f64 = 0.1;
 pub(super) fn coefficients_with_rates(u: L, u_dot: L) -> [L; 9] {
     let below = u.cmp_lt(sp(SERIES_BELOW));
     let series = || {
-        const A: [f64; 6] = [1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0];
-        const B: [f64; 6] = [0.5, -1.0 / 24.0, 1.0 / 720.0, -1.0 / 40320.0, 1.0 / 3628800.0, -1.0 / 479001600.0];
-        const C: [f64; 6] = [1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0, -1.0 / 6227020800.0];
-        const DB: [f64; 5] = [-1.0 / 24.0, 2.0 / 720.0, -3.0 / 40320.0, 4.0 / 3628800.0, -5.0 / 479001600.0];
-        const DC: [f64; 5] = [-1.0 / 120.0, 2.0 / 5040.0, -3.0 / 362880.0, 4.0 / 39916800.0, -5.0 / 6227020800.0];
         let horner = |k: &[f64]| {
             let (mut p, mut dp) = (sp(k[k.len() - 1]), sp(0.0));
             for &c in k[..k.len() - 1].iter().rev() {
@@ -184,7 +178,7 @@ pub(super) fn coefficients_with_rates(u: L, u_dot: L) -> [L; 9] {
             }
             (p, dp * u_dot)
         };
-        let (b, c, db, dc, a) = (horner(&B), horner(&C), horner(&DB), horner(&DC), horner(&A).0);
+        let (b, c, db, dc, a) = (horner(&SERIES_B), horner(&SERIES_C), horner(&SERIES_DB), horner(&SERIES_DC), horner(&SERIES_A).0);
         [a, b.0, c.0, db.0, dc.0, b.1, c.1, db.1, dc.1]
     };
     let closed = || {

@@ -442,25 +442,26 @@ impl Dynamics {
             return;
         }
         let d = model.dofs_per_segment();
+        // Each coordinate's twist `(w_j, v_j)` (the sweep's motion subspaces), taken once for all loads.
+        let twists: Vec<(Vector3<f64>, Vector3<f64>)> = (0..model.segments * d)
+            .map(|j| {
+                let col = self.motion[j / d].column(j % d);
+                (Vector3::new(col[0], col[1], col[2]), Vector3::new(col[3], col[4], col[5]))
+            })
+            .collect();
+        let mut moved: Vec<Vector3<f64>> = Vec::with_capacity(twists.len());
         // A load that is not finite cannot be linearized (the step that applied it has already been checked).
         for (s, f) in loads.iter().filter(|(s, f)| s.is_finite() && f.iter().all(|x| x.is_finite())) {
             let x = crate::kinematics::frame_at(model, &state.q, &self.frames, *s).position - state.root.position;
             let (seg, _) = crate::kinematics::locate(model, *s);
             // Each coordinate's row of the loads' second derivative, summed in magnitude: the coordinates up to
-            // the load's segment, `a` the inner one of a pair, d2 x / dq_a dq_b = w_a x (w_b x x + v_b).
+            // the load's segment, `a` the inner one of a pair, d2 x / dq_a dq_b = w_a x (w_b x x + v_b). The
+            // velocity `v_j + w_j x x` each coordinate gives the load's point is computed once per load.
             let m = (seg.min(model.segments - 1) + 1) * d;
-            let twist = |j: usize| {
-                let col = self.motion[j / d].column(j % d);
-                (Vector3::new(col[0], col[1], col[2]), Vector3::new(col[3], col[4], col[5]))
-            };
+            moved.clear();
+            moved.extend(twists[..m].iter().map(|(w, v)| v + w.cross(&x)));
             for a in 0..m {
-                let (wa, va) = twist(a);
-                let mut row = 0.0;
-                for b in 0..m {
-                    let (wb, vb) = twist(b);
-                    let (inner, (wo, vo)) = if a <= b { (wa, (wb, vb)) } else { (wb, (wa, va)) };
-                    row += f.dot(&inner.cross(&(vo + wo.cross(&x)))).abs();
-                }
+                let row: f64 = (0..m).map(|b| f.dot(&twists[a.min(b)].0.cross(&moved[a.max(b)])).abs()).sum();
                 self.geometric[a] += row;
             }
         }

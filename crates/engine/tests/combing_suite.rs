@@ -185,6 +185,27 @@ fn every_tress_of_the_family_combs_continuously() {
     }
 }
 
+/// The family's heaviest wet corner (6 g, 30 cm, 0.1 m/s) on caucasian hair, virgin, bleached and bleached twice,
+/// on eight tress layouts (`[patch] seed` 1-8; the family runs layout 1): no clamped strand-step. The case where
+/// the strand step was least stable at 1 ms: a wet wavy tress's soft twist under the tooth's drag and its contacts'
+/// loads (3 to 38 clamped strand-steps on layouts 2 and 3 with the last step's geometric stiffness alone;
+/// thousands with its diagonal alone: docs/combing.md).
+#[test]
+fn the_heavy_wet_caucasian_tress_is_stable_on_every_layout() {
+    let cases: Vec<Case> = ["virgin", "bleached", "bleached-twice"]
+        .into_iter()
+        .flat_map(|treatment| (1..=8).map(move |seed| Case { treatment, seed, ..Case::new("caucasian", 1.0, 6e-3, 0.30, 0.1) }))
+        .collect();
+    let runs = run_all(&cases);
+    for r in &runs {
+        println!("{} layout {}: peak {:.3} N, clamped strand-steps {}", r.case.label(), r.case.seed, r.peak(), r.summary.strand_clamped_steps);
+    }
+    for r in &runs {
+        assert_eq!(r.summary.strand_clamped_steps, 0, "{} layout {}: clamped strand-steps (the strand layer is unstable)", r.case.label(), r.case.seed);
+        assert!(r.summary.stroke.steps > 100 && r.peak() > 0.0, "{} layout {}: the comb did not comb", r.case.label(), r.case.seed);
+    }
+}
+
 /// An anchor case over the tress layouts ([`LAYOUTS`]): each layout's figures, in the layouts' order.
 struct Anchor {
     case: Case,
@@ -246,11 +267,7 @@ fn the_combing_law_meets_the_measured_anchors() {
     }
     // Every criterion, measured against its bounds. The ones the law does not meet yet are listed in `unmet` (and
     // in docs/combing.md): printed, not asserted; every other one is asserted.
-    let unmet = [
-        "H2 wet/dry peak",
-        "asian wet/dry peak",
-        "african wet peak / dry peak",
-    ];
+    let unmet = ["african wet peak / dry peak"];
     // (criterion, value, each layout's value, bounds)
     let mut checks: Vec<(String, f64, Vec<f64>, (f64, f64))> = Vec::new();
     let mut check = |what: String, value: f64, layouts: Vec<f64>, lo: f64, hi: f64| checks.push((what, value, layouts, (lo, hi)));

@@ -151,7 +151,7 @@ impl HapticCore {
         it.params.hold_gravity = self.model.scene.guides.first().map(|g| g.model.gravity.norm());
         it.params.hair_contact = self.hair_contact(0.0);
         if self.model.params.haptic.entanglement {
-            it.params.entanglement = Some(Entanglement { wettability: self.hair.treatment.wettability(), ..Entanglement::default() });
+            it.params.entanglement = Some(Entanglement { wettability: self.hair.treatment.wettability(), ..Entanglement::for_hair(&self.hair.hair_type) });
         }
         self.interaction = it;
     }

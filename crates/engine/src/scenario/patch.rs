@@ -117,7 +117,8 @@ pub struct PatchSpec {
     /// true).
     #[serde(default = "default_true")]
     pub entanglement: bool,
-    /// Free length of a fibre between its entanglement points, m (default `Entanglement`'s, 6 mm).
+    /// Free length of a fibre between its entanglement points, m (default: `Entanglement::for_hair`'s for the hair
+    /// type, 6.6 mm for H1 scaled with the fibre's size).
     pub entanglement_span: Option<f64>,
 }
 
@@ -444,8 +445,9 @@ impl Scenario {
             it.params.hair_contact = Some(hc);
         }
         if p.entanglement {
-            let d = Entanglement::default();
-            // The treatment's wettability: its capillary forces over virgin hair's (`Treatment::wettability`).
+            // The span between entanglement points scaled with the fibre's size (`Entanglement::for_hair`) unless
+            // given; the treatment's wettability: its capillary forces over virgin hair's (`Treatment::wettability`).
+            let d = Entanglement::for_hair(&hair);
             it.params.entanglement = Some(Entanglement { span: p.entanglement_span.unwrap_or(d.span), wettability: p.treatment.wettability(), ..d });
             it.wetness = vec![p.wetness; it.strands.len()];
         }

@@ -107,8 +107,8 @@ fn batch_mismatch(segments: usize, quadrature_points: usize, strand: &Strand) ->
     if strand.integrator != Integrator::LinearlyImplicitEuler {
         return Some("batched strands use the linearly implicit Euler integrator".into());
     }
-    if !strand.constraint_loads.is_empty() {
-        return Some("a strand with the last step's constraint loads takes their geometric stiffness in its own step".into());
+    if strand.takes_geometric_stiffness() {
+        return Some("a strand with recent constraint loads takes their geometric stiffness in its own step".into());
     }
     if strand.model.segments != segments || strand.dynamics.quadrature_nodes().len() != quadrature_points {
         return Some(format!(
@@ -603,13 +603,13 @@ mod tests {
                     s.step(1e-3, &[]).unwrap();
                 }
             }
-            if batched[2].constraint_loads.is_empty() {
+            if !batched[2].takes_geometric_stiffness() {
                 let mut refs: Vec<&mut Strand> = batched.iter_mut().collect();
                 batch.prepare(1e-3, &mut refs, &[]).unwrap();
                 batch.hand_over(2, &mut batched[2]).unwrap();
             } else {
-                // A strand carrying the last step's constraint loads is refused by the batch (their geometric
-                // stiffness is taken in its own step) and prepared alone.
+                // A strand carrying recent constraint loads is refused by the batch (their geometric stiffness
+                // is taken in its own step) and prepared alone.
                 let mut refs: Vec<&mut Strand> = batched.iter_mut().collect();
                 assert!(batch.prepare(1e-3, &mut refs, &[]).is_err());
                 let mut refs: Vec<&mut Strand> = batched.iter_mut().enumerate().filter(|(k, _)| *k != 2).map(|(_, s)| s).collect();

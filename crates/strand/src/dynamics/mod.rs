@@ -209,9 +209,12 @@ pub struct Dynamics {
     /// All generalized forces at the evaluated state (elastic, damping, gravity, drag, point forces and
     /// minus the velocity-product terms), conjugate to q, so that `qdot . forces` is a power in W.
     pub forces: DVector<f64>,
-    /// Diagonal geometric stiffness of the last step's constraint loads (the Gershgorin bound of their Hessian),
-    /// per coordinate (N m^3, as the elastic `K`): see [`Dynamics::geometric_stiffness`]. Zero without loads.
+    /// Diagonal geometric stiffness of the recent steps' constraint loads (the Gershgorin bound of their
+    /// Hessian, the last step's or the earlier steps' fading, whichever is larger), per coordinate (N m^3, as the
+    /// elastic `K`): see [`Dynamics::geometric_stiffness`]. Zero without loads.
     pub geometric: DVector<f64>,
+    /// Workspace of [`Dynamics::geometric_stiffness`]: the last step's loads' bound alone.
+    geometric_loads: DVector<f64>,
     /// Kinetic energy, J.
     pub kinetic_energy: f64,
     /// Gravitational potential energy `-sum m g . r` (world origin as reference), J.
@@ -253,6 +256,7 @@ impl Dynamics {
             mass: DMatrix::zeros(dofs, dofs),
             forces: DVector::zeros(dofs),
             geometric: DVector::zeros(dofs),
+            geometric_loads: DVector::zeros(dofs),
             kinetic_energy: 0.0,
             gravity_energy: 0.0,
             elastic_energy: 0.0,
@@ -436,11 +440,32 @@ impl Dynamics {
     /// tool's load on a curled strand whose twist is soft (wet hair: shear modulus x 0.1) is an explicit stiffness
     /// far above the elastic one on a coordinate of little inertia, and the step diverges; with the diagonal
     /// `|H_aa|` alone, a tooth's drag on a heavy wet wavy tress still did (docs/physics.md).
-    pub fn geometric_stiffness(&mut self, model: &StrandModel, state: &StrandState, loads: &[(f64, Vector3<f64>)]) {
-        self.geometric.fill(0.0);
+    ///
+    /// `kept` (in [0, 1)) is the share of the previous value kept when it is above the new one: a load taken from
+    /// the last step is explicit in a step where it appears or grows, and a contact that comes and goes from one
+    /// step to the next (a wet fibre chattering on a neighbour near the root) would be implicit in every other
+    /// step only; the previous steps' stiffness fading by `kept` a step covers it
+    /// ([`crate::integrator::GEOMETRIC_STIFFNESS_MEMORY`]). 0: the last step's loads alone. A coordinate's value
+    /// that has faded below a hundredth of its elastic stiffness is dropped (zero).
+    pub fn geometric_stiffness(&mut self, model: &StrandModel, state: &StrandState, loads: &[(f64, Vector3<f64>)], kept: f64) {
+        if kept > 0.0 {
+            let d = model.dofs_per_segment();
+            let rig = model.rigidities() * model.segment_length();
+            for (j, g) in self.geometric.iter_mut().enumerate() {
+                *g *= kept;
+                if *g < 1e-2 * rig[j % d] {
+                    *g = 0.0;
+                }
+            }
+        } else {
+            self.geometric.fill(0.0);
+        }
         if loads.is_empty() || self.frames.len() != model.segments + 1 {
             return;
         }
+        let mut bound = std::mem::take(&mut self.geometric_loads);
+        bound.resize_vertically_mut(self.geometric.len(), 0.0);
+        bound.fill(0.0);
         let d = model.dofs_per_segment();
         // Each coordinate's twist `(w_j, v_j)` (the sweep's motion subspaces), taken once for all loads.
         let twists: Vec<(Vector3<f64>, Vector3<f64>)> = (0..model.segments * d)
@@ -462,9 +487,13 @@ impl Dynamics {
             moved.extend(twists[..m].iter().map(|(w, v)| v + w.cross(&x)));
             for a in 0..m {
                 let row: f64 = (0..m).map(|b| f.dot(&twists[a.min(b)].0.cross(&moved[a.max(b)])).abs()).sum();
-                self.geometric[a] += row;
+                bound[a] += row;
             }
         }
+        for (g, b) in self.geometric.iter_mut().zip(bound.iter()) {
+            *g = g.max(*b);
+        }
+        self.geometric_loads = bound;
     }
 
     /// Jacobian `dr(s)/dq` (3 x 2N or 3 x 3N, m per (rad/m)) of the centreline point at arc length `s` and its
@@ -646,7 +675,7 @@ mod tests {
             let mut dy = Dynamics::new(&m);
             dy.sweep(&m, &st, &[], true);
             let loads = [(0.043, Vector3::new(1e-3, -2e-3, 5e-4)), (0.1, Vector3::new(-2e-3, 1e-3, 3e-3)), (0.02, Vector3::new(0.0, 4e-3, -1e-3))];
-            dy.geometric_stiffness(&m, &st, &loads);
+            dy.geometric_stiffness(&m, &st, &loads, 0.0);
             let n = m.dofs();
             let eps = 1e-6;
             let grad = |q: &DVector<f64>| {

@@ -158,7 +158,7 @@ fn the_strands_drawn_near_the_comb_follow_the_guides_fitted_to_a_loaded_groom() 
         hairstyle::write_file(&path, &curves).unwrap();
         let mut s = comb.clone();
         s.live.hairstyle = Some(path.clone());
-        s.live.render_strands = 15000;
+        s.live.render_strands = 6000;
         s.duration = Some(1.1);
         let scene = Arc::new(s.scene_in(&dir).unwrap());
         assert_eq!(scene.render.guides_per_strand, k);

@@ -19,7 +19,9 @@ for rate in "${RATES[@]}"; do
     log=$(mktemp)
     "$BIN" serve --port 0 --web "$web" --device udp:127.0.0.1:0 --device-rate "$rate" --duration 6.5 ${SERVE_ARGS:-} > "$log" 2>/dev/null &
     pid=$!
-    for _ in $(seq 600); do grep -q "device on udp:" "$log" && break; sleep 0.2; done
+    # The device is bound before the scene is built; the session (and --duration) starts when the server
+    # listens: stream from then, or the first poses wait in the socket while the scene builds.
+    for _ in $(seq 600); do grep -q "listening on" "$log" && break; sleep 0.2; done
     addr=$(sed -n 's/.*device on udp:\([^ ]*\).*/\1/p' "$log")
     [ -n "$addr" ] || { echo "serve did not start:"; cat "$log"; kill "$pid"; exit 1; }
     sim=$("$BIN" device-sim --server "udp:$addr" --path bench/device-comb.toml --rate 1000 --duration 6.2 --out "bench/out/device-$rate.csv" ${SIM_ARGS:-})

@@ -14,8 +14,10 @@
 //!    rest is not stable (long hair hanging in a plane far from upright twists out of it: the reduced model
 //!    cannot bend about its minor axis) keeps its drawn shape, flagged unstable: the built-in groom's last
 //!    resort, relaxing to another stable minimum ([`crate::generate::stabilise`]), moved such guides by
-//!    centimetres from their strands, and the live session holds its local strands near their place
-//!    (`HapticParams::hold_distance`). The full model (3 coordinates per segment) made none of them stable
+//!    centimetres from their strands, and the live session holds every local strand, generated or fitted, at
+//!    its place with its weight carried by the hair around it (`HapticParams::hold_distance`). Measured (engine
+//!    `scene::loaded_tests`, docs/hairstyles.md): the unstable ones of long grooms lie mostly off the body (the
+//!    outer layers, on the hair beneath), so the head's contact would not carry them either. The full model (3 coordinates per segment) made none of them stable
 //!    in the test family (engine `scene::loaded_tests`), at twice the cost, so it is not tried.
 
 use crate::error::GenerateError;

@@ -210,11 +210,12 @@ fn build_guide(
     })
 }
 
-/// The stability rule of every guide, generated or fitted to a file's strand: a groomed `state` whose
-/// sag-free rest (`model`, from [`sag_free_rest`]) is not a stable equilibrium (`stable` false) is relaxed,
-/// as a last resort, to the nearest stable minimum of that model ([`solve_equilibrium`] from a slightly
-/// twisted start) if that lies outside the body; else it is kept, flagged unstable. Returns the state and
-/// the flag.
+/// The generated groom's last resort for a guide no plane makes stable: a groomed `state` whose sag-free rest
+/// (`model`, from [`sag_free_rest`]) is not a stable equilibrium (`stable` false) is relaxed to the nearest
+/// stable minimum of that model ([`solve_equilibrium`] from a slightly twisted start) if that lies outside the
+/// body; else it is kept, flagged unstable. Returns the state and the flag. A guide fitted to a file's strand
+/// is not relaxed (it would leave its strand by centimetres, [`crate::fitted`]); the live session holds every
+/// guide, generated or fitted, by the one hold (engine `HapticParams::hold_distance`).
 pub fn stabilise(model: &StrandModel, state: StrandState, stable: bool, head: &Head) -> (StrandState, bool) {
     if stable {
         return (state, true);

@@ -40,8 +40,9 @@ pub struct LoopStats {
     /// Whole periods in which no step ran because an earlier step overran (the loop was preempted or a step
     /// was slow). After a late step the loop does not run the lost periods back to back (a burst of steps with
     /// the same device reading, on a machine already short of time): the next step starts one period after
-    /// the late one started (at once if it took longer), and the schedule goes on from there, one period per
-    /// step; the simulated clock (`n * period`) is continuous.
+    /// the late one ended, and the schedule goes on from there, one period per step; the simulated clock
+    /// (`n * period`) is continuous. (A step function that keeps the wall clock's pace itself, as the live
+    /// session's device loop does, then never sees a tick come early.)
     pub skipped: u64,
     /// Steps whose step function panicked: the device got zero force for them and the loop went on.
     pub panics: u64,
@@ -187,11 +188,10 @@ impl<D: HapticDevice + 'static> HapticLoop<D> {
                     let due = epoch + period * (k + 1);
                     if t1 > due {
                         // Late (started late, or overran): counted, and the schedule starts again from this
-                        // step's start: the next one period after it, or at once if this one took longer
-                        // (see `LoopStats::skipped`).
+                        // step's end: the next one period after it (see `LoopStats::skipped`).
                         misses += 1;
                         skipped += ((t1 - due).as_secs_f64() / dt) as u64;
-                        (epoch, k) = (t0, 1);
+                        (epoch, k) = (t1, 1);
                     } else {
                         k += 1;
                     }

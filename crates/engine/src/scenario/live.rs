@@ -310,6 +310,12 @@ impl LiveScenario {
     /// [`LiveScenario::run_recorded`] with the session's parameters changed by `change` (tests: a law switched
     /// off to show what it does).
     pub(crate) fn run_with(&self, scene: Arc<Scene>, record: bool, change: impl FnOnce(&mut SessionParams)) -> Result<(ForceTrace, LiveSummary, Option<Record>), ScenarioError> {
+        self.run_observed(scene, record, change, &mut |_, _| {})
+    }
+
+    /// [`LiveScenario::run_with`], showing the session to `observe` after each global step of the run (the time
+    /// since the settling ended, s; negative while settling), as a viewer sees it (tests: what is drawn).
+    pub(crate) fn run_observed(&self, scene: Arc<Scene>, record: bool, change: impl FnOnce(&mut SessionParams), observe: &mut dyn FnMut(&Lockstep, f64)) -> Result<(ForceTrace, LiveSummary, Option<Record>), ScenarioError> {
         let (profile, tool, hair) = self.validate()?;
         let mut params = SessionParams { profile, device_rate_hz: self.live.device_rate, ..SessionParams::default() };
         params.haptic.hair_contact = self.live.hair_contact;
@@ -335,13 +341,14 @@ impl LiveScenario {
         let device_steps = params.device_steps();
         let mut readings = Vec::with_capacity(device_steps);
         for n in 0..steps {
+            let t = (n as f64 - settle_steps as f64) * ls.dt;
             if n % every == 0 {
                 ls.global_step_live();
                 if n >= settle_steps {
                     meter.measure(&ls);
                 }
+                observe(&ls, t);
             }
-            let t = (n as f64 - settle_steps as f64) * ls.dt;
             if !self.live.head.is_empty() {
                 // The head moves as the viewer moves it: a recorded command to the haptic core, which hands the
                 // pose to the global layer with the tool input (so a record of this run replays the motion).

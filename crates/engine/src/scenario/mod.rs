@@ -61,3 +61,6 @@ pub enum ScenarioError {
 pub(crate) fn default_dt() -> f64 {
     1e-3
 }
+
+#[cfg(test)]
+mod loaded_comb_tests;

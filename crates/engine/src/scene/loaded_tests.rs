@@ -2,12 +2,10 @@
 
 use super::{Scene, SceneOptions};
 use crate::haptic::HapticCore;
-use crate::params::HapticParams;
 use hairstyle::fit::{axes_rotation, fit_file, transform_curves, Axis, FitOptions, Similarity};
 use hairstyle::{Hairstyle, HairstyleParams, HairCurves};
-use nalgebra::{Vector3, DVector};
+use nalgebra::Vector3;
 
-use strand::Strand;
 
 /// Another tool's frame: its name, up and front axes, metres per unit, and the file format it writes here.
 struct Convention {
@@ -45,34 +43,75 @@ fn through_another_tool(curves: &HairCurves, c: &Convention, tag: &str) -> HairC
     placed
 }
 
-/// Largest distance (m) any centreline point of each strand in `strands` moves from its start over
-/// `seconds` of 1 ms steps at rest.
-fn drift(strands: Vec<Strand>, seconds: f64) -> Vec<f64> {
-    let half = strands.len().div_ceil(2).max(1);
-    let chunks: Vec<Vec<Strand>> = strands.chunks(half).map(|c| c.to_vec()).collect();
-    std::thread::scope(|s| {
-        let handles: Vec<_> = chunks.into_iter().map(|c| s.spawn(move || c.into_iter().map(|st| drift_one(st, seconds)).collect::<Vec<_>>())).collect();
-        handles.into_iter().flat_map(|h| h.join().unwrap()).collect()
-    })
-}
-
-fn drift_one(mut st: Strand, seconds: f64) -> f64 {
-    {
-        {
-            let at = |st: &Strand| strand::kinematics::centerline(&st.model, &st.state, 17).into_iter().map(|(_, p)| p).collect::<Vec<_>>();
-            let start = at(&st);
-            let mut worst = 0.0f64;
-            for n in 0..(seconds * 1e3).round() as usize {
-                if st.step(1e-3, &[]).is_err() {
-                    return f64::INFINITY;
-                }
-                if n % 50 == 49 {
-                    worst = worst.max(at(&st).iter().zip(&start).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max));
-                }
+/// How far each guide of `scene` moves at rest for `seconds` in the live session's dynamics (largest distance of
+/// any of 17 centreline points from its reference, m, sampled every 50 ms): every guide a local strand at once,
+/// built as the live session builds them (`HapticCore::build_strands`), in the local interaction the live session
+/// sets up (`HapticCore::renew_interaction`: the body the strands rest on and its friction, the hold, hair-hair
+/// contact with the groomed overlap), held at its reference (the lattice at rest carries the reference to
+/// itself), 1 ms steps, the tool far from the hair. `held` false: the same without the hold, each strand under
+/// its own weight on its sag-free rest (`hold_distance` infinite, what a guide does with no hair around it).
+fn at_rest_in_the_live_dynamics(scene: &std::sync::Arc<Scene>, seconds: f64, held: bool) -> Vec<f64> {
+    let mut params = crate::params::SessionParams::default();
+    if !held {
+        params.haptic.hold_distance = f64::INFINITY;
+    }
+    let mut core = HapticCore::new(scene.clone(), params.clone()).unwrap();
+    let strands = HapticCore::build_strands(scene, &scene.hair_type, 0.0, &params.haptic).unwrap();
+    assert_eq!(strands.iter().all(|s| s.model.gravity.norm() == 0.0), held, "held strands carry no weight of their own, free ones do");
+    core.renew_interaction(strands);
+    for (i, g) in scene.guides.iter().enumerate() {
+        assert!(core.interaction.set_rest_state(i, &g.state));
+    }
+    if held {
+        core.interaction.holds = scene.guides.iter().map(|g| Some(tools::interaction::Hold { points: g.reference.clone(), length: g.model.length })).collect();
+    }
+    assert!(core.interaction.params.body.is_some() && core.interaction.params.body_friction > 0.0, "the strands rest on the body, with friction");
+    let far = tools::contact::ToolPose { position: Vector3::new(0.0, 0.0, 5.0), rotation: nalgebra::Matrix3::identity() };
+    let samples = scene.guides[0].reference.len();
+    let mut worst = vec![0.0f64; scene.guides.len()];
+    for n in 0..(seconds * 1e3).round() as usize {
+        if core.interaction.step(1e-3, far).is_err() {
+            return vec![f64::INFINITY; worst.len()];
+        }
+        if n % 50 == 49 {
+            for (w, (s, g)) in worst.iter_mut().zip(core.interaction.strands.iter().zip(&scene.guides)) {
+                *w = w.max(crate::haptic::centreline(s, samples).iter().zip(&g.reference).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max));
             }
-            worst
         }
     }
+    worst
+}
+
+/// Why guides of `scene` are flagged unstable (empty if none is): of those, the median share of their centreline
+/// (33 points) within 3 mm of the body (where the head could carry them), the largest sag-free rest coordinate
+/// (rad/m: the curvature a lone fibre needs to carry itself), and the range of negative modes of its static
+/// stiffness and the lowest (`strand::statics::natural_frequencies`, rad/s, negative: unstable); the same
+/// largest coordinate for the stable ones.
+fn why_unstable(scene: &Scene) -> String {
+    let head = hairstyle::Head::new(HairstyleParams::default().head).unwrap();
+    let largest = |g: &super::Guide| g.model.rest_coordinates().amax();
+    let (mut on_body, mut rest, mut modes, mut lowest) = (Vec::new(), Vec::new(), Vec::new(), 0.0f64);
+    for g in scene.guides.iter().filter(|g| !g.stable) {
+        let line = strand::kinematics::centerline(&g.model, &g.state, 33);
+        on_body.push(line.iter().filter(|(_, p)| head.signed_distance(&nalgebra::Point3::from(*p)) < 3e-3).count() as f64 / 33.0);
+        rest.push(largest(g));
+        let w = strand::statics::natural_frequencies(&g.model, &g.state).unwrap();
+        modes.push(w.iter().filter(|&&x| x < 0.0).count());
+        lowest = lowest.min(w[0]);
+    }
+    if rest.is_empty() {
+        return String::new();
+    }
+    let stable_rest: Vec<f64> = scene.guides.iter().filter(|g| g.stable).map(largest).collect();
+    format!(
+        "; the unstable ones: median {:.0} % of their length within 3 mm of the body, largest rest coordinate median {:.0} rad/m (stable ones {:.0}), {}-{} negative modes, lowest {:.0} rad/s",
+        100.0 * quantile(on_body, 0.5),
+        quantile(rest, 0.5),
+        if stable_rest.is_empty() { f64::NAN } else { quantile(stable_rest, 0.5) },
+        modes.iter().min().unwrap(),
+        modes.iter().max().unwrap(),
+        lowest
+    )
 }
 
 /// The acceptance of issue 34 over a generated family: the built-in hairstyle saved and loaded back (in the
@@ -82,8 +121,14 @@ fn drift_one(mut st: Strand, seconds: f64) -> f64 {
 /// on the head (`hairstyle::fit`) and loaded ([`Scene::load`], 24 guides). Held to:
 /// - the guides' rest centrelines within 1 mm (median) and 3 mm (95th percentile) of their file strands,
 ///   over all points of all guides (4 per segment, evenly in arc length);
-/// - at rest for 5 s (1 ms steps), every fourth guide moves less than 2 mm: as the live session simulates
-///   it (`HapticCore::build_strands`), and on its own sag-free model under gravity if it is flagged stable.
+/// - at rest for 5 s, **every** guide moves less than 2 mm in the live session's dynamics
+///   ([`at_rest_in_the_live_dynamics`]: the strands the live session builds, resting on the body with its
+///   friction, in hair-hair contact, their weight carried by the hold of the hair around them, as the live
+///   session carries every guide's, built-in or loaded).
+///
+/// Also printed, not held to a bound: what each guide does with no hair around it (its own weight on its
+/// sag-free rest, on the body, no hold), and how many of them are flagged stable: long fitted guides that
+/// run along the head can only be held (docs/hairstyles.md, "At rest").
 #[test]
 fn loaded_strands_become_guides_that_reproduce_them_and_hold_at_rest() {
     let mut cases: Vec<(String, HairCurves)> = Vec::new();
@@ -95,7 +140,7 @@ fn loaded_strands_become_guides_that_reproduce_them_and_hold_at_rest() {
     for curliness in [0.0, 0.3, 0.6] {
         for length in [0.12, 0.35] {
             let c = &CONVENTIONS[k % 3];
-            let parting = k % 2 == 0;
+            let parting = (k / 2) % 2 == 0;
             let params = HairstyleParams {
                 render_count: 600,
                 guide_count: 40,
@@ -127,51 +172,32 @@ fn loaded_strands_become_guides_that_reproduce_them_and_hold_at_rest() {
             d.extend(got.iter().zip(&want).map(|((_, a), b)| (a - b).norm()));
         }
         let (median, p95) = (quantile(d.clone(), 0.5), quantile(d, 0.95));
-        // At rest for 5 s: every fourth guide, as the live session simulates it and on its own sag-free model.
-        let every: Vec<usize> = (0..scene.guides.len()).step_by(4).collect();
-        let live = HapticCore::build_strands(&scene, &scene.hair_type, 0.0, &HapticParams::default()).unwrap();
-        let live: Vec<Strand> = every.iter().map(|&g| live[g].clone()).collect();
-        let live_drift = drift(live, 5.0).into_iter().fold(0.0, f64::max);
-        let own: Vec<Strand> = every
-            .iter()
-            .filter(|&&g| scene.guides[g].stable)
-            .map(|&g| {
-                let gd = &scene.guides[g];
-                let mut s = Strand::new(gd.model.clone(), gd.state.root.clone()).unwrap();
-                s.state.q.copy_from(&gd.state.q);
-                s.state.qdot = DVector::zeros(gd.model.dofs());
-                s
-            })
-            .collect();
-        let stable_tested = own.len();
-        // Not held to a bound: what the sag-free model does to (up to 2) guides flagged unstable.
-        let unstable: Vec<Strand> = (0..scene.guides.len())
-            .filter(|&g| !scene.guides[g].stable)
-            .take(2)
-            .map(|g| {
-                let gd = &scene.guides[g];
-                let mut s = Strand::new(gd.model.clone(), gd.state.root.clone()).unwrap();
-                s.state.q.copy_from(&gd.state.q);
-                s
-            })
-            .collect();
-        let unstable_drift = drift(unstable, 5.0).into_iter().fold(0.0, f64::max);
-        let own_drift = drift(own, 5.0).into_iter().fold(0.0, f64::max);
+        let scene = std::sync::Arc::new(scene);
+        let (live, free) = std::thread::scope(|t| {
+            let free = t.spawn(|| at_rest_in_the_live_dynamics(&scene, 2.0, false));
+            (at_rest_in_the_live_dynamics(&scene, 5.0, true), free.join().unwrap())
+        });
+        let (g_live, live_drift) = live.iter().enumerate().fold((0, 0.0f64), |w, (g, &d)| if d > w.1 { (g, d) } else { w });
+        let free_ok = free.iter().filter(|&&d| d < 2e-3).count();
+        let free_worst = free.iter().copied().fold(0.0f64, f64::max);
+        let stable = scene.guides.iter().filter(|g| g.stable).count();
+        let why = why_unstable(&scene);
         println!(
-            "{name}: {} | centrelines median {:.3} mm p95 {:.3} mm; 5 s at rest: live {:.4} mm, sag-free under gravity {:.4} mm ({stable_tested} stable of {} tested; unstable ones on their sag-free model {:.1} mm)",
+            "{name}: {} | centrelines median {:.3} mm p95 {:.3} mm; 5 s at rest in the live dynamics: all {} guides within {:.4} mm (guide {g_live}); with no hair around them {free_ok} of {} within 2 mm in 2 s (worst {:.1} mm), {stable} flagged stable{why}",
             report.summary(),
             median * 1e3,
             p95 * 1e3,
+            live.len(),
             live_drift * 1e3,
-            own_drift * 1e3,
-            every.len(),
-            unstable_drift * 1e3
+            free.len(),
+            free_worst * 1e3,
         );
-        worst = (worst.0.max(median), worst.1.max(p95), worst.2.max(live_drift), worst.3.max(own_drift));
+        worst = (worst.0.max(median), worst.1.max(p95), worst.2.max(live_drift), worst.3.max(free_worst));
         assert!(median <= 1e-3 && p95 <= 3e-3, "{name}: centrelines median {median} m, p95 {p95} m");
-        assert!(live_drift < 2e-3 && own_drift < 2e-3, "{name}: moved {live_drift} m (live), {own_drift} m (sag-free model) at rest");
+        assert_eq!(live.len(), scene.guides.len());
+        assert!(live_drift < 2e-3, "{name}: guide {g_live} moved {live_drift} m at rest in the live dynamics");
     }
-    println!("worst: median {:.3} mm, p95 {:.3} mm, drift live {:.4} mm, sag-free {:.4} mm", worst.0 * 1e3, worst.1 * 1e3, worst.2 * 1e3, worst.3 * 1e3);
+    println!("worst: median {:.3} mm, p95 {:.3} mm, at rest (live dynamics, every guide) {:.4} mm; with no hair around them up to {:.1} mm", worst.0 * 1e3, worst.1 * 1e3, worst.2 * 1e3, worst.3 * 1e3);
 }
 
 /// Pooled distances (m) of each guide's rest centreline from the strand of `curves` it was fitted to (4 points
@@ -229,3 +255,4 @@ fn a_saved_hairstyle_loads_back_as_the_scene_it_was() {
     println!("SAVE and load back: {} | guides median {:.3} mm, p95 {:.3} mm from the saved strands; drawn strands within {gap:e} m", rb.summary(), median * 1e3, p95 * 1e3);
     assert!(median <= 1e-3 && p95 <= 3e-3, "median {median} m, p95 {p95} m");
 }
+

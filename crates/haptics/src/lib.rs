@@ -10,6 +10,7 @@ pub mod coupling;
 pub mod device;
 pub mod haptic_loop;
 pub mod local_model;
+pub mod model_blend;
 pub mod profile;
 pub mod reading;
 pub mod realtime;

@@ -10,7 +10,7 @@
 //! device's own rendering at its rate of the local force model the answers carry (protocol version 2,
 //! [`crate::local_model`]): the same [`Coupling`] as the server's, against the latest model, which holds until
 //! a newer one comes or expires 50 ms after its answer (then no hair: the proxy settles on the device and the
-//! force fades through the coupling).
+//! force fades through the coupling); each new model is phased in over its validity ([`crate::model_blend`]).
 //!
 //! The device samples on its own clock, as a device's servo loop does: pose `k` is the path at `k / rate` s,
 //! stamped with that time, sent when the loop gets to it (late on a loaded host, several at once after a stall).
@@ -18,6 +18,7 @@
 use crate::coupling::{Coupling, HairReaction};
 use crate::device::{DeviceProfile, DeviceReading};
 use crate::local_model::WireModel;
+use crate::model_blend::ModelBlend;
 use crate::udp::{encode_pose_version, UdpClient};
 use crate::workspace::Workspace;
 use nalgebra::Vector3;
@@ -207,6 +208,10 @@ pub fn run(server: SocketAddr, path: &dyn Fn(f64) -> DeviceReading, p: &SimParam
     // The device's own rendering (`render`): its coupling (device frame) and the latest model with its arrival.
     let mut model: Option<(WireModel, Instant)> = None;
     let mut coupling: Option<Coupling> = None;
+    // The model rendered: the newest phased in over its validity's device steps, as the server's device loop
+    // does (`crate::model_blend`), and the number of the newest.
+    let mut rendered = ModelBlend::new(HairReaction::none());
+    let mut rendered_number: Option<u32> = None;
     let dt = 1.0 / p.rate_hz;
     let ws = p.workspace;
     let (m, b_d) = (p.profile.mass, p.profile.damping);
@@ -259,7 +264,18 @@ pub fn run(server: SocketAddr, path: &dyn Fn(f64) -> DeviceReading, p: &SimParam
                     Vector3::zeros()
                 }
                 (m, Some(c)) => {
-                    let hair = m.map_or_else(HairReaction::none, |m| m.hair);
+                    match m {
+                        Some(m) if rendered_number != Some(m.number) => {
+                            rendered_number = Some(m.number);
+                            rendered.take(m.hair, (m.valid_for * p.rate_hz).round().max(1.0) as u32);
+                        }
+                        Some(_) => {}
+                        None => {
+                            rendered_number = None;
+                            rendered.reset(HairReaction::none());
+                        }
+                    }
+                    let hair = rendered.advance();
                     c.params = m.map_or(c.params, |m| m.coupling);
                     let r = DeviceReading { time: t, position: x, rotation: reading.rotation, buttons: reading.buttons };
                     c.update_implicit(&r, dt, &hair).unwrap_or_default()

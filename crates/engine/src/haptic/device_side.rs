@@ -23,6 +23,7 @@ use crate::params::{InputKind, SessionParams};
 use crate::tool::Tool;
 use haptics::coupling::{Coupling, CouplingParams, HairReaction};
 use haptics::device::{DeviceCommand, DeviceReading};
+use haptics::model_blend::ModelBlend;
 use haptics::target::TargetFilter;
 use lattice::metaball::MetaballSet;
 use nalgebra::{Isometry3, Matrix3, Vector3};
@@ -103,8 +104,9 @@ pub struct DeviceSide {
     pub coupling: Coupling,
     /// Device point following the pointer's target or the device's samples; None while no reading.
     pub device: Option<TargetFilter>,
-    /// The local force model rendered now, and the physics step that published it.
-    model: HairReaction,
+    /// The local force model rendered (the newest phased in over a physics period, `haptics::model_blend`), and
+    /// the physics step that published the newest.
+    model: ModelBlend,
     model_step: u64,
     rotation: Matrix3<f64>,
     buttons: u32,
@@ -130,7 +132,7 @@ impl DeviceSide {
             tool: Tool::Comb,
             coupling,
             device: None,
-            model: HairReaction::none(),
+            model: ModelBlend::new(HairReaction::none()),
             model_step: 0,
             rotation: Matrix3::identity(),
             buttons: 0,
@@ -149,7 +151,14 @@ impl DeviceSide {
             // loss, a runaway put it back on the device) holds nowhere near the proxy now: no hair until the next
             // one. (Seen when a late physics step published the hair's reaction at the old place after the device
             // came back 12 cm away: 0.78 N at once.)
-            self.model = if p.anchors == self.anchors { p.model } else { HairReaction::none() };
+            // The newest model is phased in over this physics period's device steps: contacts that came or went
+            // in the physics step change its force by tens of mN, felt as a step at every model (0.03-0.08 N in
+            // the live comb strokes, bench/RESULTS.md) if rendered at once.
+            if p.anchors == self.anchors {
+                self.model.take(p.model, self.params.device_steps() as u32);
+            } else {
+                self.model.reset(HairReaction::none());
+            }
         }
         self.tool = p.tool;
         if p.head != self.head && crate::command::is_finite_pose(&p.head) {
@@ -180,11 +189,12 @@ impl DeviceSide {
         self.rotation = r.rotation;
         self.buttons = r.buttons;
         // 2. Coupling.
-        let force = match self.coupling.update_implicit(&reading, dt, &self.model) {
+        let model = self.model.advance();
+        let force = match self.coupling.update_implicit(&reading, dt, &model) {
             Ok(f) => f,
             Err(_) => {
                 self.rejected += 1;
-                self.model = HairReaction::none();
+                self.model.reset(HairReaction::none());
                 return DeviceCommand::default();
             }
         };
@@ -196,7 +206,7 @@ impl DeviceSide {
         if !(lag <= self.params.haptic.max_proxy_lag) {
             self.runaways += 1;
             self.coupling.put_proxy_at(reading.position);
-            self.model = HairReaction::none();
+            self.model.reset(HairReaction::none());
             self.anchors += 1;
             return DeviceCommand::default();
         }
@@ -221,9 +231,9 @@ impl DeviceSide {
         }
     }
 
-    /// The local force model rendered now.
-    pub fn model(&self) -> &HairReaction {
-        &self.model
+    /// The local force model rendered now (the newest, phased in over the physics period).
+    pub fn model(&self) -> HairReaction {
+        self.model.current()
     }
 
     /// The device point following the pointer's target or the device's samples `r` (interpolated between
@@ -238,7 +248,7 @@ impl DeviceSide {
         }
         if self.device.is_none() {
             self.coupling = Coupling::new(self.params.profile, CouplingParams::for_profile(&self.params.profile), target);
-            self.model = HairReaction::none();
+            self.model.reset(HairReaction::none());
             self.anchors += 1;
         }
         let follow = match self.params.input {

@@ -14,8 +14,9 @@
 //! - the device steps of period k, each of `dt / device_steps` s, render that model while physics step k runs
 //!   on its own thread, with the whole period to finish;
 //! - the device side keeps the wall clock's pace: the device ticks the loop lost (waiting for a late physics
-//!   step, or preempted) are run when it resumes, back to back with the latest reading (at most
-//!   [`MAX_PERIOD_STEPS`] device steps a period; a longer loss is dropped). The device moved during them: run
+//!   step, or preempted) are run when it resumes, back to back, with the reading from before the loss and the
+//!   last with the new one (at most [`MAX_PERIOD_STEPS`] device steps a period; a longer loss is dropped).
+//!   The device moved during them: run
 //!   as one nominal tick, the follower saw it move that much faster and its catch-up, through the coupling's
 //!   damper, pushed the hand with up to 1.4 N in free air (test `a_late_physics_step_gives_no_free_air_force_pulse`).
 //!   Each catch-up step is a device step like the others, in the hand-over's readings, so the replay runs it.
@@ -196,8 +197,8 @@ impl DeviceLoop {
                 Some(s) => now + half_tick >= s + period || count == MAX_PERIOD_STEPS,
             };
             if due {
-                // A device step late by more than a period starts the next period late: the lost periods are not
-                // run (the physics clock skips them, as the device loop skips ticks).
+                // A device step late by more than a period starts the next period late: the lost physics periods
+                // are not run (the physics clock skips them; the device side runs its lost ticks, below).
                 started = Some(now);
                 k += 1;
                 if k >= 2 && done.load(Ordering::Acquire) < k - 1 {
@@ -339,7 +340,7 @@ mod tests {
         // many ms of ticks, while the hand moves at 0.05, 0.15 or 0.3 m/s in free air; device loops at 4 and
         // 10 kHz. Run as one tick, the lost time made the follower catch up and pushed the hand with up to 1.07 N
         // (4 kHz) and 1.44 N (10 kHz) at 0.15 m/s, 90 % of the commands above 0.02 N. With the lost ticks run
-        // again the peak is 0.003-0.08 N (the follower's extrapolation errs by the speed times the catch-up's
+        // again the peak is 0.003-0.15 N (the follower's extrapolation errs by the speed times the catch-up's
         // rounding, within half a tick, and the coupling's damper answers in proportion). Asserted, case by
         // case: under 1 % of the commands above 0.7 N s/m times the speed (0.105 N at 0.15 m/s), while the loop
         // really waited. (A share, not the peak: a test thread preempted for over 10 ms on a loaded machine

@@ -18,7 +18,7 @@
 //!   last with the new one (at most [`MAX_PERIOD_STEPS`] device steps a period; a longer loss is dropped).
 //!   The device moved during them: run
 //!   as one nominal tick, the follower saw it move that much faster and its catch-up, through the coupling's
-//!   damper, pushed the hand with up to 1.4 N in free air (test `a_late_physics_step_gives_no_free_air_force_pulse`).
+//!   damper, pushed the hand in free air (test `a_late_physics_step_gives_no_free_air_force_pulse`; bench/RESULTS.md).
 //!   Each catch-up step is a device step like the others, in the hand-over's readings, so the replay runs it.
 //!
 //! Nothing takes a lock: the hand-overs go through wait-free triple buffers with a period counter each.

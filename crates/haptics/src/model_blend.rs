@@ -2,7 +2,7 @@
 //! linearised about the proxy ([`HairReaction`]) at several device steps per physics step; each physics step
 //! publishes a new linearisation, and where contacts came or went in that step the new model's force differs
 //! from the old one's at the same proxy state by tens of mN: rendered at once, a force step the hand feels at
-//! every model change (0.03-0.08 N in the live comb strokes, bench/RESULTS.md). As in Mark et al.'s
+//! every model change (bench/RESULTS.md). As in Mark et al.'s
 //! intermediate representation (SIGGRAPH 1996, the planes' "recovery" between simulation updates), the device
 //! renders a blend `(1 - a) old + a new` with `a` rising linearly from `1/n` to 1 over the `n` device steps of
 //! one physics period, so the force changes by at most its difference over a period, spread over the period.
@@ -68,11 +68,6 @@ impl ModelBlend {
     pub fn advance(&mut self) -> HairReaction {
         self.done = (self.done + 1).min(self.steps);
         self.current()
-    }
-
-    /// The newest model taken.
-    pub fn newest(&self) -> &HairReaction {
-        &self.to
     }
 }
 

@@ -23,8 +23,8 @@ pub const MAX_STEP_ROTATION: f64 = 0.5;
 /// which it fades once the loads are gone or smaller ([`Dynamics::geometric_stiffness`]'s `kept` is
 /// `exp(-h / GEOMETRIC_STIFFNESS_MEMORY)`, 0.905 a step at 1 ms). A numerical choice, not a fit: ten steps of the
 /// 1 kHz step, longer than a contact's on-off chatter (every other step) and short against a comb stroke through
-/// a wisp (0.1 s and more). Without it, a wet caucasian tress (6 g, 30 cm, 0.1 m/s) had 3 to 38 clamped
-/// strand-steps on three of eight tress layouts (docs/combing.md).
+/// a wisp (0.1 s and more). Without it, the heavy wet caucasian tress clamped strand-steps on some tress layouts
+/// (docs/combing.md; test `the_heavy_wet_caucasian_tress_is_stable_on_every_layout`).
 pub const GEOMETRIC_STIFFNESS_MEMORY: f64 = 0.01;
 
 /// Time-stepping scheme.

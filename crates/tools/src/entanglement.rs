@@ -133,13 +133,13 @@ impl Entanglement {
     /// ellipticity). In a mass of fibres at a given packing fraction, the mean length between a fibre's contacts
     /// with its neighbours goes as the fibres' cross-section over their width (Komori and Makishima, "Number of
     /// fiber-to-fiber contacts in general fiber assemblies", Textile Research Journal 47, 13-17, 1977): thicker
-    /// fibres cross fewer neighbours per unit length. No constant: H1 keeps `span_h1` to the bit (H2 6.90, GA1
+    /// fibres cross fewer neighbours per unit length. No constant: H1 keeps `span_h1` to the bit (its ratio is 1 exactly) (H2 6.90, GA1
     /// 6.11, GC3 6.17, asian 7.60, caucasian 5.58, African 4.90 mm at 6.6 mm). A section that cannot be built
     /// keeps `span_h1`.
     pub fn span_for(span_h1: f64, hair: &strand::HairType) -> f64 {
         let size = |h: &strand::HairType| h.section().map(|c| c.semi_major * c.semi_minor / (c.semi_major + c.semi_minor));
         match (size(hair), size(&strand::HairType::H1)) {
-            (Ok(s), Ok(s1)) if s > 0.0 && s1 > 0.0 && hair.name != strand::HairType::H1.name => span_h1 * (s / s1),
+            (Ok(s), Ok(s1)) if s > 0.0 && s1 > 0.0 => span_h1 * (s / s1),
             _ => span_h1,
         }
     }

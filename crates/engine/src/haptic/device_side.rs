@@ -152,8 +152,7 @@ impl DeviceSide {
             // one. (Seen when a late physics step published the hair's reaction at the old place after the device
             // came back 12 cm away: 0.78 N at once.)
             // The newest model is phased in over this physics period's device steps: contacts that came or went
-            // in the physics step change its force by tens of mN, felt as a step at every model (0.03-0.08 N in
-            // the live comb strokes, bench/RESULTS.md) if rendered at once.
+            // in the physics step change its force, felt as a step at every model if rendered at once.
             if p.anchors == self.anchors {
                 self.model.take(p.model, self.params.device_steps() as u32);
             } else {

@@ -74,19 +74,36 @@ export async function openViewer(browser, url, { view, drawn = 3 } = {}) {
 }
 
 /** Drags with the left button from world point a to world point b in `steps` steps (ms between steps);
- * `onStep(i)` (optional) is called after step i without being awaited. */
+ * `onStep(i)` (optional) is called after step i and awaited. The viewer draws nothing during the drag
+ * (`coiffureDebug.holdFrames`; the session, its messages and the poses go on): in software rendering a real
+ * pointer move waits for the next frame (1-3 s for 5k strands), which made a drag of 40 steps at 50 ms (2 s)
+ * last 1-2 minutes. A screenshot during the drag belongs in `onStep`, taken with `screenshotDrawn`. */
 export async function dragWorld(page, a, b, steps = 40, pause = 30, onStep = null) {
   const pa = await page.evaluate((p) => window.coiffureDebug.project(...p), a);
   const pb = await page.evaluate((p) => window.coiffureDebug.project(...p), b);
-  await page.mouse.move(pa[0], pa[1]);
-  await page.mouse.down();
-  for (let i = 1; i <= steps; i++) {
-    const t = i / steps;
-    await page.mouse.move(pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1]));
-    if (onStep) await onStep(i);
-    await page.waitForTimeout(pause);
+  await page.evaluate(() => window.coiffureDebug.holdFrames(true));
+  try {
+    await page.mouse.move(pa[0], pa[1]);
+    await page.mouse.down();
+    for (let i = 1; i <= steps; i++) {
+      const t = i / steps;
+      await page.mouse.move(pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1]));
+      if (onStep) await onStep(i);
+      await page.waitForTimeout(pause);
+    }
+    await page.mouse.up();
+  } finally {
+    await page.evaluate(() => window.coiffureDebug.holdFrames(false));
   }
-  await page.mouse.up();
+}
+
+/** A screenshot of a frame drawn now while the viewer holds its frames (during `dragWorld`): drawing resumes
+ * until a frame has been drawn with the current state, the screenshot is taken, and the frames are held again. */
+export async function screenshotDrawn(page, path) {
+  const n = await page.evaluate(() => { window.coiffureDebug.holdFrames(false); return window.coiffure.framesRendered; });
+  await page.waitForFunction((k) => window.coiffure.framesRendered > k, n, { polling: 50 });
+  await page.screenshot({ path });
+  await page.evaluate(() => window.coiffureDebug.holdFrames(true));
 }
 
 /** A stroke at a hand's pace whatever the frame rate: the pointer over world point a for `hoverMs`, the left

@@ -4,7 +4,7 @@ import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { artifacts, binary, dragWorld, launchBrowser, strokeWorld, openViewer, repoDir, startServer, stopServer } from './harness.mjs';
+import { artifacts, binary, dragWorld, launchBrowser, strokeWorld, openViewer, repoDir, screenshotDrawn, startServer, stopServer } from './harness.mjs';
 
 /** A Cem Yuksel .hair file written from its specification: `n` strands of `pts` points (points only) rooted on
  * a sphere of radius `r` (file units) at azimuths from `a0` over `da` and elevations from `b0` over `db` (rad),
@@ -200,7 +200,7 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     let during = 0;
     await dragWorld(page, [0.0, -0.11, 0.0], [0.0, -0.11, -0.01], 40, 50, async (k) => {
       if (k % 10 === 9) during = Math.max(during, await motion());
-      if (k === 35) await page.screenshot({ path: join(artifacts, 'dryer-during.png') });
+      if (k === 35) await screenshotDrawn(page, join(artifacts, 'dryer-during.png'));
     });
     await page.mouse.move(5, 5);
     await page.waitForTimeout(2300);
@@ -384,9 +384,11 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     // Two pages software-render in one browser: each frame takes seconds, so the waits poll on a timer (not on
     // animation frames) and the watcher need not draw before it speaks the protocol.
     const poll = { timeout: 60_000, polling: 100 };
+    // Neither page needs to draw for this test: both hold their frames, so that each reads its socket promptly
+    // (the first before the second opens: its frames would hold up the second's load for a minute or more).
+    await page.evaluate(() => window.coiffureDebug.holdFrames(true));
     const { page: second } = await openViewer(browser, server.url, { drawn: 0 });
-    // Neither page needs to draw for this test: both hold their frames, so that each reads its socket promptly.
-    for (const p of [page, second]) await p.evaluate(() => window.coiffureDebug.holdFrames(true));
+    await second.evaluate(() => window.coiffureDebug.holdFrames(true));
     await second.waitForFunction(() => window.coiffure.viewers === 2, null, poll);
     assert.equal(await second.evaluate(() => window.coiffure.youControl), false);
     await second.evaluate(() => window.coiffure.send(new Uint8Array([0x05, 1]).buffer)); // RESET from a watcher

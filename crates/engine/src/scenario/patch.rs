@@ -2,7 +2,9 @@
 //!
 //! Pipeline of [`Scenario::run`]:
 //! 1. build the patch: roots on a rectangle, small random tilts so that teeth meet hair as in a real tress;
-//!    each strand stands for `represents` real fibres (from the tress's mass);
+//!    each strand hangs in its static equilibrium under gravity (a tress at rest on the rig, its curls opened by
+//!    their weight as far as the wet or dry moduli let them) and stands for `represents` real fibres (from the
+//!    tress's mass);
 //! 2. wetness and treatment: the strands' material and the friction coefficients (tool-hair and hair-hair) from
 //!    [`tools::wetness::WetnessModel`] at `[patch] wetness` and [`tools::treatment::Treatment`] at
 //!    `[patch] treatment`, the same law as the live session's; the combing
@@ -26,6 +28,7 @@ use crate::path::{ToolPath, Waypoint};
 use nalgebra::Vector3;
 use serde::Deserialize;
 use strand::constraint::ConstraintOptions;
+use strand::statics::{solve_equilibrium, StaticOptions};
 use strand::{HairType, ModelKind, RootFrame, Strand, StrandError, StrandModel};
 use tools::interaction::{Entanglement, ForceModel, HairContact, LocalInteraction};
 use tools::shape::ToolShape;
@@ -363,7 +366,9 @@ impl Scenario {
         Ok(hair)
     }
 
-    /// The strands of the patch, at rest.
+    /// The strands of the patch, hanging at rest: each in its stable static equilibrium under gravity
+    /// (`strand::statics::solve_equilibrium`), with the material of the tress's wetness (a wet curl hangs
+    /// longer: its bending and torsion moduli are lower and it is heavier, `tools::wetness`).
     pub fn build_patch(&self) -> Result<Vec<Strand>, ScenarioError> {
         let hair = self.validate()?;
         let p = &self.patch;
@@ -382,7 +387,16 @@ impl Scenario {
                 let tilt = p.tilt * (-2.0 * splitmix(&mut rng).max(1e-300).ln()).sqrt() * 0.5f64.sqrt();
                 let tangent = Vector3::new(tilt * ang.cos(), tilt * ang.sin(), -1.0);
                 let root = RootFrame::new(Vector3::new(x, y, p.root[2]), tangent, Vector3::x()).map_err(inv)?;
-                Strand::new(model.clone(), root).map_err(inv)
+                let mut strand = Strand::new(model.clone(), root).map_err(inv)?;
+                // Hanging at rest: the stable static equilibrium under gravity of the wisp's model at its wetness
+                // (moduli and mass), as a tress hangs on a rig before the comb comes; its natural shape if the
+                // solve finds none (then the settle takes it down).
+                if let Ok(eq) = solve_equilibrium(&strand.model, &strand.state, &[], &StaticOptions::default()) {
+                    if eq.stable {
+                        strand.state.q = eq.q;
+                    }
+                }
+                Ok(strand)
             })
             .collect()
     }

@@ -93,6 +93,8 @@ describe('the look (3k render strands, small canvas)', () => {
   };
   const camera = { camera: [0.3, -0.9, 0.22], target: [0, 0, -0.05] };
   const kept = {}; // images reused by later tests
+  /** Lets the page's frame loop draw (true) or holds it (false); resolves with the frames counted so far. */
+  const liveFrames = (on) => page.evaluate((h) => { window.coiffureDebug.holdFrames(h); return window.coiffure.framesRendered; }, !on);
 
   before(async () => {
     server = await startServer(['--render-strands', '3000']);
@@ -101,6 +103,10 @@ describe('the look (3k render strands, small canvas)', () => {
     page.setDefaultTimeout(180_000);
     await page.goto(server.url, { waitUntil: 'domcontentloaded' });
     await page.waitForFunction(() => window.coiffure?.sceneLoaded && window.coiffure.framesRendered > 1, null, { timeout: 120_000 });
+    // The tests draw their own pictures (coiffureDebug.look, hairInk); the page's frame loop draws nothing
+    // meanwhile, or each picture would wait behind a live software-rendered frame. The two tests of the live
+    // frame (draw calls, frame times) let it draw (`liveFrames`).
+    await liveFrames(false);
   });
   after(async () => { await browser?.close(); if (server) console.log(await stopServer(server)); });
 
@@ -286,16 +292,18 @@ describe('the look (3k render strands, small canvas)', () => {
 
   test('the hair is one draw call drawing every strand per line (and one for each shadow pass)', async () => {
     // Strands wider than a pixel (here 33 hairs a render strand, close) add one call per parallel line.
-    await page.waitForFunction((n) => window.coiffure.framesRendered > n, await page.evaluate(() => window.coiffure.framesRendered));
+    await page.waitForFunction((n) => window.coiffure.framesRendered > n, await liveFrames(true));
     const s = await page.evaluate(() => ({ calls: window.coiffure.hairDrawCalls, segments: window.coiffure.hairSegmentsPerCall, strands: window.coiffure.strands, lines: window.coiffureDebug.view.lineCount }));
     const r = await page.evaluate(() => window.coiffureDebug.hairRest());
     console.log('hair draw calls', s);
     assert.ok(s.lines >= 1 && s.lines <= 4, `${s.lines} lines`);
     assert.equal(s.calls, s.lines + 2, `lit strands (${s.lines} lines), shadow depth, shadow opacity`);
     assert.equal(s.segments, s.strands * (r.verticesPerStrand - 1), 'the lit call draws every segment of every strand');
+    await liveFrames(false);
   });
 
   test('frame and GPU times are reported in window.coiffure and the status panel', async () => {
+    await liveFrames(true);
     await page.waitForFunction(() => window.coiffure.frameTimes.length > 3);
     const s = await page.evaluate(() => ({ gpuTimer: window.coiffure.gpuTimer, gpu: window.coiffure.gpuFrameMs, perf: document.getElementById('perf').textContent }));
     console.log('timing', s);
@@ -306,6 +314,7 @@ describe('the look (3k render strands, small canvas)', () => {
       assert.equal(s.gpu, null, 'no timer query: no GPU time');
       assert.match(s.perf, /GPU n\/a/);
     }
+    await liveFrames(false);
   });
 
   test('thin strands: the drawn ink is width x projected length, with the hair type and the camera distance', async () => {

@@ -85,8 +85,8 @@ impl Strand {
     }
 
     /// Whether the strand's next linearly implicit step takes a geometric stiffness (its last step's constraint
-    /// loads, or earlier ones still fading: [`GEOMETRIC_STIFFNESS_MEMORY`]); such a strand is stepped alone, not
-    /// in a [`crate::batch::StrandBatch`].
+    /// loads, or earlier ones still fading: [`GEOMETRIC_STIFFNESS_MEMORY`]), alone or in a
+    /// [`crate::batch::StrandBatch`]'s lane.
     pub fn takes_geometric_stiffness(&self) -> bool {
         !self.constraint_loads.is_empty() || self.dynamics.geometric.iter().any(|&g| g > 0.0)
     }

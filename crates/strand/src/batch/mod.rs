@@ -4,7 +4,8 @@
 //! [`LANES`] reduced strands with the same number of segments and Gauss points: the same root-to-tip sweep
 //! (closed-form helix, velocity-product terms, gravity, air drag, rotary inertia, point forces), the same
 //! tip-to-root force sweep, elastic and damping forces, and the same O(N) articulated-body solve of
-//! `(M (1 + h c) + (h tau + h^2) K) dqdot = h F - h^2 K qdot`. Each lane holds one strand's numbers; the lanes
+//! `(M (1 + h c) + (h tau + h^2) K + h^2 K_g) dqdot = h F - h^2 (K + K_g) qdot` (`K_g` the geometric stiffness
+//! of the constraint loads the strand carries, `Dynamics::geometric_stiffness`). Each lane holds one strand's numbers; the lanes
 //! never mix, so the strands may differ in length, section, material, rest shape, environment, root motion
 //! and point forces. The results equal the scalar step's to round-off (the sine and cosine of the SIMD
 //! library differ from the C library's in the last bits).
@@ -22,7 +23,7 @@
 use crate::constraint::ConstraintOptions;
 use crate::dynamics::{point_kinematics, wrench, PointForce};
 use crate::error::{Result, StrandError};
-use crate::integrator::{Integrator, Strand};
+use crate::integrator::{Integrator, Strand, GEOMETRIC_STIFFNESS_MEMORY};
 use crate::kinematics::{locate, Frame, Twists};
 use crate::model::ModelKind;
 use nalgebra::{DVector, Matrix3, Vector3};
@@ -95,6 +96,8 @@ pub struct StrandBatch {
     segs: Vec<Segment>,
     frames: Vec<(M3, V3)>,
     points: Vec<V3>,
+    /// Each segment's geometric stiffness of its two coordinates (zero in lanes without constraint loads).
+    geometric: Vec<[L; 2]>,
     /// Lanes filled by the last prepare.
     lanes: usize,
 }
@@ -106,9 +109,6 @@ fn batch_mismatch(segments: usize, quadrature_points: usize, strand: &Strand) ->
     }
     if strand.integrator != Integrator::LinearlyImplicitEuler {
         return Some("batched strands use the linearly implicit Euler integrator".into());
-    }
-    if strand.takes_geometric_stiffness() {
-        return Some("a strand with recent constraint loads takes their geometric stiffness in its own step".into());
     }
     if strand.model.segments != segments || strand.dynamics.quadrature_nodes().len() != quadrature_points {
         return Some(format!(
@@ -131,6 +131,7 @@ impl StrandBatch {
             segs: vec![Segment::zero(); n],
             frames: Vec::with_capacity(n + 1),
             points: Vec::with_capacity(n * quadrature_points),
+            geometric: vec![[sp(0.0); 2]; n],
             lanes: 0,
         }
     }
@@ -324,6 +325,37 @@ impl StrandBatch {
         }
         self.frames.push((start.rot, start.x + origin));
 
+        // Step 1b: the geometric stiffness of the constraint loads a lane's strand carries (its last step's, and
+        // earlier ones fading: `Dynamics::geometric_stiffness`), lane by lane with the scalar code on the lane's
+        // frames and motion subspaces (it needs them at the current state, as after the scalar sweep). Zero
+        // in lanes without loads.
+        let kept = (-h / GEOMETRIC_STIFFNESS_MEMORY).exp();
+        let geometric = &mut self.geometric[..n];
+        geometric.fill([zero; 2]);
+        for (j, s) in strands.iter_mut().enumerate() {
+            if !s.takes_geometric_stiffness() {
+                continue;
+            }
+            let dy = &mut s.dynamics;
+            dy.frames.clear();
+            dy.frames.extend(self.frames.iter().map(|(rot, x)| Frame { rotation: rot.lane(j), position: x.lane(j) }));
+            for (i, seg) in self.segs[..n].iter().enumerate() {
+                let mut motion = Twists::zeros();
+                for k in 0..2 {
+                    for r in 0..6 {
+                        motion[(r, k)] = lane(seg.motion[k][r], j);
+                    }
+                }
+                dy.set_segment_motion(i, motion);
+            }
+            dy.geometric_stiffness(&s.model, &s.state, &s.constraint_loads, kept);
+            for (i, g) in geometric.iter_mut().enumerate() {
+                for k in 0..2 {
+                    g[k].as_array_mut()[j] = s.dynamics.geometric[2 * i + k];
+                }
+            }
+        }
+
         // Step 2 (forces): tip-to-root suffix sums of the wrenches; step 4: elasticity and damping; the
         // right-hand side h F - h^2 K qdot.
         let mut suffix = [zero; 6];
@@ -338,12 +370,12 @@ impl StrandBatch {
         let hh = sp(h);
         let rig = [rig_l.x, rig_l.y];
         let mut elastic = zero;
-        for seg in self.segs[..n].iter_mut() {
+        for (seg, g) in self.segs[..n].iter_mut().zip(&self.geometric[..n]) {
             for k in 0..2 {
                 let dq = seg.q[k] - seg.rest[k];
                 elastic += half * rig[k] * dq * dq;
                 seg.force[k] = seg.force[k] - rig[k] * (dq + damping * seg.qdot[k]);
-                seg.b[k] = hh * seg.force[k] - hh * hh * rig[k] * seg.qdot[k];
+                seg.b[k] = hh * seg.force[k] - hh * hh * (rig[k] + g[k]) * seg.qdot[k];
             }
         }
 
@@ -352,7 +384,7 @@ impl StrandBatch {
         let mut ia = [[zero; 6]; 6];
         let mut pa = [zero; 6];
         let mut ok = sp(0.0).cmp_lt(sp(1.0)); // all lanes true
-        for seg in self.segs[..n].iter_mut().rev() {
+        for (seg, g) in self.segs[..n].iter_mut().zip(&self.geometric[..n]).rev() {
             let s = &seg.motion;
             let mut ia_s = [[zero; 6]; 2];
             for k in 0..2 {
@@ -366,10 +398,10 @@ impl StrandBatch {
                     u[k][r] = seg.f_own[k][r] * scale + ia_s[k][r];
                 }
             }
-            let d00 = seg.m_own[0] * scale + dot6(&s[0], &ia_s[0]) + rig_s[0];
+            let d00 = seg.m_own[0] * scale + dot6(&s[0], &ia_s[0]) + rig_s[0] + hh * hh * g[0];
             let d01 = seg.m_own[1] * scale + dot6(&s[0], &ia_s[1]);
             let d10 = seg.m_own[1] * scale + dot6(&s[1], &ia_s[0]);
-            let d11 = seg.m_own[2] * scale + dot6(&s[1], &ia_s[1]) + rig_s[1];
+            let d11 = seg.m_own[2] * scale + dot6(&s[1], &ia_s[1]) + rig_s[1] + hh * hh * g[1];
             let c = [-dot6(&s[0], &pa) - seg.b[0], -dot6(&s[1], &pa) - seg.b[1]];
             let det = d00 * d11 - d01 * d10;
             ok = ok & d00.cmp_gt(zero) & det.cmp_gt(zero) & det.is_finite();
@@ -553,6 +585,50 @@ mod tests {
     }
 
     #[test]
+    fn lanes_carrying_constraint_loads_take_their_geometric_stiffness_as_the_scalar_step() {
+        // 200 steps of 1 ms for 1 to 4 different strands, each given constraint loads (a tooth's pull at two
+        // places, 0.2-2 mN) in two steps of three and none in the third, so that their geometric stiffness is
+        // taken from the last step's loads, or from earlier ones fading (`GEOMETRIC_STIFFNESS_MEMORY`). q, qdot
+        // and the remembered stiffness equal the scalar step's to 1e-10 (relative), lane by lane.
+        for lanes in 1..=LANES {
+            let mut scalar: Vec<Strand> = strands().into_iter().take(lanes).collect();
+            let mut batched = scalar.clone();
+            let mut batch = StrandBatch::for_strand(&batched[0]);
+            let mut carried = 0;
+            for step in 0..200 {
+                let forces: Vec<Vec<PointForce>> = (0..lanes).map(|k| forces_for(k, step)).collect();
+                for (k, (a, b)) in scalar.iter_mut().zip(batched.iter_mut()).enumerate() {
+                    let len = a.model.length;
+                    let loads = if (step + k) % 3 == 2 {
+                        Vec::new()
+                    } else {
+                        let f = 2e-3 * (0.1 + ((step * 7 + k * 13) % 10) as f64 / 10.0);
+                        vec![(0.45 * len, Vector3::new(f, -0.5 * f, 0.2 * f)), (0.9 * len, Vector3::new(-0.3 * f, f, 0.0))]
+                    };
+                    a.constraint_loads = loads.clone();
+                    b.constraint_loads = loads;
+                    carried += b.takes_geometric_stiffness() as usize;
+                }
+                for (k, s) in scalar.iter_mut().enumerate() {
+                    s.step(1e-3, &forces[k]).unwrap();
+                }
+                let ext: Vec<&[PointForce]> = forces.iter().map(|f| f.as_slice()).collect();
+                let mut refs: Vec<&mut Strand> = batched.iter_mut().collect();
+                batch.step(1e-3, &mut refs, &ext).unwrap();
+            }
+            assert!(carried >= 100 * lanes, "{lanes} lanes: only {carried} strand-steps took a geometric stiffness");
+            for (k, (a, b)) in batched.iter().zip(&scalar).enumerate() {
+                let d = max_difference(a, b);
+                assert!(d < 1e-10, "{lanes} lanes, strand {k}: difference {d:e}");
+                let g = (&a.dynamics.geometric - &b.dynamics.geometric).amax() / (1.0 + b.dynamics.geometric.amax());
+                assert!(g < 1e-10, "{lanes} lanes, strand {k}: geometric stiffness differs by {g:e}");
+                assert!(b.dynamics.geometric.amax() > 0.0, "strand {k}: no geometric stiffness at the end");
+                assert!(b.state.qdot.amax() > 1e-3, "strand {k} at rest");
+            }
+        }
+    }
+
+    #[test]
     fn prepared_lanes_expose_the_scalar_sweep() {
         // After prepare, each strand's frames, Gauss points, forces and energies equal those of its own
         // prepare_step (1e-12 m, 1e-10 relative), and the prepared velocities agree to 1e-10.
@@ -584,9 +660,9 @@ mod tests {
 
     #[test]
     fn a_handed_over_lane_solves_constraints_like_the_scalar_step() {
-        // A contact pressed into lane 2's strand: batch prepare + hand_over + finish_step with the contact (the first
-        // step; then the strand carries the contact's load and is prepared alone) gives the same impulse and state
-        // as the scalar step_constrained (1e-9 relative), over 50 steps.
+        // A contact pressed into lane 2's strand: batch prepare + hand_over + finish_step with the contact (from
+        // the second step with the geometric stiffness of the contact's load, in the lane) gives the same impulse
+        // and state as the scalar step_constrained (1e-9 relative), over 50 steps.
         let mut scalar = strands();
         let mut batched = scalar.clone();
         let mut batch = StrandBatch::new(16, 2);
@@ -603,19 +679,10 @@ mod tests {
                     s.step(1e-3, &[]).unwrap();
                 }
             }
-            if !batched[2].takes_geometric_stiffness() {
-                let mut refs: Vec<&mut Strand> = batched.iter_mut().collect();
-                batch.prepare(1e-3, &mut refs, &[]).unwrap();
-                batch.hand_over(2, &mut batched[2]).unwrap();
-            } else {
-                // A strand carrying recent constraint loads is refused by the batch (their geometric stiffness
-                // is taken in its own step) and prepared alone.
-                let mut refs: Vec<&mut Strand> = batched.iter_mut().collect();
-                assert!(batch.prepare(1e-3, &mut refs, &[]).is_err());
-                let mut refs: Vec<&mut Strand> = batched.iter_mut().enumerate().filter(|(k, _)| *k != 2).map(|(_, s)| s).collect();
-                batch.prepare(1e-3, &mut refs, &[]).unwrap();
-                batched[2].prepare_step(1e-3, &[]).unwrap();
-            }
+            // From the second step the strand carries the contact's load: its lane takes the geometric stiffness.
+            let mut refs: Vec<&mut Strand> = batched.iter_mut().collect();
+            batch.prepare(1e-3, &mut refs, &[]).unwrap();
+            batch.hand_over(2, &mut batched[2]).unwrap();
             let pb = batched[2].finish_step(&[contact], &opts).unwrap();
             for (k, s) in batched.iter_mut().enumerate() {
                 if k != 2 {

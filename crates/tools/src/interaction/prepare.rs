@@ -36,9 +36,8 @@ impl LocalInteraction {
         self.ws.lane_of.resize(self.strands.len(), None);
         let mut groups: Vec<((usize, usize), Vec<usize>)> = Vec::new();
         for (k, s) in self.strands.iter().enumerate() {
-            // A strand that carries recent constraint loads takes their geometric stiffness in its own (scalar)
-            // step.
-            if s.model.kind != ModelKind::Reduced || s.integrator != strand::Integrator::LinearlyImplicitEuler || s.takes_geometric_stiffness() {
+            // (A strand that carries recent constraint loads takes their geometric stiffness in its lane.)
+            if s.model.kind != ModelKind::Reduced || s.integrator != strand::Integrator::LinearlyImplicitEuler {
                 continue;
             }
             let key = (s.model.segments, s.dynamics.quadrature_nodes().len());

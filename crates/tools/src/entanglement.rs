@@ -133,9 +133,9 @@ impl Entanglement {
     /// ellipticity). In a mass of fibres at a given packing fraction, the mean length between a fibre's contacts
     /// with its neighbours goes as the fibres' cross-section over their width (Komori and Makishima, "Number of
     /// fiber-to-fiber contacts in general fiber assemblies", Textile Research Journal 47, 13-17, 1977): thicker
-    /// fibres cross fewer neighbours per unit length. No constant: H1 keeps `span_h1` to the bit (its ratio is 1 exactly) (H2 6.90, GA1
-    /// 6.11, GC3 6.17, asian 7.60, caucasian 5.58, African 4.90 mm at 6.6 mm). A section that cannot be built
-    /// keeps `span_h1`.
+    /// fibres cross fewer neighbours per unit length. No constant: H1's ratio is 1 exactly, so it keeps
+    /// `span_h1` to the bit (the other presets' spans: docs/combing.md). A section that cannot be built keeps
+    /// `span_h1`. Lengths in m.
     pub fn span_for(span_h1: f64, hair: &strand::HairType) -> f64 {
         let size = |h: &strand::HairType| h.section().map(|c| c.semi_major * c.semi_minor / (c.semi_major + c.semi_minor));
         match (size(hair), size(&strand::HairType::H1)) {

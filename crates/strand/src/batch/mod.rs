@@ -555,6 +555,18 @@ mod tests {
         dq.max(dv)
     }
 
+    /// Steps `scalar` one by one and `batched` (the same strands) in `batch`, by 1 ms with step `step`'s point
+    /// forces ([`forces_for`]).
+    fn step_alongside(scalar: &mut [Strand], batched: &mut [Strand], batch: &mut StrandBatch, step: usize) {
+        let forces: Vec<Vec<PointForce>> = (0..scalar.len()).map(|k| forces_for(k, step)).collect();
+        for (s, f) in scalar.iter_mut().zip(&forces) {
+            s.step(1e-3, f).unwrap();
+        }
+        let ext: Vec<&[PointForce]> = forces.iter().map(|f| f.as_slice()).collect();
+        let mut refs: Vec<&mut Strand> = batched.iter_mut().collect();
+        batch.step(1e-3, &mut refs, &ext).unwrap();
+    }
+
     #[test]
     fn batch_steps_equal_scalar_steps() {
         // 300 steps of 1 ms for 4 different strands, full and partly filled batches (1 to 4 lanes): q and qdot
@@ -565,13 +577,7 @@ mod tests {
             let mut batched = scalar.clone();
             let mut batch = StrandBatch::for_strand(&batched[0]);
             for step in 0..300 {
-                let forces: Vec<Vec<PointForce>> = (0..lanes).map(|k| forces_for(k, step)).collect();
-                for (k, s) in scalar.iter_mut().enumerate() {
-                    s.step(1e-3, &forces[k]).unwrap();
-                }
-                let ext: Vec<&[PointForce]> = forces.iter().map(|f| f.as_slice()).collect();
-                let mut refs: Vec<&mut Strand> = batched.iter_mut().collect();
-                batch.step(1e-3, &mut refs, &ext).unwrap();
+                step_alongside(&mut scalar, &mut batched, &mut batch, step);
             }
             for (k, (a, b)) in batched.iter().zip(&scalar).enumerate() {
                 let d = max_difference(a, b);
@@ -596,7 +602,6 @@ mod tests {
             let mut batch = StrandBatch::for_strand(&batched[0]);
             let mut carried = 0;
             for step in 0..200 {
-                let forces: Vec<Vec<PointForce>> = (0..lanes).map(|k| forces_for(k, step)).collect();
                 for (k, (a, b)) in scalar.iter_mut().zip(batched.iter_mut()).enumerate() {
                     let len = a.model.length;
                     let loads = if (step + k) % 3 == 2 {
@@ -609,12 +614,7 @@ mod tests {
                     b.constraint_loads = loads;
                     carried += b.takes_geometric_stiffness() as usize;
                 }
-                for (k, s) in scalar.iter_mut().enumerate() {
-                    s.step(1e-3, &forces[k]).unwrap();
-                }
-                let ext: Vec<&[PointForce]> = forces.iter().map(|f| f.as_slice()).collect();
-                let mut refs: Vec<&mut Strand> = batched.iter_mut().collect();
-                batch.step(1e-3, &mut refs, &ext).unwrap();
+                step_alongside(&mut scalar, &mut batched, &mut batch, step);
             }
             assert!(carried >= 100 * lanes, "{lanes} lanes: only {carried} strand-steps took a geometric stiffness");
             for (k, (a, b)) in batched.iter().zip(&scalar).enumerate() {

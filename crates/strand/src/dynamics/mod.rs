@@ -267,15 +267,15 @@ impl Dynamics {
         }
     }
 
-    /// Sets segment `i`'s motion subspace and articulated-solve workspace `(U, D^-1, c)` (padded to 3 columns),
-    /// as [`Dynamics::sweep`] and [`Dynamics::solve_articulated`] would have left them; used by
-    /// [`crate::batch::StrandBatch`] to hand a lane's prepared step to the scalar constraint solver.
     /// Sets segment `i`'s motion subspace (its twists about the root position, as the sweep leaves them), for
     /// [`Dynamics::geometric_stiffness`] after a batched sweep.
     pub(crate) fn set_segment_motion(&mut self, i: usize, motion: Twists) {
         self.motion[i] = motion;
     }
 
+    /// Sets segment `i`'s motion subspace and articulated-solve workspace `(U, D^-1, c)` (padded to 3 columns),
+    /// as [`Dynamics::sweep`] and [`Dynamics::solve_articulated`] would have left them; used by
+    /// [`crate::batch::StrandBatch`] to hand a lane's prepared step to the scalar constraint solver.
     pub(crate) fn set_segment_solver(&mut self, i: usize, motion: Twists, articulated: (Twists, Matrix3<f64>, Vector3<f64>)) {
         self.motion[i] = motion;
         self.articulated[i] = articulated;

@@ -8,6 +8,8 @@
 # bench/device_forces.py bench/out/device-4000.csv). Run after `cargo build --release -p coiffure-server`.
 #   bench/device_loop.sh [DEVICE_RATES...]        e.g. bench/device_loop.sh 4000 10000 (the default)
 #   COIFFURE_BIN=path/to/coiffure SERVE_ARGS="--haptic-priority 0" SIM_ARGS="--loss 0.01" bench/device_loop.sh
+#   RECORD=1 bench/device_loop.sh    also records each session and prints the force quality at the device rate
+#                                    (the record replayed: bench/out/replay-RATE/device_force.csv)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BIN=${COIFFURE_BIN:-target/release/coiffure}
@@ -17,7 +19,9 @@ web=$(mktemp -d)
 echo '<!doctype html><title>bench</title>' > "$web/index.html"
 for rate in "${RATES[@]}"; do
     log=$(mktemp)
-    "$BIN" serve --port 0 --web "$web" --device udp:127.0.0.1:0 --device-rate "$rate" --duration 6.5 ${SERVE_ARGS:-} > "$log" 2>/dev/null &
+    rec=()
+    [ -n "${RECORD:-}" ] && rec=(--record "bench/out/device-$rate.rec")
+    "$BIN" serve --port 0 --web "$web" --device udp:127.0.0.1:0 --device-rate "$rate" --duration 6.5 "${rec[@]}" ${SERVE_ARGS:-} > "$log" 2>/dev/null &
     pid=$!
     # The device is bound before the scene is built; the session (and --duration) starts when the server
     # listens: stream from then, or the first poses wait in the socket while the scene builds.
@@ -31,6 +35,11 @@ for rate in "${RATES[@]}"; do
     grep "^strand budget:" "$log" || true
     grep "^device:" "$log"
     echo "$sim"
+    if [ -n "${RECORD:-}" ]; then
+        # The server's force at the device loop's rate, replayed from its record (bit for bit what it sent).
+        "$BIN" replay "bench/out/device-$rate.rec" --out "bench/out/replay-$rate" > /dev/null
+        python3 bench/device_forces.py "bench/out/replay-$rate/device_force.csv"
+    fi
     rm -f "$log"
 done
 rm -rf "$web"

@@ -181,11 +181,23 @@ mod tests {
         let report = session.stop();
         eprintln!("device loop {:?}\nphysics {:?}", report.haptic, report.physics);
         let rec = read_record(&path);
-        let (trace, summary) = crate::scenario::live::replay_record(scene, params, &rec).unwrap();
+        let (trace, summary, device) = crate::scenario::live::replay_record_at_device_rate(scene, params, &rec).unwrap();
         assert_eq!(trace.len(), rec.steps.len());
         for (i, st) in rec.steps.iter().enumerate() {
             let f = trace.force(i);
             assert!(f.iter().zip(st.force.iter()).all(|(a, b)| a.to_bits() == b.to_bits()), "step {i}: {f:?} vs {:?}", st.force);
+        }
+        // The device-rate trace: one line per recorded device step (each period's readings), stamped with its
+        // reading's time, and each period's last device step is the force the record kept for it.
+        let readings: Vec<_> = rec.steps.iter().flat_map(|s| s.readings()).collect();
+        assert_eq!(device.time.len(), readings.len());
+        assert!(readings.len() > rec.steps.len(), "the device loop ran faster than the physics: {} device steps, {} periods", readings.len(), rec.steps.len());
+        for (i, r) in readings.iter().enumerate() {
+            assert_eq!(device.time[i].to_bits(), r.map_or(f64::NAN, |r| r.time).to_bits(), "device step {i}");
+        }
+        for (i, st) in rec.steps.iter().enumerate() {
+            let last = device.period.iter().rposition(|&p| p == i).expect("every period has device steps");
+            assert!(device.force[last].iter().zip(st.force.iter()).all(|(a, b)| a.to_bits() == b.to_bits()), "period {i}");
         }
         eprintln!("{} steps, {summary:?}", trace.len());
         assert!(summary.peak_force_n > 1e-4 && summary.contact_steps > 0, "the comb met the hair: {summary:?}");

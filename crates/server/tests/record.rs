@@ -127,6 +127,22 @@ fn a_server_killed_mid_session_leaves_a_record_that_replays_to_the_forces_the_de
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(text.contains(&format!("cut: read up to byte {} of {}", cut.offset, cut.file_bytes)) && text.contains(&format!("{} haptic steps", r.record.steps.len())), "{text}");
+    // Its device_force.csv has every device step's force (the device loop's rate), as the device was sent it
+    // (printed to 7 significant digits), each stamped with its pose's time.
+    let csv = std::fs::read_to_string(dir.join("replay").join("device_force.csv")).unwrap();
+    let scene = Arc::new(engine::session::Scene::builtin(&r.record.settings.clone().unwrap().scene_options()).unwrap());
+    let params = r.record.settings.clone().unwrap().session_params(r.record.rate_hz).unwrap();
+    let forces: Vec<_> = engine::replay::replay_device_steps(scene, params, &r.record).unwrap().into_iter().flatten().collect();
+    let readings: Vec<_> = r.record.steps.iter().flat_map(|s| s.readings()).collect();
+    let rows: Vec<Vec<f64>> = csv.lines().skip(1).map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+    assert_eq!(csv.lines().next(), Some("period,t,fx,fy,fz,tx,ty,tz"));
+    assert_eq!(rows.len(), forces.len(), "one row per device step");
+    assert!(forces.len() > 2 * r.record.steps.len(), "device steps {} for {} physics steps", forces.len(), r.record.steps.len());
+    for (i, (row, f)) in rows.iter().zip(&forces).enumerate() {
+        assert!((0..3).all(|k| (row[2 + k] - f[k]).abs() <= 1e-6 * f.norm() + 1e-12), "device step {i}: {row:?} vs {f:?}");
+        let t = readings[i].map_or(f64::NAN, |r| r.time);
+        assert!((row[1] - t).abs() <= 1e-6 || (row[1].is_nan() && t.is_nan()), "device step {i}: time {} vs {t}", row[1]);
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -379,15 +379,49 @@ impl LiveScenario {
     }
 }
 
+/// The force and torque the device was sent at every device step of a replayed record (the device loop's
+/// rate, `SessionParams::device_rate_hz`; several per physics step), with the time of the reading each
+/// device step took. What a force-quality study reads: the device renders these, not the physics rate's trace.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DeviceTrace {
+    /// The device's time stamp of the reading the step took, s (the device's own clock: for `coiffure
+    /// device-sim`, the path's time); NaN for a step without a reading (the device sent none).
+    pub time: Vec<f64>,
+    /// The physics period the step belongs to (0 for the first).
+    pub period: Vec<usize>,
+    /// Force sent to the device, N (world frame).
+    pub force: Vec<Vector3<f64>>,
+    /// Torque sent to the device, N m (world frame; zero for a 3-DOF profile).
+    pub torque: Vec<Vector3<f64>>,
+}
+
+impl DeviceTrace {
+    /// `device_force.csv`: a header line, then `period,t,fx,fy,fz,tx,ty,tz` per device step (s, N, N m).
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from("period,t,fx,fy,fz,tx,ty,tz\n");
+        for i in 0..self.time.len() {
+            let (f, t) = (self.force[i], self.torque[i]);
+            s += &format!("{},{:.6},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e}\n", self.period[i], self.time[i], f.x, f.y, f.z, t.x, t.y, t.z);
+        }
+        s
+    }
+}
+
 /// Replays a `coiffure serve --record` file on `scene` (the scene the server ran: same render strands and
 /// guides) with the session parameters `params` into the outputs of a live scenario. The force trace is
 /// the replayed one (equal to the recorded one bit for bit, see [`crate::replay::replay`]).
 pub fn replay_record(scene: Arc<Scene>, params: SessionParams, record: &Record) -> Result<(ForceTrace, LiveSummary), ScenarioError> {
+    replay_record_at_device_rate(scene, params, record).map(|(t, s, _)| (t, s))
+}
+
+/// [`replay_record`], with the force of every device step ([`DeviceTrace`]) too.
+pub fn replay_record_at_device_rate(scene: Arc<Scene>, params: SessionParams, record: &Record) -> Result<(ForceTrace, LiveSummary, DeviceTrace), ScenarioError> {
     let sim = |e: crate::error::SessionError| ScenarioError::Invalid(format!("replay: {e}"));
     let mut ls = Lockstep::new(scene.clone(), params, record.rate_hz).map_err(sim)?;
     let mut meter = Meter::new(&scene);
     meter.settle(&ls);
     let mut trace = ForceTrace::default();
+    let mut device = DeviceTrace::default();
     let mut timing = Vec::with_capacity(record.steps.len());
     let started = Instant::now();
     let mut last = Instant::now();
@@ -399,14 +433,22 @@ pub fn replay_record(scene: Arc<Scene>, params: SessionParams, record: &Record) 
         Some(c) => {
             // The haptic step's wall time (from the end of the previous step or global step).
             timing.push(last.elapsed().as_secs_f64());
-            trace.push(trace.len() as f64 * ls.dt, &c.force, &c.torque, ls.haptic.last_contacts(), &ls.haptic.tool_input().position);
+            let k = trace.len();
+            let readings = record.steps[k].readings();
+            for (j, d) in ls.device_commands.iter().enumerate() {
+                device.time.push(readings.get(j).copied().flatten().map_or(f64::NAN, |r| r.time));
+                device.period.push(k);
+                device.force.push(d.force);
+                device.torque.push(d.torque);
+            }
+            trace.push(k as f64 * ls.dt, &c.force, &c.torque, ls.haptic.last_contacts(), &ls.haptic.tool_input().position);
             meter.step(ls);
             last = Instant::now();
         }
     });
     meter.measure(&ls);
     let wall = started.elapsed().as_secs_f64();
-    Ok((trace.clone(), LiveSummary::new(&trace, params.profile.max_force, ls.dt, &meter, &mut timing, ls.haptic.stats.rejected, ls.haptic.stats.failed, wall)))
+    Ok((trace.clone(), LiveSummary::new(&trace, params.profile.max_force, ls.dt, &meter, &mut timing, ls.haptic.stats.rejected, ls.haptic.stats.failed, wall), device))
 }
 
 #[cfg(test)]

@@ -147,8 +147,10 @@ mod tests {
         assert_eq!(back, rec);
         let forces = replay(scene, params, &back).unwrap();
         assert_eq!(forces.len(), rec.steps.len());
+        // A physics stall (a step later than a full period plus `device_loop::PHYSICS_STALL`: the device loop goes on
+        // with the model it has, and the record stops matching its replay there) is named in the failure.
         for (i, (f, s)) in forces.iter().zip(&rec.steps).enumerate() {
-            assert!(f.iter().zip(s.force.iter()).all(|(a, b)| a.to_bits() == b.to_bits()), "step {i}: {f:?} vs {:?}", s.force);
+            assert!(f.iter().zip(s.force.iter()).all(|(a, b)| a.to_bits() == b.to_bits()), "step {i}: {f:?} vs {:?}; physics {:?}", s.force, report.physics);
         }
         let peak = rec.steps.iter().map(|s| s.force.norm()).fold(0.0, f64::max);
         assert!(peak > 1e-4, "the stroke was felt: peak {peak} N");

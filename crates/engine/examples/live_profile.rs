@@ -5,10 +5,11 @@
 //! each step stages a share of the viewer's snapshot (`HapticCore::stage_snapshot`) and every
 //! `SessionParams::publish_every`-th step writes it (`HapticCore::snapshot`), timed together as "publish" and
 //! counted in the step's wall time. Run:
-//! `cargo run --release -p coiffure-engine --example live_profile [-- [FILE.toml] [rt] [pace] [slowest=N] [hair=on|off] [max_active=N]]`
+//! `cargo run --release -p coiffure-engine --example live_profile [-- [FILE.toml] [rt] [pace|pace=spin] [slowest=N] [hair=on|off] [max_active=N]]`
 //! (`rt`: SCHED_FIFO priority 10 for this thread, needs root or CAP_SYS_NICE; `hair=`: `HapticParams::hair_contact`,
 //! default the scenario's `[live] hair_contact`; `max_active=`: `SessionParams::max_active`; `pace`: each step waits for
-//! its period on the wall clock, as the live physics thread does, instead of running back to back).
+//! its period on the wall clock, as the live physics thread does, instead of running back to back; `pace=spin`: the same
+//! with a spin-wait instead of a sleep).
 
 use engine::command::Command;
 use engine::haptic::StepPhases;
@@ -67,13 +68,18 @@ fn main() {
     });
     // `pace`: each step starts on the wall clock's next period (sleeping between steps as the live physics thread
     // waits for its next period), instead of back to back: shows what an idle gap between steps costs the step.
-    let pace = args.iter().any(|a| a == "pace");
+    let pace = args.iter().any(|a| a == "pace" || a == "pace=spin");
+    let spin = args.iter().any(|a| a == "pace=spin");
     let clock = Instant::now();
     for n in 0..steps {
         if pace {
             let due = clock + std::time::Duration::from_secs_f64(n as f64 * ls.dt);
             let now = Instant::now();
-            if due > now {
+            if due > now && spin {
+                while Instant::now() < due {
+                    std::hint::spin_loop();
+                }
+            } else if due > now {
                 std::thread::sleep(due - now);
             }
         }

@@ -1,7 +1,9 @@
 //! Time-step convergence of the combing force's statistics (issue 29): runs the comb-h1 tress (24 wisps, 4.75 g,
 //! 20 cm, combed at 0.25 m/s, as `combing_suite`'s standard case) of every preset, dry and wet, at several time
 //! steps, and prints for each the stroke's force statistics (peak, 99th, 95th and 90th percentiles, median, mean,
-//! over the steps from the first to the last contact) and their change from one step size to the next.
+//! over the steps from the first to the last contact) and their change from one step size to the next; and
+//! the combing curve by fifths of the tress length (the layouts' mean force by comb position over each fifth, as
+//! `combing_suite` reads issue 29's curve-shape criteria: the largest fifth, the largest later fifth over the first).
 //! Each figure is the mean over `seeds` tress layouts (`[patch] seed`: the wisps' roots and tilts), beside the
 //! layouts' spread (sample standard deviation over the mean), so that a change with the step size can be told
 //! from the sensitivity of one layout's trajectory.
@@ -44,21 +46,25 @@ fn toml(hair: &str, wetness: f64, treatment: &str, dt: f64, seed: u64) -> String
 }
 
 /// Statistics of the force magnitude over the stroke (first to last contact), N: peak, p99, p95, p90, median, mean;
-/// and the clamped strand-steps.
-fn stats(hair: &str, wetness: f64, treatment: &str, dt: f64, seed: u64) -> ([f64; 6], u64) {
+/// the clamped strand-steps; and the combing curve by fifths of the tress length (mean force by comb position over
+/// each fifth, roots first, N: `engine::scenario::fifths`, as `combing_suite` reads it).
+fn stats(hair: &str, wetness: f64, treatment: &str, dt: f64, seed: u64) -> ([f64; 6], u64, [f64; 5]) {
     let out = run(&ScenarioFile::from_toml(&toml(hair, wetness, treatment, dt, seed)).unwrap()).unwrap();
     let clamped = match &out.summary {
         ScenarioSummary::Patch(s) => s.strand_clamped_steps,
         _ => unreachable!(),
     };
     let f = &out.force;
+    let position: Vec<f64> = f.tool_z.iter().map(|z| 0.3 - z).collect();
+    let magnitude: Vec<f64> = (0..f.len()).map(|i| f.force(i).norm()).collect();
+    let fifths = engine::scenario::fifths(&position, &magnitude, 0.2).mean_force_n;
     let first = f.contacts.iter().position(|&c| c > 0).unwrap();
     let last = f.contacts.iter().rposition(|&c| c > 0).unwrap();
     let mut v: Vec<f64> = (first..=last).map(|i| f.force(i).norm()).collect();
     let mean = v.iter().sum::<f64>() / v.len() as f64;
     v.sort_by(f64::total_cmp);
     let rank = |q: f64| v[((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1];
-    ([v[v.len() - 1], rank(0.99), rank(0.95), rank(0.9), rank(0.5), mean], clamped)
+    ([v[v.len() - 1], rank(0.99), rank(0.95), rank(0.9), rank(0.5), mean], clamped, fifths)
 }
 
 /// Mean and sample standard deviation of `x`.
@@ -109,8 +115,23 @@ fn main() {
             });
         }
     });
-    let results: Vec<([f64; 6], u64)> = results.into_inner().unwrap().into_iter().map(Option::unwrap).collect();
+    let results: Vec<([f64; 6], u64, [f64; 5])> = results.into_inner().unwrap().into_iter().map(Option::unwrap).collect();
     let at = |c: usize, d: usize, k: usize| results[(c * nd + d) * ns + k];
+    // The combing curve: the layouts' mean force by fifth of the length (roots to tips), the largest fifth, and the
+    // largest later fifth over the first (issue 29's curve-shape criteria: dry, largest at 3 or 4; wet, a later one
+    // above the first and the largest not 4).
+    println!("| case | dt (ms) | mean fifths, roots to tips (N) | largest | largest later / first | layouts' largest |");
+    println!("|---|---|---|---|---|---|");
+    for c in 0..nc {
+        for (d, dt) in dts.iter().enumerate() {
+            let f: [f64; 5] = std::array::from_fn(|q| (0..ns).map(|k| at(c, d, k).2[q]).sum::<f64>() / ns as f64);
+            let largest = |f: &[f64; 5]| (0..5).max_by(|&a, &b| f[a].total_cmp(&f[b])).unwrap();
+            let rise = f[1..].iter().copied().fold(0.0, f64::max) / f[0];
+            let each: Vec<usize> = (0..ns).map(|k| largest(&at(c, d, k).2)).collect();
+            println!("| {} | {} | {} | {} | {rise:.3} | {each:?} |", label(c), dt * 1e3, f.map(|x| format!("{x:.4}")).join(" / "), largest(&f));
+        }
+    }
+    println!();
     // Mean over the layouts and spread (sd / mean) of statistic `q` for case c at step d.
     let ms = |c: usize, d: usize, q: usize| {
         let (m, sd) = mean_sd(&(0..ns).map(|k| at(c, d, k).0[q]).collect::<Vec<_>>());

@@ -297,7 +297,10 @@ fn the_combing_law_meets_the_measured_anchors() {
     }
     println!("| criterion | measured (layouts' mean) | standard error | layouts' range | bounds | met |");
     println!("|---|---|---|---|---|---|");
-    let shape = |what: &str| what.contains("fifth");
+    // The curve-shape criteria the law does not meet (docs/combing.md, "The combing curve's shape"): dry, the
+    // largest fifth is not at the tips; wet, no later fifth above the first. Wet, the largest fifth not the tips'
+    // is met on every preset and asserted.
+    let shape = |what: &str| what.contains("dry: largest fifth") || what.contains("wet: largest later fifth");
     for (what, v, l, (lo, hi)) in &checks {
         let o = OverLayouts::of(l);
         println!("| {what} | {v:.3} | {:.3} | {:.3}-{:.3} | [{lo}, {hi}] | {} |", o.sd / (l.len() as f64).sqrt(), o.min, o.max, if (*lo..=*hi).contains(v) { "yes" } else { "**no**" });
@@ -305,8 +308,7 @@ fn the_combing_law_meets_the_measured_anchors() {
     let met = checks.iter().filter(|(_, v, _, (lo, hi))| (*lo..=*hi).contains(v)).count();
     println!("{met} of {} criteria met", checks.len());
     for (what, v, _, (lo, hi)) in &checks {
-        // The curve shape by fifths is not met on most presets (dry: the largest fifth is not at the tips; wet: the
-        // force does not rise from the roots, or the largest is the tips'): printed, not asserted (docs/combing.md).
+        // The unmet curve-shape criteria (above) are printed, not asserted.
         if unmet.contains(&what.as_str()) || shape(what) {
             continue;
         }

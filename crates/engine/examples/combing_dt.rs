@@ -13,10 +13,14 @@
 
 use engine::scenario::{run, ScenarioFile, ScenarioSummary};
 
+/// The tress's roots' height and its length, m (the comb's position along it is `ROOT_Z - z`).
+const ROOT_Z: f64 = 0.3;
+const LENGTH: f64 = 0.2;
+
 /// One tress and stroke (as `crates/engine/tests/combing_suite.rs`'s `Case::toml`).
 fn toml(hair: &str, wetness: f64, treatment: &str, dt: f64, seed: u64) -> String {
-    let (mass, length, speed) = (4.75e-3, 0.2, 0.25);
-    let (z0, z1) = (0.29, 0.3 - length - 0.02);
+    let (mass, length, speed) = (4.75e-3, LENGTH, 0.25);
+    let (z0, z1) = (0.29, ROOT_Z - length - 0.02);
     let t1 = (z0 - z1) / speed;
     format!(
         r#"
@@ -28,7 +32,7 @@ fn toml(hair: &str, wetness: f64, treatment: &str, dt: f64, seed: u64) -> String
         strands = 24
         length = {length}
         segments = 12
-        root = [0.0, 0.0, 0.3]
+        root = [0.0, 0.0, {ROOT_Z}]
         extent = [0.012, 0.004]
         tilt = 0.05
         seed = {seed}
@@ -55,9 +59,9 @@ fn stats(hair: &str, wetness: f64, treatment: &str, dt: f64, seed: u64) -> ([f64
         _ => unreachable!(),
     };
     let f = &out.force;
-    let position: Vec<f64> = f.tool_z.iter().map(|z| 0.3 - z).collect();
+    let position: Vec<f64> = f.tool_z.iter().map(|z| ROOT_Z - z).collect();
     let magnitude: Vec<f64> = (0..f.len()).map(|i| f.force(i).norm()).collect();
-    let fifths = engine::scenario::fifths(&position, &magnitude, 0.2).mean_force_n;
+    let fifths = engine::scenario::fifths(&position, &magnitude, LENGTH).mean_force_n;
     let first = f.contacts.iter().position(|&c| c > 0).unwrap();
     let last = f.contacts.iter().rposition(|&c| c > 0).unwrap();
     let mut v: Vec<f64> = (first..=last).map(|i| f.force(i).norm()).collect();

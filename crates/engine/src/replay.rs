@@ -183,7 +183,7 @@ mod tests {
         let report = session.stop();
         eprintln!("device loop {:?}\nphysics {:?}", report.haptic, report.physics);
         let rec = read_record(&path);
-        let (trace, summary, device) = crate::scenario::live::replay_record_at_device_rate(scene, params, &rec).unwrap();
+        let (trace, summary, device) = crate::scenario::live::replay_record(scene, params, &rec).unwrap();
         assert_eq!(trace.len(), rec.steps.len());
         for (i, st) in rec.steps.iter().enumerate() {
             let f = trace.force(i);

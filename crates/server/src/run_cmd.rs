@@ -66,7 +66,7 @@ pub fn replay(args: &ReplayArgs) -> Result<()> {
     let mut params = settings.session_params(rec.rate_hz).map_err(|e| anyhow::anyhow!("{}: the record's settings: {e}", args.record.display()))?;
     params.hairs_per_render_strand = args.hairs_per_render_strand.unwrap_or(params.hairs_per_render_strand);
     params.validate().context("--hairs-per-render-strand, or the record's settings")?;
-    let (force, summary, device) = engine::scenario::live::replay_record_at_device_rate(scene, params, &rec)?;
+    let (force, summary, device) = engine::scenario::live::replay_record(scene, params, &rec)?;
     let o = ScenarioOutput { kind: "replay", wall_time_s: summary.wall_time_s, force, global_rows: vec![], profile: Default::default(), summary: ScenarioSummary::Live(summary), hair: None };
     let stem = args.record.file_stem().and_then(|s| s.to_str()).unwrap_or("replay").to_string();
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from(&stem));
@@ -76,8 +76,7 @@ pub fn replay(args: &ReplayArgs) -> Result<()> {
     );
     print!("{}", engine::scenario::write_replay(&o, &head, &out)?);
     // The force at the device loop's rate (what the device rendered; force.csv has one line per physics step).
-    let p = out.join("device_force.csv");
-    hairstyle::formats::write_atomic(&p, device.to_csv().as_bytes()).with_context(|| format!("cannot write {}", p.display()))?;
+    let p = engine::scenario::write_device_force(&out, &device)?;
     println!("device steps    {} (force sent at every device step: {})", device.time.len(), p.display());
     Ok(())
 }

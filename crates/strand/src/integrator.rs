@@ -27,6 +27,12 @@ pub const MAX_STEP_ROTATION: f64 = 0.5;
 /// (docs/combing.md; test `the_heavy_wet_caucasian_tress_is_stable_on_every_layout`).
 pub const GEOMETRIC_STIFFNESS_MEMORY: f64 = 0.01;
 
+/// The share of the remembered geometric stiffness a step of `h` s keeps, `exp(-h / GEOMETRIC_STIFFNESS_MEMORY)`
+/// (dimensionless; 0.905 at 1 ms): [`Dynamics::geometric_stiffness`]'s `kept`, for the scalar step and the batch.
+pub(crate) fn geometric_stiffness_kept(h: f64) -> f64 {
+    (-h / GEOMETRIC_STIFFNESS_MEMORY).exp()
+}
+
 /// Time-stepping scheme.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Integrator {
@@ -185,7 +191,7 @@ impl Strand {
     /// assembled); `K_g` the diagonal geometric stiffness of the last step's constraint loads.
     pub(crate) fn linearly_implicit_velocity(&mut self, h: f64, external: &[PointForce]) -> Result<DVector<f64>> {
         self.dynamics.sweep(&self.model, &self.state, external, true);
-        self.dynamics.geometric_stiffness(&self.model, &self.state, &self.constraint_loads, (-h / GEOMETRIC_STIFFNESS_MEMORY).exp());
+        self.dynamics.geometric_stiffness(&self.model, &self.state, &self.constraint_loads, geometric_stiffness_kept(h));
         self.linearly_implicit_rhs(h);
         let mut rhs = std::mem::replace(&mut self.rhs, DVector::zeros(0));
         let ok = self.solve_step_matrix(h, &mut rhs);
@@ -258,7 +264,7 @@ mod tests {
         let m = StrandModel::new(ModelKind::Full, 0.2, 12, CrossSection::new(45e-6, 33e-6).unwrap(), Material::default()).unwrap().with_uniform_rest(20.0, 60.0, -15.0);
         let mut s = Strand::new(m, RootFrame::new(Vector3::new(0.0, 0.0, 0.3), Vector3::new(0.0, 0.0, -1.0), Vector3::y()).unwrap()).unwrap();
         let h = 1e-3;
-        let kept = (-h / GEOMETRIC_STIFFNESS_MEMORY).exp();
+        let kept = geometric_stiffness_kept(h);
         s.constraint_loads = vec![(0.15, Vector3::new(2e-3, -1e-3, 5e-4))];
         s.linearly_implicit_velocity(h, &[]).unwrap();
         let first = s.dynamics.geometric.clone();

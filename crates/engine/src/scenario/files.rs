@@ -108,6 +108,14 @@ pub fn write_replay(output: &ScenarioOutput, head: &str, out: &Path) -> Result<S
     Ok(text)
 }
 
+/// Writes `device_force.csv` in `out` (the force of every device step of a replayed record,
+/// [`super::live::DeviceTrace::to_csv`]); returns its path.
+pub fn write_device_force(out: &Path, device: &super::live::DeviceTrace) -> Result<std::path::PathBuf, ScenarioError> {
+    let p = out.join("device_force.csv");
+    write(&p, device.to_csv().as_bytes())?;
+    Ok(p)
+}
+
 /// Writes one output file whole (`hairstyle::formats::write_atomic`: never half-written under its name).
 fn write(p: &Path, bytes: &[u8]) -> Result<(), ScenarioError> {
     hairstyle::formats::write_atomic(p, bytes).map_err(|e| io_err(p, format!("cannot write: {e}")))

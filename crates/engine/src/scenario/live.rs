@@ -408,14 +408,10 @@ impl DeviceTrace {
 }
 
 /// Replays a `coiffure serve --record` file on `scene` (the scene the server ran: same render strands and
-/// guides) with the session parameters `params` into the outputs of a live scenario. The force trace is
-/// the replayed one (equal to the recorded one bit for bit, see [`crate::replay::replay`]).
-pub fn replay_record(scene: Arc<Scene>, params: SessionParams, record: &Record) -> Result<(ForceTrace, LiveSummary), ScenarioError> {
-    replay_record_at_device_rate(scene, params, record).map(|(t, s, _)| (t, s))
-}
-
-/// [`replay_record`], with the force of every device step ([`DeviceTrace`]) too.
-pub fn replay_record_at_device_rate(scene: Arc<Scene>, params: SessionParams, record: &Record) -> Result<(ForceTrace, LiveSummary, DeviceTrace), ScenarioError> {
+/// guides) with the session parameters `params` into the outputs of a live scenario, and the force of every
+/// device step ([`DeviceTrace`]). The force trace is the replayed one (equal to the recorded one bit for bit,
+/// see [`crate::replay::replay`]).
+pub fn replay_record(scene: Arc<Scene>, params: SessionParams, record: &Record) -> Result<(ForceTrace, LiveSummary, DeviceTrace), ScenarioError> {
     let sim = |e: crate::error::SessionError| ScenarioError::Invalid(format!("replay: {e}"));
     let mut ls = Lockstep::new(scene.clone(), params, record.rate_hz).map_err(sim)?;
     let mut meter = Meter::new(&scene);

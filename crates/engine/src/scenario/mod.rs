@@ -23,7 +23,7 @@ pub mod strokes;
 
 pub use actions::{Action, ConeAction, ConePose, CutAction};
 pub use combing::{fifths, CombingFigures, CombingProfile, Fifths, PerStroke};
-pub use files::{load_tool, read_path_csv, run_in, summary_json, write_output, write_replay};
+pub use files::{load_tool, read_path_csv, run_in, summary_json, write_device_force, write_output, write_replay};
 pub use global::{GlobalOutput, GlobalRow, GlobalScenario, GlobalSummary, HairstyleSpec};
 pub use live::{LiveScenario, LiveSpec, LiveTool, LiveWaypoint};
 pub use output::{ForceStats, ForceTrace, LiveSummary};

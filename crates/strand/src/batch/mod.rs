@@ -23,7 +23,7 @@
 use crate::constraint::ConstraintOptions;
 use crate::dynamics::{point_kinematics, wrench, PointForce};
 use crate::error::{Result, StrandError};
-use crate::integrator::{Integrator, Strand, GEOMETRIC_STIFFNESS_MEMORY};
+use crate::integrator::{geometric_stiffness_kept, Integrator, Strand};
 use crate::kinematics::{locate, Frame, Twists};
 use crate::model::ModelKind;
 use nalgebra::{DVector, Matrix3, Vector3};
@@ -329,7 +329,7 @@ impl StrandBatch {
         // earlier ones fading: `Dynamics::geometric_stiffness`), lane by lane with the scalar code on the lane's
         // frames and motion subspaces (it needs them at the current state, as after the scalar sweep). Zero
         // in lanes without loads.
-        let kept = (-h / GEOMETRIC_STIFFNESS_MEMORY).exp();
+        let kept = geometric_stiffness_kept(h);
         let geometric = &mut self.geometric[..n];
         geometric.fill([zero; 2]);
         for (j, s) in strands.iter_mut().enumerate() {
@@ -340,13 +340,7 @@ impl StrandBatch {
             dy.frames.clear();
             dy.frames.extend(self.frames.iter().map(|(rot, x)| Frame { rotation: rot.lane(j), position: x.lane(j) }));
             for (i, seg) in self.segs[..n].iter().enumerate() {
-                let mut motion = Twists::zeros();
-                for k in 0..2 {
-                    for r in 0..6 {
-                        motion[(r, k)] = lane(seg.motion[k][r], j);
-                    }
-                }
-                dy.set_segment_motion(i, motion);
+                dy.set_segment_motion(i, lane_twists(&seg.motion, j));
             }
             dy.geometric_stiffness(&s.model, &s.state, &s.constraint_loads, kept);
             for (i, g) in geometric.iter_mut().enumerate() {
@@ -488,14 +482,7 @@ impl StrandBatch {
         }
         let j = lane_index;
         for (i, seg) in self.segs[..self.segments].iter().enumerate() {
-            let mut motion = Twists::zeros();
-            let mut u = Twists::zeros();
-            for k in 0..2 {
-                for r in 0..6 {
-                    motion[(r, k)] = lane(seg.motion[k][r], j);
-                    u[(r, k)] = lane(seg.u[k][r], j);
-                }
-            }
+            let (motion, u) = (lane_twists(&seg.motion, j), lane_twists(&seg.u, j));
             let (d00, d01, d11) = (lane(seg.dinv[0], j), lane(seg.dinv[1], j), lane(seg.dinv[2], j));
             let dinv = Matrix3::new(d00, d01, 0.0, d01, d11, 0.0, 0.0, 0.0, 1.0);
             let c = Vector3::new(lane(seg.c[0], j), lane(seg.c[1], j), 0.0);
@@ -503,6 +490,18 @@ impl StrandBatch {
         }
         Ok(())
     }
+}
+
+/// Lane `j` of a segment's two lane-wise 6-vectors (its motion subspace's twists, or the articulated solve's
+/// `U`), as the scalar code's 6x2 matrix.
+fn lane_twists(t: &[L6; 2], j: usize) -> Twists {
+    let mut out = Twists::zeros();
+    for k in 0..2 {
+        for r in 0..6 {
+            out[(r, k)] = lane(t[k][r], j);
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -567,15 +566,20 @@ mod tests {
         batch.step(1e-3, &mut refs, &ext).unwrap();
     }
 
+    /// The first `lanes` of [`strands`] twice (to step one by one and in a batch) and a batch for them.
+    fn alongside(lanes: usize) -> (Vec<Strand>, Vec<Strand>, StrandBatch) {
+        let scalar: Vec<Strand> = strands().into_iter().take(lanes).collect();
+        let batch = StrandBatch::for_strand(&scalar[0]);
+        (scalar.clone(), scalar, batch)
+    }
+
     #[test]
     fn batch_steps_equal_scalar_steps() {
         // 300 steps of 1 ms for 4 different strands, full and partly filled batches (1 to 4 lanes): q and qdot
         // equal the scalar step's to 1e-10 (relative to 1 + max |q|, 1 + max |qdot|); only round-off differs
         // (SIMD sine and cosine, summation order).
         for lanes in 1..=LANES {
-            let mut scalar: Vec<Strand> = strands().into_iter().take(lanes).collect();
-            let mut batched = scalar.clone();
-            let mut batch = StrandBatch::for_strand(&batched[0]);
+            let (mut scalar, mut batched, mut batch) = alongside(lanes);
             for step in 0..300 {
                 step_alongside(&mut scalar, &mut batched, &mut batch, step);
             }
@@ -597,9 +601,7 @@ mod tests {
         // taken from the last step's loads, or from earlier ones fading (`GEOMETRIC_STIFFNESS_MEMORY`). q, qdot
         // and the remembered stiffness equal the scalar step's to 1e-10 (relative), lane by lane.
         for lanes in 1..=LANES {
-            let mut scalar: Vec<Strand> = strands().into_iter().take(lanes).collect();
-            let mut batched = scalar.clone();
-            let mut batch = StrandBatch::for_strand(&batched[0]);
+            let (mut scalar, mut batched, mut batch) = alongside(lanes);
             let mut carried = 0;
             for step in 0..200 {
                 for (k, (a, b)) in scalar.iter_mut().zip(batched.iter_mut()).enumerate() {

@@ -36,7 +36,6 @@ impl LocalInteraction {
         self.ws.lane_of.resize(self.strands.len(), None);
         let mut groups: Vec<((usize, usize), Vec<usize>)> = Vec::new();
         for (k, s) in self.strands.iter().enumerate() {
-            // (A strand that carries recent constraint loads takes their geometric stiffness in its lane.)
             if s.model.kind != ModelKind::Reduced || s.integrator != strand::Integrator::LinearlyImplicitEuler {
                 continue;
             }

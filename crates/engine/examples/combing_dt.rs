@@ -8,18 +8,24 @@
 //! layouts' spread (sample standard deviation over the mean), so that a change with the step size can be told
 //! from the sensitivity of one layout's trajectory.
 //! Run from the repository root:
-//! `cargo run --release -p coiffure-engine --example combing_dt [-- dt=0.001,0.0005,0.00025] [seeds=1,2,3,4] [hair=H1,african] [treatments] [threads=2]`
-//! `treatments` adds caucasian conditioned (dry and wet), bleached and bleached twice (wet).
+//! `cargo run --release -p coiffure-engine --example combing_dt [-- dt=0.001,0.0005,0.00025] [seeds=1,2,3,4] [hair=H1,african] [treatments] [light] [threads=2]`
+//! `treatments` adds caucasian conditioned (dry and wet), bleached and bleached twice (wet); `light` the 2.75 g
+//! caucasian tress, dry and wet. With every preset, `treatments` and `light`, the last table is issue 29's 51
+//! criteria as `combing_suite::the_combing_law_meets_the_measured_anchors` reads them (at each time step), and
+//! the count met: the suite's table from a release build, for trying a change of the law.
 
 use engine::scenario::{run, ScenarioFile, ScenarioSummary};
 
 /// The tress's roots' height and its length, m (the comb's position along it is `ROOT_Z - z`).
 const ROOT_Z: f64 = 0.3;
 const LENGTH: f64 = 0.2;
+/// The standard tress's mass and the light one's, kg (Newman et al. 1973's 4.75 g and 2.75 g tresses).
+const MASS: f64 = 4.75e-3;
+const LIGHT: f64 = 2.75e-3;
 
 /// One tress and stroke (as `crates/engine/tests/combing_suite.rs`'s `Case::toml`).
-fn toml(hair: &str, wetness: f64, treatment: &str, dt: f64, seed: u64) -> String {
-    let (mass, length, speed) = (4.75e-3, LENGTH, 0.25);
+fn toml(hair: &str, wetness: f64, treatment: &str, mass: f64, dt: f64, seed: u64) -> String {
+    let (length, speed) = (LENGTH, 0.25);
     let (z0, z1) = (0.29, ROOT_Z - length - 0.02);
     let t1 = (z0 - z1) / speed;
     format!(
@@ -52,8 +58,8 @@ fn toml(hair: &str, wetness: f64, treatment: &str, dt: f64, seed: u64) -> String
 /// Statistics of the force magnitude over the stroke (first to last contact), N: peak, p99, p95, p90, median, mean;
 /// the clamped strand-steps; and the combing curve by fifths of the tress length (mean force by comb position over
 /// each fifth, roots first, N: `engine::scenario::fifths`, as `combing_suite` reads it).
-fn stats(hair: &str, wetness: f64, treatment: &str, dt: f64, seed: u64) -> ([f64; 6], u64, [f64; 5]) {
-    let out = run(&ScenarioFile::from_toml(&toml(hair, wetness, treatment, dt, seed)).unwrap()).unwrap();
+fn stats(hair: &str, wetness: f64, treatment: &str, mass: f64, dt: f64, seed: u64) -> ([f64; 6], u64, [f64; 5]) {
+    let out = run(&ScenarioFile::from_toml(&toml(hair, wetness, treatment, mass, dt, seed)).unwrap()).unwrap();
     let clamped = match &out.summary {
         ScenarioSummary::Patch(s) => s.strand_clamped_steps,
         _ => unreachable!(),
@@ -87,19 +93,25 @@ fn main() {
     let seeds: Vec<u64> = list("seeds", "1").iter().map(|s| s.parse().unwrap()).collect();
     let hairs = list("hair", "H1,H2,GA1,GC3,asian,caucasian,african");
     let threads: usize = get("threads").map(|s| s.parse().unwrap()).unwrap_or(2);
-    let mut cases: Vec<(String, f64, &str)> = Vec::new();
+    let mut cases: Vec<(String, f64, &str, f64)> = Vec::new();
     for h in &hairs {
-        cases.push((h.clone(), 0.0, "virgin"));
-        cases.push((h.clone(), 1.0, "virgin"));
+        cases.push((h.clone(), 0.0, "virgin", MASS));
+        cases.push((h.clone(), 1.0, "virgin", MASS));
     }
     if args.iter().any(|a| a == "treatments") {
         for (t, w) in [("conditioned", 0.0), ("conditioned", 1.0), ("bleached", 1.0), ("bleached-twice", 1.0)] {
-            cases.push(("caucasian".into(), w, t));
+            cases.push(("caucasian".into(), w, t, MASS));
+        }
+    }
+    if args.iter().any(|a| a == "light") {
+        for w in [0.0, 1.0] {
+            cases.push(("caucasian".into(), w, "virgin", LIGHT));
         }
     }
     let label = |c: usize| {
-        let (h, w, t) = &cases[c];
-        format!("{h} {} {t}", if *w > 0.0 { "wet" } else { "dry" })
+        let (h, w, t, m) = &cases[c];
+        let grams = if *m == MASS { String::new() } else { format!(" {} g", m * 1e3) };
+        format!("{h} {} {t}{grams}", if *w > 0.0 { "wet" } else { "dry" })
     };
     let (nc, nd, ns) = (cases.len(), dts.len(), seeds.len());
     let next = std::sync::atomic::AtomicUsize::new(0);
@@ -112,8 +124,8 @@ fn main() {
                     break;
                 }
                 let (c, d, k) = (j / (nd * ns), (j / ns) % nd, j % ns);
-                let (h, w, t) = &cases[c];
-                let r = stats(h, *w, t, dts[d], seeds[k]);
+                let (h, w, t, m) = &cases[c];
+                let r = stats(h, *w, t, *m, dts[d], seeds[k]);
                 eprintln!("{} dt {} seed {}: {:?}", label(c), dts[d], seeds[k], r);
                 results.lock().unwrap()[j] = Some(r);
             });
@@ -170,10 +182,65 @@ fn main() {
     println!("\n| hair | dt (ms) | wet/dry {} |", names.join(" | wet/dry "));
     println!("|---|---|{}", "---|".repeat(names.len()));
     for h in &hairs {
-        let find = |w: f64| cases.iter().position(|(hh, ww, t)| hh == h && *ww == w && *t == "virgin").unwrap();
+        let find = |w: f64| cases.iter().position(|(hh, ww, t, m)| hh == h && *ww == w && *t == "virgin" && *m == MASS).unwrap();
         for (d, dt) in dts.iter().enumerate() {
             let cells: Vec<String> = (0..names.len()).map(|q| format!("{:.2}", ms(find(1.0), d, q).0 / ms(find(0.0), d, q).0)).collect();
             println!("| {h} | {} | {} |", dt * 1e3, cells.join(" | "));
         }
+    }
+    // Issue 29's criteria (as combing_suite reads them), when every case they need was run.
+    let find = |h: &str, w: f64, t: &str, m: f64| cases.iter().position(|(hh, ww, tt, mm)| hh == h && *ww == w && *tt == t && *mm == m);
+    let straight = ["H1", "H2", "GA1", "GC3", "asian", "caucasian"];
+    let needed = straight.iter().chain(["african"].iter()).all(|h| find(h, 0.0, "virgin", MASS).is_some() && find(h, 1.0, "virgin", MASS).is_some())
+        && find("caucasian", 1.0, "bleached-twice", MASS).is_some()
+        && find("caucasian", 0.0, "virgin", LIGHT).is_some();
+    if !needed {
+        return;
+    }
+    for (d, dt) in dts.iter().enumerate() {
+        let mean = |c: usize, q: usize| (0..ns).map(|k| at(c, d, k).0[q]).sum::<f64>() / ns as f64;
+        let fifths = |c: usize| -> [f64; 5] { std::array::from_fn(|q| (0..ns).map(|k| at(c, d, k).2[q]).sum::<f64>() / ns as f64) };
+        let largest = |f: &[f64; 5]| (0..5).max_by(|&a, &b| f[a].total_cmp(&f[b])).unwrap() as f64;
+        let (peak, median) = (0, 4);
+        let std = |h: &str, w: f64| find(h, w, "virgin", MASS).unwrap();
+        let mut checks: Vec<(String, f64, f64, f64)> = Vec::new();
+        for h in straight {
+            let (dry, wet) = (std(h, 0.0), std(h, 1.0));
+            checks.push((format!("{h} dry peak, N"), mean(dry, peak), 0.06, 0.24));
+            checks.push((format!("{h} wet/dry peak"), mean(wet, peak) / mean(dry, peak), 4.0, 10.0));
+            checks.push((format!("{h} dry median / peak"), mean(dry, median) / mean(dry, peak), 0.4, 1.0));
+            checks.push((format!("{h} wet median / peak"), mean(wet, median) / mean(wet, peak), 0.4, 1.0));
+            checks.push((format!("{h} dry: largest fifth"), largest(&fifths(dry)), 3.0, 4.0));
+            checks.push((format!("{h} wet: largest fifth"), largest(&fifths(wet)), 0.0, 3.0));
+            let f = fifths(wet);
+            checks.push((format!("{h} wet: largest later fifth / first"), f[1..].iter().copied().fold(0.0, f64::max) / f[0], 1.0, f64::INFINITY));
+        }
+        let light = |w: f64| find("caucasian", w, "virgin", LIGHT).unwrap();
+        checks.push(("caucasian 2.75 g wet peak, N".into(), mean(light(1.0), peak), 0.25, 1.0));
+        for w in [0.0, 1.0] {
+            let per_gram = mean(light(w), peak) / mean(std("caucasian", w), peak) * MASS / LIGHT;
+            checks.push((format!("caucasian {} peak per gram, 2.75 g / 4.75 g", if w > 0.0 { "wet" } else { "dry" }), per_gram, 0.65, 1.35));
+        }
+        checks.push(("african dry peak / H1 dry peak".into(), mean(std("african", 0.0), peak) / mean(std("H1", 0.0), peak), 2.0, f64::INFINITY));
+        checks.push(("african wet peak / dry peak".into(), mean(std("african", 1.0), peak) / mean(std("african", 0.0), peak), 0.0, 1.0));
+        for (t, w, what, lo, hi) in [
+            ("conditioned", 0.0, "caucasian conditioned / virgin, dry", 0.6, 0.95),
+            ("conditioned", 1.0, "caucasian conditioned / virgin, wet", 0.3, 0.6),
+            ("bleached", 1.0, "caucasian bleached / virgin, wet", 2.0, 4.0),
+            ("bleached-twice", 1.0, "caucasian bleached twice / virgin, wet", 3.0, 6.0),
+        ] {
+            checks.push((what.into(), mean(find("caucasian", w, t, MASS).unwrap(), peak) / mean(std("caucasian", w), peak), lo, hi));
+        }
+        println!("\nissue 29's criteria at dt {} ms (layouts' means; a ratio of the means)", dt * 1e3);
+        println!("| criterion | measured | bounds | met |");
+        println!("|---|---|---|---|");
+        for (what, v, lo, hi) in &checks {
+            println!("| {what} | {v:.3} | [{lo}, {hi}] | {} |", if (*lo..=*hi).contains(v) { "yes" } else { "**no**" });
+        }
+        let met = checks.iter().filter(|(_, v, lo, hi)| (*lo..=*hi).contains(v)).count();
+        println!("{met} of {} criteria met", checks.len());
+        // Issue 12's dry order, asserted by tests/tress.rs on the shipped tresses (comb-h2, comb-ga1).
+        let (h2, ga1) = (mean(std("H2", 0.0), peak), mean(std("GA1", 0.0), peak));
+        println!("H2 dry peak above GA1's (tress.rs): {} ({h2:.4} / {ga1:.4} N)", if h2 > ga1 { "yes" } else { "**no**" });
     }
 }

@@ -137,6 +137,20 @@ impl MetaballSet {
         self.field_and_gradient(x).1
     }
 
+    /// The balls whose reach can touch the axis-aligned box `[lo, hi]` (m), into `out` (replacing its balls, keeping
+    /// its storage): every other ball's term is exactly zero at every point of the box, so `out`'s field, gradient
+    /// and [`MetaballSet::clear_of`] equal this set's there, bit for bit (the terms that are left are summed in
+    /// the same order). Not for [`MetaballSet::push_out`], whose search leaves the box.
+    pub fn reaching_into(&self, lo: &Point3<f64>, hi: &Point3<f64>, out: &mut MetaballSet) {
+        out.balls.clear();
+        out.balls.extend(self.balls.iter().filter(|b| {
+            let c = &b.centre;
+            let gap = Vector3::new((lo.x - c.x).max(c.x - hi.x).max(0.0), (lo.y - c.y).max(c.y - hi.y).max(0.0), (lo.z - c.z).max(c.z - hi.z).max(0.0));
+            // A margin of 1e-9 of the reach for the rounding of the points' own distances.
+            gap.norm_squared() < b.radius * b.radius * (1.0 + 1e-9) || !gap.norm_squared().is_finite()
+        }));
+    }
+
     /// F (dimensionless) and its gradient (1/m) at `x` (m).
     pub fn field_and_gradient(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
         let mut f = 0.0;
@@ -400,6 +414,46 @@ mod tests {
             Metaball::new(Point3::new(0.06, 0.02, -0.01), 0.07),
             Metaball::new(Point3::new(-0.03, 0.09, 0.04), 0.05),
         ])
+    }
+
+    #[test]
+    fn the_balls_reaching_a_box_give_the_same_field_in_it_bit_for_bit() {
+        // The head, neck and shoulders, and boxes of every size (a hair's point to the whole body) placed over a
+        // grid around it: at every point of a box (its corners, centre and a lattice inside), the field and
+        // gradient of the reaching balls equal the whole set's exactly, and so does `clear_of`; boxes far from
+        // the body keep no ball, and a box over the cranium keeps at least it.
+        let body = MetaballSet::head_neck_shoulders(0.09);
+        let mut near = MetaballSet::default();
+        let (mut boxes, mut dropped) = (0, 0);
+        for size in [1e-4, 0.01, 0.05, 0.2] {
+            for i in -6..=6 {
+                for j in -6..=6 {
+                    for k in -8..=4 {
+                        let lo = Point3::new(0.05 * i as f64, 0.05 * j as f64, 0.05 * k as f64);
+                        let hi = lo + Vector3::new(size, 0.7 * size, 1.3 * size);
+                        body.reaching_into(&lo, &hi, &mut near);
+                        boxes += 1;
+                        dropped += body.balls.len() - near.balls.len();
+                        for a in 0..=4 {
+                            for b in 0..=4 {
+                                for c in 0..=4 {
+                                    let t = Vector3::new(a as f64, b as f64, c as f64) / 4.0;
+                                    let x = lo + (hi - lo).component_mul(&t);
+                                    assert_eq!(near.field_and_gradient(&x), body.field_and_gradient(&x), "box {lo} .. {hi}, point {x}");
+                                    assert_eq!(near.clear_of(&x, 0.25, 1e-3), body.clear_of(&x, 0.25, 1e-3));
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(dropped > boxes, "the boxes kept {dropped} fewer balls than the whole set over {boxes} boxes");
+        let far = Point3::new(1.0, 1.0, 1.0);
+        body.reaching_into(&far, &(far + Vector3::repeat(0.01)), &mut near);
+        assert!(near.balls.is_empty());
+        body.reaching_into(&Point3::new(0.0, 0.0, 0.09), &Point3::new(0.01, 0.01, 0.1), &mut near);
+        assert!(near.balls.contains(&body.balls[0]), "the cranium reaches the top of the head");
     }
 
     fn points() -> Vec<Point3<f64>> {

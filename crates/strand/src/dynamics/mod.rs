@@ -185,6 +185,17 @@ struct SegmentSums {
     inertia: Inertia,
 }
 
+/// Workspace of [`Dynamics::geometric_stiffness`], kept for its storage.
+#[derive(Debug, Clone, Default)]
+struct GeometricWorkspace {
+    /// Each coordinate's twist `(w, v)` (rad/m, m/m).
+    twists: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// The velocity each coordinate gives the load's point, `u = v + w x x` (m/s per coordinate rate).
+    moved: Vec<Vector3<f64>>,
+    /// Each coordinate's row sum of the loads' Hessian in magnitude (N m^3).
+    bound: Vec<f64>,
+}
+
 /// Reusable workspace and results of a dynamics evaluation (allocated once per strand).
 #[derive(Debug, Clone)]
 pub struct Dynamics {
@@ -213,11 +224,8 @@ pub struct Dynamics {
     /// Hessian, the last step's or the earlier steps' fading, whichever is larger), per coordinate (N m^3, as the
     /// elastic `K`): see [`Dynamics::geometric_stiffness`]. Zero without loads.
     pub geometric: DVector<f64>,
-    /// Workspace of [`Dynamics::geometric_stiffness`]: the last step's loads' bound alone.
-    geometric_loads: DVector<f64>,
-    /// Workspace of [`Dynamics::geometric_stiffness`] (no allocation in the 1 kHz step): each coordinate's twist
-    /// `(w, v)` (rad/m, m/m) and the velocity it gives a load's point.
-    geometric_twists: (Vec<(Vector3<f64>, Vector3<f64>)>, Vec<Vector3<f64>>),
+    /// Workspace of [`Dynamics::geometric_stiffness`] (no allocation in the 1 kHz step).
+    geometric_work: GeometricWorkspace,
     /// Kinetic energy, J.
     pub kinetic_energy: f64,
     /// Gravitational potential energy `-sum m g . r` (world origin as reference), J.
@@ -259,8 +267,7 @@ impl Dynamics {
             mass: DMatrix::zeros(dofs, dofs),
             forces: DVector::zeros(dofs),
             geometric: DVector::zeros(dofs),
-            geometric_loads: DVector::zeros(dofs),
-            geometric_twists: (Vec::new(), Vec::new()),
+            geometric_work: GeometricWorkspace::default(),
             kinetic_energy: 0.0,
             gravity_energy: 0.0,
             elastic_energy: 0.0,
@@ -473,12 +480,12 @@ impl Dynamics {
         if loads.is_empty() || self.frames.len() != model.segments + 1 {
             return;
         }
-        let mut bound = std::mem::take(&mut self.geometric_loads);
-        bound.resize_vertically_mut(self.geometric.len(), 0.0);
-        bound.fill(0.0);
         let d = model.dofs_per_segment();
+        let dofs = self.geometric.len();
+        let GeometricWorkspace { mut twists, mut moved, mut bound } = std::mem::take(&mut self.geometric_work);
+        bound.clear();
+        bound.resize(dofs, 0.0);
         // Each coordinate's twist `(w_j, v_j)` (the sweep's motion subspaces), taken once for all loads.
-        let (mut twists, mut moved) = std::mem::take(&mut self.geometric_twists);
         twists.clear();
         twists.extend((0..model.segments * d).map(|j| {
             let col = self.motion[j / d].column(j % d);
@@ -489,21 +496,27 @@ impl Dynamics {
             let x = crate::kinematics::frame_at(model, &state.q, &self.frames, *s).position - state.root.position;
             let (seg, _) = crate::kinematics::locate(model, *s);
             // Each coordinate's row of the loads' second derivative, summed in magnitude: the coordinates up to
-            // the load's segment, `a` the inner one of a pair, d2 x / dq_a dq_b = w_a x (w_b x x + v_b). The
-            // velocity `v_j + w_j x x` each coordinate gives the load's point is computed once per load.
+            // the load's segment, `a` the inner one of a pair, f . d2 x / dq_a dq_b = f . w_a x (w_b x x + v_b)
+            // = (f x w_a) . u_b with u_b = v_b + w_b x x, the velocity coordinate b gives the load's point
+            // (taken once per load). Each pair a < b is taken once for both rows (H is symmetric).
             let m = (seg.min(model.segments - 1) + 1) * d;
             moved.clear();
             moved.extend(twists[..m].iter().map(|(w, v)| v + w.cross(&x)));
             for a in 0..m {
-                let row: f64 = (0..m).map(|b| f.dot(&twists[a.min(b)].0.cross(&moved[a.max(b)])).abs()).sum();
+                let g = f.cross(&twists[a].0);
+                let mut row = g.dot(&moved[a]).abs();
+                for (b, u) in moved.iter().enumerate().skip(a + 1) {
+                    let h = g.dot(u).abs();
+                    row += h;
+                    bound[b] += h;
+                }
                 bound[a] += row;
             }
         }
-        for (g, b) in self.geometric.iter_mut().zip(bound.iter()) {
+        for (g, b) in self.geometric.iter_mut().zip(&bound) {
             *g = g.max(*b);
         }
-        self.geometric_loads = bound;
-        self.geometric_twists = (twists, moved);
+        self.geometric_work = GeometricWorkspace { twists, moved, bound };
     }
 
     /// Jacobian `dr(s)/dq` (3 x 2N or 3 x 3N, m per (rad/m)) of the centreline point at arc length `s` and its

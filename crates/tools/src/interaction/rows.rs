@@ -53,12 +53,15 @@ impl LocalInteraction {
                 // Each piece's start, and the strand's last end (a piece's end is the next one's start). The
                 // pieces are contiguous per strand, in strand order.
                 let pieces = &self.pieces[first_piece[k]..first_piece[k + 1]];
-                let points = pieces.iter().enumerate().flat_map(|(i, p)| {
+                let points = || pieces.iter().enumerate().flat_map(|(i, p)| {
                     let last = i + 1 == pieces.len();
                     std::iter::once((p.s, p.a)).chain(last.then_some((p.s + p.length, p.b)))
                 });
-                for (s, x) in points {
-                    if body.clear_of(&x.into(), *threshold, radius) {
+                // The first test against the balls that reach the strand's box only (the same answer, fewer terms).
+                let (lo, hi) = points().fold((Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY)), |(lo, hi), (_, x)| (lo.inf(&x), hi.sup(&x)));
+                body.reaching_into(&lo.into(), &hi.into(), &mut self.ws.near_body);
+                for (s, x) in points() {
+                    if self.ws.near_body.clear_of(&x.into(), *threshold, radius) {
                         continue;
                     }
                     let q = body.push_out(&x.into(), *threshold, radius).coords;

@@ -37,6 +37,9 @@ pub(super) struct Workspace {
     pub rows: Vec<ConstraintRows>,
     /// Of [`super::LocalInteraction::warm_start`]: which of a strand's last impulses are taken.
     pub warm_used: Vec<bool>,
+    /// The body's balls that reach the strand whose body contacts are being found
+    /// ([`lattice::metaball::MetaballSet::reaching_into`]).
+    pub near_body: lattice::metaball::MetaballSet,
 }
 
 impl Workspace {
@@ -57,6 +60,7 @@ impl Workspace {
             hair_slots: Vec::new(),
             rows: Vec::new(),
             warm_used: Vec::new(),
+            near_body: lattice::metaball::MetaballSet::default(),
         }
     }
 }

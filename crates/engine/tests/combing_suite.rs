@@ -254,6 +254,11 @@ fn the_combing_law_meets_the_measured_anchors() {
     // Every criterion, measured against its bounds. The ones the law does not meet yet are listed in `unmet` (and
     // in docs/combing.md): printed, not asserted; every other one is asserted.
     let unmet = ["african wet peak / dry peak"];
+    // The dry end peak and the wet rise read the layouts' geometry as much as the law (docs/combing.md, "The combing
+    // curve's shape"): met on some presets by a few per cent, and a change of round-off alone (main df3070b, no
+    // change of the law) flipped GA1's two. Printed and counted, not asserted. Wet, the largest fifth not the tips'
+    // is met on every preset with a margin and asserted.
+    let shape = |what: &str| what.contains("dry: largest fifth") || what.contains("wet: largest later fifth");
     // (criterion, value, each layout's value, bounds)
     let mut checks: Vec<(String, f64, Vec<f64>, (f64, f64))> = Vec::new();
     let mut check = |what: String, value: f64, layouts: Vec<f64>, lo: f64, hi: f64| checks.push((what, value, layouts, (lo, hi)));
@@ -297,10 +302,6 @@ fn the_combing_law_meets_the_measured_anchors() {
     }
     println!("| criterion | measured (layouts' mean) | standard error | layouts' range | bounds | met |");
     println!("|---|---|---|---|---|---|");
-    // The curve-shape criteria the law does not meet (docs/combing.md, "The combing curve's shape"): dry, the
-    // largest fifth is not at the tips; wet, no later fifth above the first. Wet, the largest fifth not the tips'
-    // is met on every preset and asserted.
-    let shape = |what: &str| what.contains("dry: largest fifth") || what.contains("wet: largest later fifth");
     for (what, v, l, (lo, hi)) in &checks {
         let o = OverLayouts::of(l);
         println!("| {what} | {v:.3} | {:.3} | {:.3}-{:.3} | [{lo}, {hi}] | {} |", o.sd / (l.len() as f64).sqrt(), o.min, o.max, if (*lo..=*hi).contains(v) { "yes" } else { "**no**" });
@@ -308,7 +309,7 @@ fn the_combing_law_meets_the_measured_anchors() {
     let met = checks.iter().filter(|(_, v, _, (lo, hi))| (*lo..=*hi).contains(v)).count();
     println!("{met} of {} criteria met", checks.len());
     for (what, v, _, (lo, hi)) in &checks {
-        // The unmet curve-shape criteria (above) are printed, not asserted.
+        // The unmet criteria and the curve's noise-level shape criteria (above) are printed, not asserted.
         if unmet.contains(&what.as_str()) || shape(what) {
             continue;
         }

@@ -6,7 +6,7 @@
 //! `r_t` passing along the fibres *through* a wisp parts the fibres in its path: each is bent around the tooth
 //! between two entanglement points, and presses on the tooth with
 //!
-//! `N_f = held (48 E I delta / span^3 (1 + mu_ff theta n) + w (c f_a l_c + 2 pi gamma sqrt(r_f r_t) (1 + c)))`   (N, per parted fibre)
+//! `N_f = held (48 E I delta / span^3 (1 + mu_ff theta n) + w (Z c f_a l_c + 2 pi gamma sqrt(r_f r_t) (1 + c)))`   (N, per parted fibre)
 //!
 //! - bending: a span of length `span` held at its ends and deflected by `delta` in its middle (a simply
 //!   supported beam under a central load, `48 E I / L^3`); `delta = (r_t + r_f) / 2 + kappa span^2 / 8`: the mean
@@ -18,29 +18,39 @@
 //!   more on a wet one (heavier, bending and torsion moduli 0.4 and 0.1 of dry: `crate::wetness`), interlocks
 //!   less: **wet curly hair combs easier** as its curl relaxes. Straight hair (rest curvature 0) has none.
 //!   `E I` is the fibre's flexural rigidity at its wetness;
-//! - **interlocked curls pushed ahead of the comb** (`1 + mu_ff theta n`, [`Entanglement::pile_factor`]): curled
-//!   fibres cross their neighbours at the end slope `4 h / span` of the curl's arc of sagitta `h = kappa span^2 / 8`;
-//!   the tooth turns a parted fibre by `3 (r_t + r_f) / (2 span)` at the crossings (the end slope of the span it
-//!   deflects), and spreads open a crossing at a smaller angle. At a larger one the curls are hooked by
-//!   `theta = max(0, 4 h - 3 (r_t + r_f) / 2) / span`: the comb cannot part them and pushes the crossing down ahead of
-//!   it, with the ones it met before. After combing `travel` metres of the wisp it pushes `n = travel / span`
-//!   crossings, each a small capstan wrap of angle `theta` with the fibre-on-fibre friction `mu_ff` on the parted
-//!   fibres' bending load (the crossings carry the bending's reactions; the capillary shares pull along the
-//!   fibres). The pile grows towards the tips and leaves with the fibres there (`held`): the tangles "generated
-//!   below the comb, which move down with it" and whose cumulative effect at the tips gives the end peak
+//! - **tangles pushed ahead of the comb** (`1 + mu_ff theta n`, [`Entanglement::pile_factor`]): the tooth turns a
+//!   parted fibre by `theta_t = 3 (r_t + r_f) / (2 span)` at the crossings (the end slope of the span it deflects,
+//!   [`Entanglement::tooth_turn`]). A crossing the tooth meets with its path between the two fibres cannot be parted:
+//!   the comb pushes it down ahead of it with the ones it met before, each a small capstan wrap of the turn
+//!   `theta_t` (straight fibres' tangles). Curled fibres cross their neighbours at the end slope `4 h / span` of the
+//!   curl's arc of sagitta `h = kappa span^2 / 8`; beyond the tooth's own turn they are hooked by `4 h / span -
+//!   theta_t`, so `theta = max(theta_t, 4 h / span - theta_t)`. After combing `travel` metres of the wisp the comb
+//!   pushes `n = travel / span` crossings, each a wrap of angle `theta` with the fibre-on-fibre friction `mu_ff` on
+//!   the parted fibres' bending load (the crossings carry the bending's reactions; the capillary shares pull along
+//!   the fibres). The pile grows towards the tips and leaves with the fibres there (`held`): the tangles "generated
+//!   below the comb, which move down with it" and whose cumulative effect at the tips gives the dry end peak
 //!   (Y. K. Kamath, TRI-Princeton, "Problems of tangled hair", kamath-consulting.com, 2017: mechanism described, no
 //!   figures), curly hair's inter- and intra-fibre entanglements (TRI-Princeton, *Hair Care Product Claims*, ch. 6).
-//!   Wet, the curl relaxes (`kappa` falls) and the pile with it. Straight and wavy fibres (a 4.4 cm wave: 0.08 rad
-//!   against a 0.6 mm tooth's 0.15 rad) pile nothing. No constant is fitted: `theta` is the curl's and the tooth's
-//!   geometry over the calibrated span, `mu_ff` the fibres' friction (`crate::hair_contact::HairContact::friction`,
-//!   with the wetness and the treatment);
+//!   **Wet crossings are zipped shut** ([`Entanglement::zipped`]) where the capillary adhesion over a span beats the
+//!   bending that aligns the two fibres, `w c f_a r_f span^2 >= 2 E I theta_t^2` (the elastocapillary coalescence of
+//!   wet hair, Bico et al., Nature 432, 690 (2004); the adhesion's energy per unit length `f_a r_f`, the bending's
+//!   over a span `2 E I theta_t^2 / span` for the two fibres): a wet tress has no straight-fibre tangles to push (the
+//!   measured wet curve has no end peak), only the curls' hooks, which relax with the curl. No constant is fitted:
+//!   `theta` is the curl's and the tooth's geometry over the calibrated span, `mu_ff` the fibres' friction
+//!   (`crate::hair_contact::HairContact::friction`, with the wetness and the treatment);
 //! - **capillary adhesion of wet fibres**: wet fibres lying side by side are held together by the menisci
 //!   between them, `f_a` per unit length of contact (default `2 gamma`: a meniscus on each side, each pulling
 //!   with the surface tension per unit length; the elastocapillary coalescence of wet hair, Bico et al., Nature
 //!   432, 690 (2004)); a parted fibre must be pulled off its neighbours over the length `l_c` over which they lie
 //!   side by side: the whole span for straight fibres, and for fibres curled with curvature `kappa` the length over
 //!   which two touching arcs stay within a fibre radius of each other, `2 sqrt(2 r_f / kappa)` (shorter curls touch
-//!   their neighbours at points, so **straight hair combs harder wet, curly hair does not**);
+//!   their neighbours at points, so **straight hair combs harder wet, curly hair does not**); **a wet tress
+//!   compacts** (TRI-Princeton, ch. 6: straight hair "becomes more volumetrically compact when it is wet and the
+//!   surface tension of water causes the hair fibers to stick to one another"; wet fibres coalesce into
+//!   close-packed bundles, Bico 2004), so a fibre lies along six neighbours, each pulling with `f_a` along the line
+//!   of the two centres: pulled sideways, it is held by `Z = sum max(0, cos phi_i)` of them, `6 / pi` averaged over
+//!   the directions of the pull ([`Entanglement::peeled_neighbours`]: 2 pulled away from a neighbour, `sqrt 3`
+//!   between two);
 //! - the hair surface's **wettability** `c` ([`Entanglement::wettability`]): the capillary forces of water on the
 //!   fibre's surface relative to virgin hair's, `cos theta_r / cos theta_r(virgin)` of the receding contact
 //!   angles (a meniscus pulled off a surface pulls as the cosine of its contact angle): 1 for virgin hair, 2 for
@@ -105,6 +115,14 @@ pub struct Entanglement {
     /// fall far below the 7-8 measured (docs/combing.md gives the ratios): the meniscus at the contact lines is not all
     /// of the wet adhesion (the Laplace pressure of the water held between the fibres adds to it; not modelled).
     pub wettability: f64,
+    /// The neighbours a parted wet fibre is pulled off, dimensionless: the adhesion between fibres `f_a` counts this
+    /// many times. Default `6 / pi` (1.91): in a close-packed wet bundle (wet fibres coalesce, Bico et al., Nature
+    /// 432, 690 (2004); a wet tress compacts, TRI-Princeton, *Hair Care Product Claims*, ch. 6) a fibre has six
+    /// neighbours, each meniscus pulling along the line of the two centres; pulled sideways in a direction at
+    /// `phi_i` from each, the fibre is held by `sum max(0, cos phi_i)` of them (2 pulled away from one neighbour,
+    /// `sqrt 3` between two), `6 / pi` over the directions of the pull (the wisps' bundles lie at any angle to the
+    /// tooth). Geometry, not fitted; 1 is the law before (one neighbour).
+    pub peeled_neighbours: f64,
     /// Relative speed of the tooth through the wisp at and above which the drag reaches its full Coulomb force,
     /// m/s (`strand::constraint::ConstraintKind::Drag::slip_speed`); below it the drag grows with the speed (a
     /// regularised Coulomb drag: a wisp at rest on a still tooth creeps through it instead of hanging on it, and
@@ -115,7 +133,7 @@ pub struct Entanglement {
 
 impl Default for Entanglement {
     fn default() -> Self {
-        Self { span: 6.6e-3, surface_tension: 0.072, adhesion: 2.0 * 0.072, wettability: 1.0, slip_speed: 0.05 }
+        Self { span: 6.6e-3, surface_tension: 0.072, adhesion: 2.0 * 0.072, wettability: 1.0, peeled_neighbours: 6.0 / std::f64::consts::PI, slip_speed: 0.05 }
     }
 }
 
@@ -159,6 +177,9 @@ impl Entanglement {
         if !(self.wettability.is_finite() && self.wettability >= 0.0) {
             return bad("entanglement.wettability", format!("must be >= 0, got {}", self.wettability));
         }
+        if !(self.peeled_neighbours.is_finite() && self.peeled_neighbours >= 0.0) {
+            return bad("entanglement.peeled_neighbours", format!("must be >= 0, got {}", self.peeled_neighbours));
+        }
         if !(self.slip_speed.is_finite() && self.slip_speed >= 0.0) {
             return bad("entanglement.slip_speed", format!("must be >= 0 m/s, got {}", self.slip_speed));
         }
@@ -188,37 +209,58 @@ impl Entanglement {
         (kappa * self.span * self.span / 8.0).min(0.25 * self.span)
     }
 
-    /// The interlocked curls' pile-up factor on the parted fibres' bending load, dimensionless (the module's law):
+    /// The turn the tooth gives a parted fibre at the crossings that hold it, rad: `3 (r_t + r_f) / (2 span)`, the
+    /// end slope `3 delta / span` of a span deflected by `delta = (r_t + r_f) / 2` in its middle (radii in m).
+    pub fn tooth_turn(&self, fibre_radius: f64, tooth_radius: f64) -> f64 {
+        1.5 * (tooth_radius + fibre_radius) / self.span
+    }
+
+    /// Whether wet crossings are zipped shut (the module's law): the capillary adhesion between two fibres over a
+    /// span, `w c f_a r_f span` (its energy per unit length `f_a r_f`, at wetness `wetness` and the wettability `c`),
+    /// is at least the bending that aligns two fibres crossing at the tooth's turn `theta_t`
+    /// ([`Entanglement::tooth_turn`]), `2 E I theta_t^2 / span` (the elastocapillary coalescence of wet hair, Bico et
+    /// al., Nature 432, 690 (2004)). For a fibre of flexural rigidity `ei` (N m^2) and radius `fibre_radius` (m) on a
+    /// tooth of radius `tooth_radius` (m). Dry fibres are never zipped; wet (w = 1, E I x 0.4) the presets' fibres
+    /// are, with the adhesion 2.2-2.9 times the bending on a 0.6 mm tooth (docs/combing.md).
+    pub fn zipped(&self, ei: f64, fibre_radius: f64, tooth_radius: f64, wetness: f64) -> bool {
+        let w = if wetness.is_finite() { wetness.clamp(0.0, 1.0) } else { 0.0 };
+        let theta = self.tooth_turn(fibre_radius, tooth_radius);
+        w > 0.0 && w * self.wettability * self.adhesion * fibre_radius * self.span * self.span >= 2.0 * ei * theta * theta
+    }
+
+    /// The tangles' pile-up factor on the parted fibres' bending load, dimensionless (the module's law):
     /// `1 + mu_ff theta n`, with `n = travel / span` the crossings the comb has met over `travel` (m) along the
     /// wisp since it entered it, which it pushes ahead, `mu_ff` (`hair_friction`) the fibre-on-fibre friction
-    /// coefficient (each crossing pushed along is a small capstan wrap of angle `theta`) and `theta` the angle by which
-    /// curled fibres hook into each other at a crossing: `theta = max(0, 4 h - 3 (r_t + r_f) / 2) / span`, the end
-    /// slope of the curl's arc of sagitta `h` over a span ([`Entanglement::sagitta`]) beyond the turn the tooth
-    /// itself gives a parted fibre at the crossings (the end slope `3 delta / span` of a span deflected by the tooth's
-    /// `delta = (r_t + r_f) / 2`): a crossing at a smaller angle is spread open as the tooth passes, a crossing at a
-    /// larger one is hooked and pushed ahead. 1 for straight and wavy fibres (a 4.4 cm wave turns 0.08 rad over the
-    /// span, a 0.6 mm tooth 0.15 rad), growing with tight curls (African hair: 0.37 rad).
-    pub fn pile_factor(&self, hair_friction: f64, fibre_radius: f64, tooth_radius: f64, curvature: f64, travel: f64) -> f64 {
+    /// coefficient (each crossing pushed along is a small capstan wrap of angle `theta`) and `theta` the angle of the
+    /// wrap: the tooth's turn `theta_t` ([`Entanglement::tooth_turn`]; none where the crossings are `zipped`, wet:
+    /// [`Entanglement::zipped`]) or, if larger, the angle by which curled fibres hook into each other beyond it,
+    /// `(4 h - 3 (r_t + r_f) / 2) / span`, the end slope of the curl's arc of sagitta `h` over a span
+    /// ([`Entanglement::sagitta`]) beyond the tooth's turn. Straight and wavy fibres (a 4.4 cm wave turns 0.08 rad over
+    /// the span, a 0.6 mm tooth 0.15 rad) pile at the tooth's turn dry and nothing wet; tight curls (African hair:
+    /// 0.37 rad) pile at their hook's angle, dry and wet.
+    pub fn pile_factor(&self, hair_friction: f64, fibre_radius: f64, tooth_radius: f64, curvature: f64, travel: f64, zipped: bool) -> f64 {
         let mu = if hair_friction.is_finite() { hair_friction.max(0.0) } else { 0.0 };
         let n = if travel.is_finite() { travel.abs() / self.span } else { 0.0 };
-        let theta = ((4.0 * self.sagitta(curvature) - 1.5 * (tooth_radius + fibre_radius)) / self.span).max(0.0);
+        let turn = self.tooth_turn(fibre_radius, tooth_radius);
+        let hook = (4.0 * self.sagitta(curvature) / self.span - turn).max(0.0);
+        let theta = if zipped { hook } else { hook.max(turn) };
         1.0 + mu * theta * n
     }
 
     /// [`Entanglement::parting_load`] with the crossings the tooth pushes ahead (the tangle pile-up,
-    /// [`Entanglement::pile_factor`]): the bending share times `1 + mu_ff theta travel / span`, for the fibre-on-fibre
-    /// friction `hair_friction` and the tooth's `travel` (m) along the wisp since it entered it. The capillary
-    /// shares are not piled: they pull fibres off their neighbours along their length, not at the crossings.
+    /// [`Entanglement::pile_factor`], zipped shut when wet: [`Entanglement::zipped`]): the bending share times
+    /// `1 + mu_ff theta travel / span`, for the fibre-on-fibre friction `hair_friction` and the tooth's `travel` (m)
+    /// along the wisp since it entered it. The capillary shares are not piled: they pull fibres off their neighbours
+    /// along their length, not at the crossings.
     #[allow(clippy::too_many_arguments)]
     pub fn parting_load_piled(&self, ei: f64, fibre_radius: f64, tooth_radius: f64, wetness: f64, free_length: f64, curvature: f64, hair_friction: f64, travel: f64) -> f64 {
         let kappa = if curvature.is_finite() { curvature.abs() } else { 0.0 };
         let w = if wetness.is_finite() { wetness.clamp(0.0, 1.0) } else { 0.0 };
         let delta = self.deflection(fibre_radius, tooth_radius, kappa);
-        let pile = self.pile_factor(hair_friction, fibre_radius, tooth_radius, kappa, travel);
-        // Virgin hair (wettability 1) keeps the operations' order of the law before the wettability, bit for bit.
+        let pile = self.pile_factor(hair_friction, fibre_radius, tooth_radius, kappa, travel, self.zipped(ei, fibre_radius, tooth_radius, w));
         let c = self.wettability;
         let bridge = 4.0 * std::f64::consts::PI * self.surface_tension * (fibre_radius * tooth_radius).sqrt() * (0.5 * (1.0 + c));
-        let adhesion = self.adhesion * self.contact_length(fibre_radius, kappa) * c;
+        let adhesion = self.peeled_neighbours * self.adhesion * self.contact_length(fibre_radius, kappa) * c;
         let held = (2.0 * free_length.max(0.0) / self.span).min(1.0);
         held * (48.0 * ei * delta / self.span.powi(3) * pile + w * (adhesion + bridge))
     }
@@ -334,11 +376,13 @@ mod tests {
         assert!((e.contact_length(rf, 156.0) - 2.0 * (2.0 * rf / 156.0f64).sqrt()).abs() < 1e-15);
         let k0 = 8.0 * rf / (e.span * e.span);
         assert!((e.contact_length(rf, k0 * (1.0 + 1e-9)) - e.span).abs() < 1e-9 * e.span);
-        // Wet adhesion, per fibre: the straight fibre's 0.144 N/m over the span, the curled one's over its contact.
+        // Wet adhesion, per fibre: the straight fibre's 0.144 N/m from 6 / pi neighbours over the span, the curled
+        // one's over its contact.
         let wet = |kappa: f64| e.parting_load(ei, rf, rt, 1.0, 0.1, kappa) - e.parting_load(ei, rf, rt, 0.0, 0.1, kappa);
         let bridge = 4.0 * std::f64::consts::PI * 0.072 * (rf * rt).sqrt();
-        assert!((wet(0.0) - (0.144 * e.span + bridge)).abs() < 1e-12);
-        assert!((wet(156.0) - (0.144 * e.contact_length(rf, 156.0) + bridge)).abs() < 1e-12);
+        let z = 6.0 / std::f64::consts::PI;
+        assert!((wet(0.0) - (z * 0.144 * e.span + bridge)).abs() < 1e-12);
+        assert!((wet(156.0) - (z * 0.144 * e.contact_length(rf, 156.0) + bridge)).abs() < 1e-12);
         assert!(wet(156.0) < 0.5 * wet(0.0));
         // Teeth part the wisp, a comb's 3 mm spine does not (diameter above half a span).
         assert!(e.parts(0.6e-3) && !e.parts(3e-3));
@@ -352,21 +396,26 @@ mod tests {
         // (by hand, 1e-3).
         let e = Entanglement::default();
         let (ei, rf, rt, mu) = (1.46e-9, 42.5e-6, 0.6e-3, 0.25);
-        let f = e.pile_factor(mu, rf, rt, 156.0, 0.1);
+        let f = e.pile_factor(mu, rf, rt, 156.0, 0.1, false);
         assert!((f - 2.397).abs() < 1e-3, "{f}");
-        // Linear in the travel and the friction; straight fibres, no friction or no travel: none, exactly.
-        assert!((e.pile_factor(mu, rf, rt, 156.0, 0.05) - 1.0 - 0.5 * (f - 1.0)).abs() < 1e-12);
-        assert!((e.pile_factor(2.0 * mu, rf, rt, 156.0, 0.1) - 1.0 - 2.0 * (f - 1.0)).abs() < 1e-12);
-        assert_eq!(e.pile_factor(mu, rf, rt, 0.0, 0.1), 1.0);
-        assert_eq!(e.pile_factor(0.0, rf, rt, 156.0, 0.1), 1.0);
-        assert_eq!(e.pile_factor(mu, rf, rt, 156.0, 0.0), 1.0);
-        // Caucasian waves (radius 4.4 cm, 22.7 1/m) cross at 0.075 rad, below the tooth's own turn (0.146 rad): spread
-        // open, none piled.
-        assert_eq!(e.pile_factor(mu, 40e-6, rt, 22.7, 0.2), 1.0);
+        // The curls' hooks are not zipped shut wet: the same pile.
+        assert_eq!(e.pile_factor(mu, rf, rt, 156.0, 0.1, true), f);
+        // Linear in the travel and the friction; no friction or no travel: none, exactly.
+        assert!((e.pile_factor(mu, rf, rt, 156.0, 0.05, false) - 1.0 - 0.5 * (f - 1.0)).abs() < 1e-12);
+        assert!((e.pile_factor(2.0 * mu, rf, rt, 156.0, 0.1, false) - 1.0 - 2.0 * (f - 1.0)).abs() < 1e-12);
+        assert_eq!(e.pile_factor(0.0, rf, rt, 156.0, 0.1, false), 1.0);
+        assert_eq!(e.pile_factor(mu, rf, rt, 156.0, 0.0, false), 1.0);
+        // Caucasian waves (radius 4.4 cm, 22.7 1/m) cross at 0.075 rad, below the tooth's own turn ((0.6 + 0.04) mm x
+        // 1.5 / 6.6 mm = 0.1455 rad): piled at the tooth's turn as straight fibres are, 1 + 0.25 x 0.1455 x 0.2 / 6.6 mm
+        // = 2.102 (by hand, 1e-3); zipped shut (wet), none.
+        let wave = e.pile_factor(mu, 40e-6, rt, 22.7, 0.2, false);
+        assert!((wave - 2.102).abs() < 1e-3, "{wave}");
+        assert_eq!(wave, e.pile_factor(mu, 40e-6, rt, 0.0, 0.2, false));
+        assert_eq!(e.pile_factor(mu, 40e-6, rt, 22.7, 0.2, true), 1.0);
         // The angle is bounded with the sagitta (a quarter span: theta at most 1 - 0.146 rad); bad inputs pile nothing.
-        assert!((e.pile_factor(mu, rf, rt, 1e9, e.span) - (1.0 + mu * (1.0 - 1.5 * (rt + rf) / e.span))).abs() < 1e-12);
-        assert_eq!(e.pile_factor(f64::NAN, rf, rt, 156.0, 0.1), 1.0);
-        assert_eq!(e.pile_factor(mu, rf, rt, 156.0, f64::INFINITY), 1.0);
+        assert!((e.pile_factor(mu, rf, rt, 1e9, e.span, false) - (1.0 + mu * (1.0 - 1.5 * (rt + rf) / e.span))).abs() < 1e-12);
+        assert_eq!(e.pile_factor(f64::NAN, rf, rt, 156.0, 0.1, false), 1.0);
+        assert_eq!(e.pile_factor(mu, rf, rt, 156.0, f64::INFINITY, false), 1.0);
         // The pile multiplies the bending share only: no travel is the law without it, bit for bit; wet, the
         // capillary shares are added unpiled.
         for w in [0.0, 1.0] {
@@ -379,6 +428,51 @@ mod tests {
         // Near the tip the pile leaves with the fibres (the held share): a quarter span from it, half.
         let half = e.parting_load_piled(ei, rf, rt, 0.0, 0.25 * e.span, 156.0, mu, 0.1);
         assert!((half - 0.5 * e.parting_load_piled(ei, rf, rt, 0.0, 0.1, 156.0, mu, 0.1)).abs() < 1e-12 * half);
+    }
+
+    #[test]
+    fn straight_tangles_pile_dry_and_zip_shut_wet() {
+        // H1 (EI 7.59e-9 N m^2 dry, 0.4 of it wet; r_f 46.55 um) on a 0.6 mm tooth, the default span 6.6 mm: the
+        // tooth's turn 1.5 x 0.64655 mm / 6.6 mm = 0.14694 rad. Zipping, wet: 0.144 N/m x 46.55 um x (6.6 mm)^2 =
+        // 2.9200e-10 J against 2 x 3.036e-9 x 0.14694^2 = 1.3110e-10 J: 2.23 times (by hand); dry never.
+        let e = Entanglement::default();
+        let (ei, rf, rt, mu) = (7.59e-9, 46.55e-6, 0.6e-3, 0.2);
+        assert!((e.tooth_turn(rf, rt) - 0.14694).abs() < 1e-5, "{}", e.tooth_turn(rf, rt));
+        assert!(e.zipped(0.4 * ei, rf, rt, 1.0));
+        assert!(!e.zipped(ei, rf, rt, 0.0) && !e.zipped(0.4 * ei, rf, rt, 0.0));
+        // The margin: at 2.23 the crossings zip at w >= 1 / 2.23 = 0.448 (with the wet stiffness), a stiffer fibre
+        // (EI x 2.3) not at all; bleached hair (wettability 2) at half the wetness.
+        assert!(e.zipped(0.4 * ei, rf, rt, 0.46) && !e.zipped(0.4 * ei, rf, rt, 0.43));
+        assert!(!e.zipped(2.3 * 0.4 * ei, rf, rt, 1.0));
+        let bleached = Entanglement { wettability: 2.0, ..e };
+        assert!(bleached.zipped(0.4 * ei, rf, rt, 0.23) && !bleached.zipped(0.4 * ei, rf, rt, 0.21));
+        // Dry, a straight fibre combed 10 cm pushes 15.15 crossings, each a wrap of 0.14694 rad: the bending share
+        // times 1 + 0.2 x 0.14694 x 15.15 = 1.4453 (by hand, 1e-4); wet (zipped), the law without the pile.
+        let dry = e.parting_load_piled(ei, rf, rt, 0.0, 0.15, 0.0, mu, 0.1);
+        assert!((dry / e.parting_load(ei, rf, rt, 0.0, 0.15, 0.0) - 1.4453).abs() < 1e-4, "{dry}");
+        assert_eq!(e.parting_load_piled(0.4 * ei, rf, rt, 1.0, 0.15, 0.0, mu, 0.1), e.parting_load(0.4 * ei, rf, rt, 1.0, 0.15, 0.0));
+        // Partly wet and not zipped: the pile is back.
+        assert!(e.parting_load_piled(0.4 * ei, rf, rt, 0.3, 0.15, 0.0, mu, 0.1) > e.parting_load(0.4 * ei, rf, rt, 0.3, 0.15, 0.0));
+    }
+
+    #[test]
+    fn a_wet_fibre_is_pulled_off_six_over_pi_neighbours() {
+        // Six close-packed neighbours, each meniscus pulling along the line of the centres: pulled in direction psi,
+        // the fibre is held by sum max(0, cos(phi_i - psi)); averaged over psi (a fine quadrature), 6 / pi; 2 pulled
+        // away from one neighbour, sqrt 3 between two.
+        let held = |psi: f64| (0..6).map(|i| (i as f64 * std::f64::consts::FRAC_PI_3 - psi).cos().max(0.0)).sum::<f64>();
+        let n = 100_000;
+        let mean = (0..n).map(|k| held(2.0 * std::f64::consts::PI * (k as f64 + 0.5) / n as f64)).sum::<f64>() / n as f64;
+        let e = Entanglement::default();
+        assert!((mean - e.peeled_neighbours).abs() < 1e-8, "{mean} vs {}", e.peeled_neighbours);
+        assert!((held(0.0) - 2.0).abs() < 1e-12 && (held(std::f64::consts::FRAC_PI_6) - 3f64.sqrt()).abs() < 1e-12);
+        // The adhesion between fibres counts that many times; the bridge on the tooth and the dry load do not move.
+        let (ei, rf, rt) = (7.59e-9, 46.55e-6, 0.6e-3);
+        let one = Entanglement { peeled_neighbours: 1.0, ..e };
+        let share = |e: &Entanglement| e.parting_load(0.4 * ei, rf, rt, 1.0, 0.1, 0.0) - e.parting_load(0.4 * ei, rf, rt, 0.0, 0.1, 0.0);
+        assert!((share(&e) - share(&one) - (e.peeled_neighbours - 1.0) * 0.144 * e.span).abs() < 1e-15);
+        assert_eq!(e.parting_load(ei, rf, rt, 0.0, 0.1, 0.0), one.parting_load(ei, rf, rt, 0.0, 0.1, 0.0));
+        assert!(Entanglement { peeled_neighbours: -1.0, ..e }.validate().unwrap_err().to_string().contains("entanglement.peeled_neighbours"));
     }
 
     #[test]
@@ -445,13 +539,13 @@ mod tests {
         for (e, c) in [(v, 1.0), (b, 2.0)] {
             for kappa in [0.0, 156.0] {
                 // The wet share: the load wet less the same fibre's load dry.
-                let want = c * 0.144 * e.contact_length(rf, kappa) + bridge * (1.0 + c);
+                let want = e.peeled_neighbours * c * 0.144 * e.contact_length(rf, kappa) + bridge * (1.0 + c);
                 let got = e.parting_load(0.4 * ei, rf, rt, 1.0, 0.1, kappa) - e.parting_load(0.4 * ei, rf, rt, 0.0, 0.1, kappa);
                 assert!((got - want).abs() < 1e-12, "c = {c}, kappa = {kappa}: {got} vs {want}");
             }
         }
         // Virgin hair's load is the complete-wetting law, 4 pi gamma sqrt(r_f r_t) on the tooth.
-        assert!((v.parting_load(0.4 * ei, rf, rt, 1.0, 0.1, 0.0) - (beam + 0.144 * v.span + 2.0 * bridge)).abs() < 1e-15);
+        assert!((v.parting_load(0.4 * ei, rf, rt, 1.0, 0.1, 0.0) - (beam + v.peeled_neighbours * 0.144 * v.span + 2.0 * bridge)).abs() < 1e-15);
     }
 
     #[test]
@@ -464,9 +558,9 @@ mod tests {
         let beam = e.parting_load(ei, rf, rt, 0.0, 0.1, 0.0);
         assert!((beam - 0.2300e-3).abs() < 1e-3 * 0.23e-3, "{beam}");
         let wet = e.parting_load(0.4 * ei, rf, rt, 1.0, 0.1, 0.0);
-        // Wet and straight: the softer beam, the adhesion to the neighbours over the whole span (0.144 N/m x 8 mm
-        // = 1.152 mN) and the bridge on the tooth.
-        assert!((wet - (0.4 * beam + 1.152e-3 + 0.1511e-3)).abs() < 1e-3 * 0.15e-3, "{wet}");
+        // Wet and straight: the softer beam, the adhesion to the 6 / pi neighbours over the whole span (0.144 N/m x
+        // 8 mm x 1.9099 = 2.2002 mN) and the bridge on the tooth.
+        assert!((wet - (0.4 * beam + 2.2002e-3 + 0.1511e-3)).abs() < 1e-3 * 0.15e-3, "{wet}");
         // At the tip nothing is left; a quarter span from it, half of everything.
         assert_eq!(e.parting_load(ei, rf, rt, 1.0, 0.0, 0.0), 0.0);
         assert!((e.parting_load(0.4 * ei, rf, rt, 1.0, 0.25 * e.span, 0.0) - 0.5 * wet).abs() < 1e-12 * wet);

@@ -196,7 +196,7 @@ impl Session {
         // the physics step with the proxy's state the device thread handed over; then the record of the period
         // before (its device readings came with this hand-over), the tool input and the viewers' snapshot.
         let mut pending: Option<(Vec<Command>, u64)> = None;
-        let physics = move |h: &Handover| -> Published {
+        let physics = move |h: &Handover, publish: &mut dyn FnMut(Published)| {
             let started = Instant::now();
             let mut cmds = Vec::new();
             // The strand budget's change decided after the last step, applied and recorded first.
@@ -215,6 +215,9 @@ impl Session {
             }
             let lattice = lat_h_out.read();
             core.physics_period(&cmds, &h.proxy, lattice, dt);
+            // The device loop takes the period's model now; the rest (the global layer's tool input, the record,
+            // the viewers' snapshot) it does not wait for.
+            publish(core.published());
             tool_in.write(core.tool_input());
             if let Some(r) = step_tx.as_mut() {
                 // Period k's record is whole at physics step k + 1: its device readings and last force come
@@ -234,7 +237,6 @@ impl Session {
             if let Some(b) = budget.as_mut() {
                 b.change = b.budget.observe(started.elapsed().as_secs_f64(), core.active().len()).map(|n| Command::LimitStrands(n as u32));
             }
-            core.published()
         };
         let on_refused = |why: String| tracing::warn!("haptic thread: {why}");
         let haptic = DeviceLoop::spawn(dev, side, first_model, dt, params.device_steps(), params.haptic_priority, physics, on_refused)

@@ -220,8 +220,8 @@ impl Entanglement {
     /// is at least the bending that aligns two fibres crossing at the tooth's turn `theta_t`
     /// ([`Entanglement::tooth_turn`]), `2 E I theta_t^2 / span` (the elastocapillary coalescence of wet hair, Bico et
     /// al., Nature 432, 690 (2004)). For a fibre of flexural rigidity `ei` (N m^2) and radius `fibre_radius` (m) on a
-    /// tooth of radius `tooth_radius` (m). Dry fibres are never zipped; wet (w = 1, E I x 0.4) the presets' fibres
-    /// are, with the adhesion 2.2-2.9 times the bending on a 0.6 mm tooth (docs/combing.md).
+    /// tooth of radius `tooth_radius` (m). Dry fibres are never zipped (test
+    /// `every_presets_crossings_zip_shut_wet_and_never_dry` gives the presets' margins).
     pub fn zipped(&self, ei: f64, fibre_radius: f64, tooth_radius: f64, wetness: f64) -> bool {
         let w = if wetness.is_finite() { wetness.clamp(0.0, 1.0) } else { 0.0 };
         let theta = self.tooth_turn(fibre_radius, tooth_radius);
@@ -453,6 +453,54 @@ mod tests {
         assert_eq!(e.parting_load_piled(0.4 * ei, rf, rt, 1.0, 0.15, 0.0, mu, 0.1), e.parting_load(0.4 * ei, rf, rt, 1.0, 0.15, 0.0));
         // Partly wet and not zipped: the pile is back.
         assert!(e.parting_load_piled(0.4 * ei, rf, rt, 0.3, 0.15, 0.0, mu, 0.1) > e.parting_load(0.4 * ei, rf, rt, 0.3, 0.15, 0.0));
+    }
+
+    #[test]
+    fn every_presets_crossings_zip_shut_wet_and_never_dry() {
+        // Every hair preset, every treatment (its wettability), the built-in comb's and brush's thinnest teeth and a
+        // range of wetness, with the preset's own span, fibre radius and flexural rigidity at the wetness
+        // (`WetnessModel::hair`, E I = E(w) I_soft, as the local strands take it): dry, never zipped; the zipping
+        // ratio `w c f_a r_f span^2 / (2 E I theta_t^2)` grows with the wetness (the adhesion grows and the fibre
+        // softens), so once zipped a fibre stays zipped when wetter; fully wet on the comb's tooth every preset is
+        // zipped (the module's law: a wet tress has no straight-fibre tangles). `zipped` is that ratio >= 1, to the
+        // bit. The margins over the family are printed.
+        use crate::shape::ToolShape;
+        use crate::treatment::Treatment;
+        use crate::wetness::WetnessModel;
+        let teeth = [("comb", ToolShape::builtin("comb").unwrap().min_radius()), ("brush", ToolShape::builtin("brush").unwrap().min_radius())];
+        let wet_model = WetnessModel::default();
+        let (mut lowest_wet_comb, mut highest_wet_comb) = (f64::INFINITY, 0.0f64);
+        for hair in strand::HairType::ALL {
+            let section = hair.section().unwrap();
+            let rf = section.semi_major;
+            for t in Treatment::ALL {
+                let e = Entanglement { wettability: t.wettability(), ..Entanglement::for_hair(&hair) };
+                for (tool, rt) in teeth {
+                    let mut last = 0.0;
+                    for k in 0..=20 {
+                        let w = k as f64 / 20.0;
+                        let ei = wet_model.hair(&hair, w).unwrap().young_modulus * section.i_soft();
+                        let theta = e.tooth_turn(rf, rt);
+                        let ratio = w * e.wettability * e.adhesion * rf * e.span * e.span / (2.0 * ei * theta * theta);
+                        let case = format!("{} {} {tool} w {w}: ratio {ratio}", hair.name, t.name());
+                        assert_eq!(e.zipped(ei, rf, rt, w), ratio >= 1.0, "{case}");
+                        assert!(ratio >= last, "{case}: below the drier {last}");
+                        last = ratio;
+                        if w == 0.0 {
+                            assert!(!e.zipped(ei, rf, rt, w), "{case}: zipped dry");
+                        }
+                        if w == 1.0 && tool == "comb" {
+                            assert!(e.zipped(ei, rf, rt, w), "{case}: not zipped wet on the comb");
+                            if t == Treatment::Virgin {
+                                lowest_wet_comb = lowest_wet_comb.min(ratio);
+                                highest_wet_comb = highest_wet_comb.max(ratio);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        println!("virgin hair fully wet on the comb's tooth: adhesion over bending {lowest_wet_comb:.2}-{highest_wet_comb:.2} over the presets");
     }
 
     #[test]

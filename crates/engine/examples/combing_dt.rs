@@ -14,14 +14,12 @@
 //! criteria as `combing_suite::the_combing_law_meets_the_measured_anchors` reads them (at each time step), and
 //! the count met: the suite's table from a release build, for trying a change of the law.
 
+use engine::scenario::criteria::{self, LayoutFigures, LIGHT_MASS as LIGHT, MASS};
 use engine::scenario::{run, ScenarioFile, ScenarioSummary};
 
 /// The tress's roots' height and its length, m (the comb's position along it is `ROOT_Z - z`).
 const ROOT_Z: f64 = 0.3;
 const LENGTH: f64 = 0.2;
-/// The standard tress's mass and the light one's, kg (Newman et al. 1973's 4.75 g and 2.75 g tresses).
-const MASS: f64 = 4.75e-3;
-const LIGHT: f64 = 2.75e-3;
 
 /// One tress and stroke (as `crates/engine/tests/combing_suite.rs`'s `Case::toml`).
 fn toml(hair: &str, wetness: f64, treatment: &str, mass: f64, dt: f64, seed: u64) -> String {
@@ -188,59 +186,24 @@ fn main() {
             println!("| {h} | {} | {} |", dt * 1e3, cells.join(" | "));
         }
     }
-    // Issue 29's criteria (as combing_suite reads them), when every case they need was run.
+    // Issue 29's criteria (engine::scenario::criteria, which combing_suite asserts), when every case they need was run.
     let find = |h: &str, w: f64, t: &str, m: f64| cases.iter().position(|(hh, ww, tt, mm)| hh == h && *ww == w && *tt == t && *mm == m);
-    let straight = ["H1", "H2", "GA1", "GC3", "asian", "caucasian"];
-    let needed = straight.iter().chain(["african"].iter()).all(|h| find(h, 0.0, "virgin", MASS).is_some() && find(h, 1.0, "virgin", MASS).is_some())
-        && find("caucasian", 1.0, "bleached-twice", MASS).is_some()
-        && find("caucasian", 0.0, "virgin", LIGHT).is_some();
-    if !needed {
+    if !criteria::cases().iter().all(|&(h, w, m, t)| find(h, w, t, m).is_some()) {
         return;
     }
     for (d, dt) in dts.iter().enumerate() {
-        let mean = |c: usize, q: usize| (0..ns).map(|k| at(c, d, k).0[q]).sum::<f64>() / ns as f64;
-        let fifths = |c: usize| -> [f64; 5] { std::array::from_fn(|q| (0..ns).map(|k| at(c, d, k).2[q]).sum::<f64>() / ns as f64) };
-        let largest = |f: &[f64; 5]| (0..5).max_by(|&a, &b| f[a].total_cmp(&f[b])).unwrap() as f64;
-        let (peak, median) = (0, 4);
-        let std = |h: &str, w: f64| find(h, w, "virgin", MASS).unwrap();
-        let mut checks: Vec<(String, f64, f64, f64)> = Vec::new();
-        for h in straight {
-            let (dry, wet) = (std(h, 0.0), std(h, 1.0));
-            checks.push((format!("{h} dry peak, N"), mean(dry, peak), 0.06, 0.24));
-            checks.push((format!("{h} wet/dry peak"), mean(wet, peak) / mean(dry, peak), 4.0, 10.0));
-            checks.push((format!("{h} dry median / peak"), mean(dry, median) / mean(dry, peak), 0.4, 1.0));
-            checks.push((format!("{h} wet median / peak"), mean(wet, median) / mean(wet, peak), 0.4, 1.0));
-            checks.push((format!("{h} dry: largest fifth"), largest(&fifths(dry)), 3.0, 4.0));
-            checks.push((format!("{h} wet: largest fifth"), largest(&fifths(wet)), 0.0, 3.0));
-            let f = fifths(wet);
-            checks.push((format!("{h} wet: largest later fifth / first"), f[1..].iter().copied().fold(0.0, f64::max) / f[0], 1.0, f64::INFINITY));
-        }
-        let light = |w: f64| find("caucasian", w, "virgin", LIGHT).unwrap();
-        checks.push(("caucasian 2.75 g wet peak, N".into(), mean(light(1.0), peak), 0.25, 1.0));
-        for w in [0.0, 1.0] {
-            let per_gram = mean(light(w), peak) / mean(std("caucasian", w), peak) * MASS / LIGHT;
-            checks.push((format!("caucasian {} peak per gram, 2.75 g / 4.75 g", if w > 0.0 { "wet" } else { "dry" }), per_gram, 0.65, 1.35));
-        }
-        checks.push(("african dry peak / H1 dry peak".into(), mean(std("african", 0.0), peak) / mean(std("H1", 0.0), peak), 2.0, f64::INFINITY));
-        checks.push(("african wet peak / dry peak".into(), mean(std("african", 1.0), peak) / mean(std("african", 0.0), peak), 0.0, 1.0));
-        for (t, w, what, lo, hi) in [
-            ("conditioned", 0.0, "caucasian conditioned / virgin, dry", 0.6, 0.95),
-            ("conditioned", 1.0, "caucasian conditioned / virgin, wet", 0.3, 0.6),
-            ("bleached", 1.0, "caucasian bleached / virgin, wet", 2.0, 4.0),
-            ("bleached-twice", 1.0, "caucasian bleached twice / virgin, wet", 3.0, 6.0),
-        ] {
-            checks.push((what.into(), mean(find("caucasian", w, t, MASS).unwrap(), peak) / mean(std("caucasian", w), peak), lo, hi));
-        }
+        // Each case's figures over the layouts at this step size (peak: statistic 0, median: statistic 4).
+        let figures: Vec<LayoutFigures> = (0..nc).map(|c| LayoutFigures { peak: (0..ns).map(|k| at(c, d, k).0[0]).collect(), median: (0..ns).map(|k| at(c, d, k).0[4]).collect(), fifths: (0..ns).map(|k| at(c, d, k).2).collect() }).collect();
+        let checks = criteria::criteria(|h, w, m, t| &figures[find(h, w, t, m).expect("every case was run")]);
         println!("\nissue 29's criteria at dt {} ms (layouts' means; a ratio of the means)", dt * 1e3);
         println!("| criterion | measured | bounds | met |");
         println!("|---|---|---|---|");
-        for (what, v, lo, hi) in &checks {
-            println!("| {what} | {v:.3} | [{lo}, {hi}] | {} |", if (*lo..=*hi).contains(v) { "yes" } else { "**no**" });
+        for c in &checks {
+            println!("| {} | {:.3} | [{}, {}] | {} |", c.what, c.value, c.bounds.0, c.bounds.1, if c.met() { "yes" } else { "**no**" });
         }
-        let met = checks.iter().filter(|(_, v, lo, hi)| (*lo..=*hi).contains(v)).count();
-        println!("{met} of {} criteria met", checks.len());
-        // Issue 12's dry order, asserted by tests/tress.rs on the shipped tresses (comb-h2, comb-ga1).
-        let (h2, ga1) = (mean(std("H2", 0.0), peak), mean(std("GA1", 0.0), peak));
-        println!("H2 dry peak above GA1's (tress.rs): {} ({h2:.4} / {ga1:.4} N)", if h2 > ga1 { "yes" } else { "**no**" });
+        println!("{} of {} criteria met", checks.iter().filter(|c| c.met()).count(), checks.len());
+        // tests/tress.rs's H2 / GA1 dry comparison on the shipped tresses (comb-h2, comb-ga1).
+        let peak = |h: &str| figures[find(h, 0.0, "virgin", MASS).unwrap()].peak.iter().sum::<f64>() / ns as f64;
+        println!("H2 / GA1 dry peak: {:.4} / {:.4} N", peak("H2"), peak("GA1"));
     }
 }

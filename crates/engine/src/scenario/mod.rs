@@ -11,6 +11,7 @@
 
 pub mod actions;
 pub mod combing;
+pub mod criteria;
 pub mod files;
 pub mod global;
 pub mod live;

@@ -140,7 +140,13 @@ ws.onmessage = (ev) => {
       onScene(msg);
       break;
     }
-    case P.Server.FRAME: onFrame(P.decodeFrame(buf)); break;
+    case P.Server.FRAME: {
+      const f = P.decodeFrame(buf);
+      onFrame(f);
+      // Done with it: the server sends the next (at most two on their way), never a backlog (FRAME_ACK).
+      if (ws.readyState === WebSocket.OPEN) ws.send(P.encodeFrameAck(f.seq));
+      break;
+    }
     case P.Server.STRANDS: onStrands(P.decodeStrands(buf)); break;
     case P.Server.DEVICE: {
       const d = P.decodeDevice(buf);

@@ -13,6 +13,7 @@ export const Client = {
   PING: 0x08,
   HEAD: 0x09,
   SET_TREATMENT: 0x0A,
+  FRAME_ACK: 0x0B,
 } as const;
 
 /** The hair's surface treatments by wire id (SET_TREATMENT, FRAME; `tools::treatment::Treatment::ALL`). */
@@ -363,6 +364,14 @@ export function encodeSetHair(type: number, curliness: number, ease: number): Ar
 export function encodeSetTreatment(treatment: number): ArrayBuffer {
   const [b, v] = header(Client.SET_TREATMENT, 1);
   v.setUint8(2, treatment);
+  return b;
+}
+
+/** FRAME_ACK: the viewer has finished with FRAME `seq`; the server then keeps at most two FRAMEs on their way to
+ * it, so that a page that falls behind gets the newest frame, not a backlog of stale ones. */
+export function encodeFrameAck(seq: number): ArrayBuffer {
+  const [b, v] = header(Client.FRAME_ACK, 4);
+  v.setUint32(2, seq, true);
   return b;
 }
 

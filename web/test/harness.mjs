@@ -127,16 +127,19 @@ export async function strokeWorld(page, a, b, seconds, hz = 100, { hoverMs = 150
   const timing = await page.evaluate(({ pa, pb, seconds, hz }) => new Promise((done) => {
     const canvas = document.getElementById('view');
     const t0 = performance.now();
-    let moves = 0, last = t0, gap = 0;
+    let moves = 0, last = t0, gap = 0, frames = window.coiffure.framesReceived, frameJump = 0;
     const tick = () => {
       const now = performance.now();
       const t = Math.min(1, (now - t0) / (1000 * seconds));
       canvas.dispatchEvent(new PointerEvent('pointermove', { bubbles: true, pointerId: 1, pointerType: 'mouse', isPrimary: true, buttons: 1,
         clientX: pa[0] + t * (pb[0] - pa[0]), clientY: pa[1] + t * (pb[1] - pa[1]) }));
       moves++;
+      // FRAMEs handled since the last move (a page that falls behind used to find a backlog of stale ones).
+      frameJump = Math.max(frameJump, window.coiffure.framesReceived - frames);
+      frames = window.coiffure.framesReceived;
       gap = Math.max(gap, now - last);
       last = now;
-      if (t < 1) setTimeout(tick, 1000 / hz); else done({ moves, ms: now - t0, maxGapMs: gap });
+      if (t < 1) setTimeout(tick, 1000 / hz); else done({ moves, ms: now - t0, maxGapMs: gap, maxFramesPerMove: frameJump });
     };
     tick();
   }), { pa, pb, seconds, hz });

@@ -21,6 +21,12 @@ pub const OUTBOX_BYTES: usize = 96 << 20;
 /// read for seconds (frames are skipped meanwhile; only the queue waits).
 pub const BEHIND_LIMIT: Duration = Duration::from_secs(30);
 
+/// Most FRAMEs on their way to a viewer that acknowledges them (FRAME_ACK): sent and not yet acknowledged.
+/// Two: at 60 fps the next FRAME is sent while the viewer handles one (a viewer that keeps up never waits); a
+/// viewer that stalls (a busy page) holds at most two stale FRAMEs, then gets the newest, instead of handling a
+/// socket's backlog of seconds-old ones (their force drove the mouse's pseudo-haptics with a stale value).
+pub const FRAME_WINDOW: usize = 2;
+
 /// Messages of which only the latest matters: a newer one replaces a queued one (moved to the back).
 const LATEST_ONLY: [u8; 3] = [server::CONTROL, server::DEVICE, server::STRANDS];
 /// Messages a new SCENE makes stale (they describe the previous hairstyle).
@@ -80,12 +86,16 @@ pub struct Outbox {
     epoch: Instant,
     /// Time limit of [`Outbox::behind`].
     limit: Duration,
+    /// The sequence number of the latest FRAME the viewer acknowledged, plus one (0: it never has).
+    acked: AtomicU64,
+    /// Wakes the writer on an acknowledgement.
+    ack: Notify,
 }
 
 impl Outbox {
     /// An empty queue for viewer `id`, disconnected when behind for `limit`.
     pub fn new(id: u64, limit: Duration) -> Self {
-        Self { limit, id, queue: Mutex::new(Queue::default()), ready: Notify::new(), close: watch::channel(None).0, close_after: Mutex::new(None), sending_since: AtomicU64::new(0), epoch: Instant::now() }
+        Self { limit, id, queue: Mutex::new(Queue::default()), ready: Notify::new(), close: watch::channel(None).0, close_after: Mutex::new(None), sending_since: AtomicU64::new(0), epoch: Instant::now(), acked: AtomicU64::new(0), ack: Notify::new() }
     }
 
     /// Queues `msg` (coalescing, see the module); a queue over [`OUTBOX_CAPACITY`] messages or
@@ -124,6 +134,23 @@ impl Outbox {
     /// Waits until a message may have been queued.
     pub async fn ready(&self) {
         self.ready.notified().await
+    }
+
+    /// The viewer has finished with FRAME `seq` (FRAME_ACK); acknowledgements never go back.
+    pub fn ack(&self, seq: u32) {
+        self.acked.fetch_max(seq as u64 + 1, Ordering::Relaxed);
+        self.ack.notify_one();
+    }
+
+    /// The latest FRAME the viewer acknowledged; None if it never has (it is then sent every frame its writer
+    /// can, with no window).
+    pub fn acked(&self) -> Option<u32> {
+        self.acked.load(Ordering::Relaxed).checked_sub(1).map(|s| s as u32)
+    }
+
+    /// Waits until an acknowledgement may have arrived.
+    pub async fn ack_arrived(&self) {
+        self.ack.notified().await
     }
 
     /// Bytes queued now.

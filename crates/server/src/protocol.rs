@@ -34,6 +34,10 @@ pub mod client {
     /// u8 surface treatment (`tools::treatment::Treatment::id`: 0 virgin, 1 conditioned, 2 bleached, 3
     /// bleached twice).
     pub const SET_TREATMENT: u8 = 0x0A;
+    /// u32 sequence number of the last FRAME the viewer has finished with. From a viewer's first FRAME_ACK on,
+    /// the server keeps at most [`crate::outbox::FRAME_WINDOW`] FRAMEs unacknowledged on their way to it: a
+    /// viewer that falls behind gets the newest frame when it catches up, not a backlog of stale ones.
+    pub const FRAME_ACK: u8 = 0x0B;
 }
 
 /// Server -> client message types.
@@ -106,6 +110,8 @@ pub enum ClientMessage {
     Save(usize),
     /// Ping.
     Ping(u32),
+    /// The viewer has finished with the FRAME of this sequence number.
+    FrameAck(u32),
 }
 
 /// Why a client message was refused.
@@ -238,6 +244,10 @@ pub fn parse_client(b: &[u8]) -> Result<ClientMessage, WireError> {
         client::PING => {
             need(4, "PING")?;
             Ok(ClientMessage::Ping(u32::from_le_bytes([p[0], p[1], p[2], p[3]])))
+        }
+        client::FRAME_ACK => {
+            need(4, "FRAME_ACK")?;
+            Ok(ClientMessage::FrameAck(u32::from_le_bytes([p[0], p[1], p[2], p[3]])))
         }
         other => Err(err(code::UNKNOWN_TYPE, format!("unknown message type 0x{other:02x}"))),
     }
@@ -569,6 +579,13 @@ mod tests {
                 assert_eq!(buttons, 1);
             }
             m => panic!("{m:?}"),
+        }
+        // FRAME_ACK: a u32 sequence number, exactly.
+        assert_eq!(parse_client(&[client::FRAME_ACK, 1, 7, 1, 0, 0]).unwrap(), ClientMessage::FrameAck(263));
+        for n in [0, 3, 5] {
+            let e = parse_client(&[vec![client::FRAME_ACK, 1], vec![0; n]].concat()).unwrap_err();
+            assert_eq!(e.code, code::MALFORMED);
+            assert!(e.message.contains("FRAME_ACK needs a 4-byte payload"), "{}", e.message);
         }
     }
 

@@ -106,3 +106,55 @@ fn a_reading_viewer_gets_its_frames_on_time_while_another_does_not_read() {
         eprintln!("server: {}", l.split("delivery: ").nth(1).unwrap_or(&l));
     }
 }
+
+#[test]
+fn a_viewer_that_acknowledges_its_frames_gets_the_newest_after_a_stall_not_a_backlog() {
+    // A page busy for a while (software rendering, a loaded machine) used to find a socket's backlog of
+    // seconds-old FRAMEs when it came back, and drove the mouse's pseudo-haptics with their stale force. A
+    // viewer that acknowledges its FRAMEs (FRAME_ACK) has at most FRAME_WINDOW (2) on their way; after its stall
+    // it gets those two, then the newest. Stalls of 0.5, 1 and 1.5 s; after each, A reads and acknowledges for
+    // 1 s. Bounds: at most 2 FRAMEs older than the stall's end by more than a quarter of the stall (the frame
+    // schedule is 60 fps: sequence / fps), the third FRAME after the stall within 0.25 s of the newest
+    // sequence, and at least half the FRAMEs of the second read at 60 fps (the window does not starve a viewer
+    // that keeps up).
+    let fps = 60.0;
+    let s = serve(&["--render-strands", "2000", "--fps", "60", "--duration", "15"]);
+    let mut a = open(&s.http, None, "").unwrap();
+    let ack = |a: &mut tungstenite::WebSocket<std::net::TcpStream>, seq: u32| {
+        let mut m = vec![0x0B, 1];
+        m.extend_from_slice(&seq.to_le_bytes());
+        a.send(tungstenite::Message::Binary(m.into())).unwrap();
+    };
+    let seq_of = |m: &[u8]| u32::from_le_bytes(m[2..6].try_into().unwrap());
+    let first = first_of(&mut a, 0x82);
+    let start = Instant::now();
+    let s0 = seq_of(&first);
+    ack(&mut a, s0);
+    a.get_mut().set_read_timeout(Some(Duration::from_millis(5))).unwrap();
+    for stall in [0.5, 1.0, 1.5] {
+        std::thread::sleep(Duration::from_secs_f64(stall));
+        // The sequence the server is at now (its frames are scheduled at sequence / fps after the first).
+        let t = Instant::now();
+        let mut got: Vec<(f64, u32)> = Vec::new();
+        while t.elapsed() < Duration::from_secs(1) {
+            match a.read() {
+                Ok(tungstenite::Message::Binary(m)) if m[0] == 0x82 => {
+                    let q = seq_of(&m);
+                    got.push((t.elapsed().as_secs_f64(), q));
+                    ack(&mut a, q);
+                }
+                Ok(_) => {}
+                Err(tungstenite::Error::Io(e)) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
+                Err(e) => panic!("viewer A: {e}"),
+            }
+        }
+        // How old each FRAME was when read: where the schedule was at the stall's end less its sequence, s.
+        let now_seq = s0 as f64 + (t - start).as_secs_f64() * fps;
+        let stale = got.iter().filter(|&&(_, q)| now_seq - q as f64 > 0.25 * stall * fps).count();
+        eprintln!("stall {stall} s: {} FRAMEs in the next second, {stale} stale; the first sequences {:?} (the schedule at {now_seq:.0})", got.len(), got.iter().take(5).map(|g| g.1).collect::<Vec<_>>());
+        assert!(stale <= 2, "{stale} FRAMEs over {:.2} s old after a {stall} s stall: {:?}", 0.25 * stall, &got[..got.len().min(8)]);
+        assert!(got.len() >= 3, "{} FRAMEs in the second after the stall", got.len());
+        assert!(now_seq - got[2].1 as f64 <= 0.25 * fps, "the third FRAME after a {stall} s stall is {} (the schedule at {now_seq:.0})", got[2].1);
+        assert!(got.len() as f64 >= 0.5 * fps, "{} FRAMEs in the second after the stall (at {fps} fps)", got.len());
+    }
+}

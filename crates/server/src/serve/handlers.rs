@@ -45,6 +45,12 @@ pub(super) fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
     let not_controller = || Some(protocol::encode_error(&WireError { code: protocol::code::NOT_CONTROLLER, message: "another viewer controls the tool; send TAKE_CONTROL first".into() }));
     match msg {
         ClientMessage::Ping(t) => Some(protocol::encode_pong(t)),
+        ClientMessage::FrameAck(seq) => {
+            if let Some(v) = app.control.lock().unwrap().viewers.iter().find(|v| v.id == id) {
+                v.ack(seq);
+            }
+            None
+        }
         ClientMessage::TakeControl => {
             app.control.lock().unwrap().controller = Some(id);
             app.broadcast_control();

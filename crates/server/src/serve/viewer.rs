@@ -3,7 +3,8 @@
 
 use super::access::check_access;
 use super::app::{record_stopped, App};
-use crate::outbox::{CloseReason, Outbox};
+use crate::outbox::{CloseReason, Outbox, FRAME_WINDOW};
+use std::collections::VecDeque;
 use crate::protocol::{self, WireError};
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::extract::State;
@@ -61,7 +62,17 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
         // Since when the writer has been free to send (its pickup delays are measured from it).
         let mut free_since = Instant::now();
         let mut last_seq = None;
+        // FRAMEs sent and not yet acknowledged, oldest first (a viewer that acknowledges gets at most
+        // FRAME_WINDOW of them; one that never has is not held back and this keeps the last few).
+        let mut in_flight: VecDeque<u32> = VecDeque::new();
         loop {
+            let mut frame_seq = None;
+            if let Some(a) = out_w.acked() {
+                while in_flight.front().is_some_and(|&s| s <= a) {
+                    in_flight.pop_front();
+                }
+            }
+            let window_full = out_w.acked().is_some() && in_flight.len() >= FRAME_WINDOW;
             let bytes = match out_w.pop() {
                 Some(m) => m,
                 None if out_w.closes_after_queue() => {
@@ -69,13 +80,20 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
                     break;
                 }
                 None => tokio::select! {
-                    changed = frames.changed() => {
+                    // The viewer is behind: the writer waits for its acknowledgement, then sends the newest
+                    // frame (the wait is the viewer's, not a pickup delay of the server's).
+                    _ = out_w.ack_arrived(), if window_full => {
+                        free_since = Instant::now();
+                        continue;
+                    }
+                    changed = frames.changed(), if !window_full => {
                         if changed.is_err() { break; }
                         let f = frames.borrow_and_update().clone();
                         if f.bytes.is_empty() { continue; }
                         let seq = protocol::frame_seq(&f.bytes).expect("a FRAME holds its sequence number");
                         app_w.delivery.pickup(&app_w.published, seq, f.published, last_seq, free_since);
                         last_seq = Some(seq);
+                        frame_seq = Some(seq);
                         let mut bytes = f.bytes.clone();
                         let you = app_w.control.lock().map(|c| c.controller == Some(id)).unwrap_or(false);
                         bytes[protocol::FRAME_FLAGS_OFFSET] = you as u8;
@@ -94,6 +112,12 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
             free_since = Instant::now();
             if !sent {
                 break;
+            }
+            if let Some(seq) = frame_seq {
+                in_flight.push_back(seq);
+                if in_flight.len() > 4 * FRAME_WINDOW {
+                    in_flight.pop_front();
+                }
             }
         }
         // Say why, unless a send was cut half way (the stream is then broken) or the socket failed.

@@ -32,6 +32,7 @@ mod hold;
 mod model;
 mod params;
 mod paper;
+mod pile;
 mod prepare;
 mod result;
 mod rows;
@@ -45,6 +46,7 @@ pub use crate::entanglement::Entanglement;
 pub use crate::hair_contact::HairContact;
 pub use hold::{hold_rate, Hold, HOLD_EVERY, HOLD_LOADS};
 pub use model::ForceModel;
+use pile::Pile;
 pub use params::InteractionParams;
 pub use result::{StepResult, StepTimings};
 
@@ -95,10 +97,10 @@ pub struct LocalInteraction {
     /// Each strand's constraint impulses of the last step: the next solve starts from them
     /// ([`LocalInteraction::warm_start`]).
     warm: Vec<Vec<Warm>>,
-    /// Each strand's arc length (m) at which the comb entered the wisp, while a tooth drags through it (None when
-    /// none does): the crossings the comb pushes ahead are those it met since ([`Entanglement::pile_factor`]). A
-    /// wisp that leaves every tooth leaves its pile behind.
-    piles: Vec<Option<f64>>,
+    /// Each strand's pile of tangles pushed ahead of the comb ([`Pile`]: where the comb entered the wisp and the
+    /// farthest a tooth has dragged through it since; None before any drag): the crossings the comb pushes ahead are
+    /// those it met since ([`Entanglement::pile_factor`]).
+    piles: Vec<Option<Pile>>,
     /// Buffers and caches of the step ([`workspace`]).
     ws: Workspace,
 }

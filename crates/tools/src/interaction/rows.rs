@@ -5,7 +5,7 @@
 
 use super::frame::{Pending, Solved, StepFrame};
 use super::warm::WarmTag;
-use super::{ForceModel, LocalInteraction};
+use super::{ForceModel, LocalInteraction, Pile};
 use crate::contact::Contact;
 use nalgebra::Vector3;
 use strand::constraint::{ConstraintKind, ConstraintRows, PointConstraint};
@@ -100,7 +100,8 @@ impl LocalInteraction {
                     let hair_friction = self.params.hair_contact.map_or(0.0, |hc| hc.friction);
                     // Where the comb entered the wisp: kept while a tooth drags through it, else this step's
                     // shallowest contact.
-                    let entry = self.piles[k].take().unwrap_or_else(|| mine.iter().map(|c| c.s).fold(f64::INFINITY, f64::min));
+                    let span = entanglement.map_or(0.0, |e| e.span);
+                    let entry = Pile::entry(&mut self.piles[k], mine.iter().map(|c| c.s), span);
                     for (i, c) in mine.iter().enumerate() {
                         let r_t = self.shape.capsules.get(c.primitive).map_or(0.0, |cap| cap.radius);
                         let parts = parting && entanglement.is_some_and(|e| e.parts(r_t));
@@ -118,7 +119,7 @@ impl LocalInteraction {
                             let distance = r_t + reach - c.depth;
                             let share = crate::entanglement::parted_share(distance, wisp_radius, r_t + r_f);
                             let curl = crate::entanglement::curl_curvature(strand, c.s);
-                            self.piles[k] = Some(entry);
+                            Pile::reach(&mut self.piles[k], entry, c.s);
                             let max_force = friction * share * e.parting_load_piled(ei, r_f, r_t, w, strand.model.length - c.s, curl, hair_friction, c.s - entry);
                             if max_force > 0.0 {
                                 cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Drag { max_force, slip_speed: e.slip_speed }, velocity: c.tool_velocity });

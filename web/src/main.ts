@@ -144,7 +144,7 @@ ws.onmessage = (ev) => {
       const f = P.decodeFrame(buf);
       onFrame(f);
       // Done with it: the server sends the next (at most two on their way), never a backlog (FRAME_ACK).
-      if (ws.readyState === WebSocket.OPEN) ws.send(P.encodeFrameAck(f.seq));
+      status.send(P.encodeFrameAck(f.seq));
       break;
     }
     case P.Server.STRANDS: onStrands(P.decodeStrands(buf)); break;

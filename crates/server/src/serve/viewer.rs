@@ -62,17 +62,19 @@ async fn viewer(socket: WebSocket, app: Arc<App>) {
         // Since when the writer has been free to send (its pickup delays are measured from it).
         let mut free_since = Instant::now();
         let mut last_seq = None;
-        // FRAMEs sent and not yet acknowledged, oldest first (a viewer that acknowledges gets at most
-        // FRAME_WINDOW of them; one that never has is not held back and this keeps the last few).
+        // FRAMEs sent and not yet acknowledged, oldest first: a viewer that acknowledges gets at most FRAME_WINDOW
+        // of them. They are kept (the last few) before its first acknowledgement too, so that the frames already
+        // on their way when it starts count against its window.
         let mut in_flight: VecDeque<u32> = VecDeque::new();
         loop {
             let mut frame_seq = None;
-            if let Some(a) = out_w.acked() {
+            let acked = out_w.acked();
+            if let Some(a) = acked {
                 while in_flight.front().is_some_and(|&s| s <= a) {
                     in_flight.pop_front();
                 }
             }
-            let window_full = out_w.acked().is_some() && in_flight.len() >= FRAME_WINDOW;
+            let window_full = acked.is_some() && in_flight.len() >= FRAME_WINDOW;
             let bytes = match out_w.pop() {
                 Some(m) => m,
                 None if out_w.closes_after_queue() => {

@@ -22,19 +22,14 @@ impl Pile {
     /// contact lies more than a span from the stretch dragged through (the pile is then dropped). Without a pile:
     /// the shallowest contact.
     pub(crate) fn entry(slot: &mut Option<Pile>, contacts: impl Iterator<Item = f64> + Clone, span: f64) -> f64 {
-        let shallowest = contacts.clone().fold(f64::INFINITY, f64::min);
         if let Some(p) = *slot {
-            let mut any = false;
-            let near = contacts.clone().any(|s| {
-                any = true;
-                s >= p.lo - span && s <= p.hi + span
-            });
-            if near || !any {
+            let mut this_step = contacts.clone().peekable();
+            if this_step.peek().is_none() || this_step.any(|s| s >= p.lo - span && s <= p.hi + span) {
                 return p.entry;
             }
             *slot = None;
         }
-        shallowest
+        contacts.fold(f64::INFINITY, f64::min)
     }
 
     /// Records a tooth dragging through the wisp at arc length `s` (m), counting from `entry` (from

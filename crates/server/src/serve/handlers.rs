@@ -41,7 +41,9 @@ pub(super) fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
             return Some(protocol::encode_error(&e));
         }
     };
-    let controls = app.control.lock().unwrap().controller == Some(id);
+    // Whether this viewer holds the tool, read only by the messages that need it (a PING or a FRAME_ACK, sent
+    // every frame, takes the control lock at most once).
+    let controls = || app.control.lock().unwrap().controller == Some(id);
     let not_controller = || Some(protocol::encode_error(&WireError { code: protocol::code::NOT_CONTROLLER, message: "another viewer controls the tool; send TAKE_CONTROL first".into() }));
     match msg {
         ClientMessage::Ping(t) => Some(protocol::encode_pong(t)),
@@ -57,7 +59,7 @@ pub(super) fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
             None
         }
         ClientMessage::Pose { position, rotation, buttons } => {
-            if !controls {
+            if !controls() {
                 return not_controller();
             }
             if app.udp.is_some() {
@@ -69,7 +71,7 @@ pub(super) fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
             None
         }
         ClientMessage::Command(c) => {
-            if !controls {
+            if !controls() {
                 return not_controller();
             }
             let _ = app.commands.lock().unwrap().send(c);
@@ -78,7 +80,7 @@ pub(super) fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
         ClientMessage::Save(format) => {
             // A SAVE writes the whole hairstyle (up to a second of work at 100k strands): only the viewer in
             // control, at most one per `SAVE_INTERVAL`.
-            if !controls {
+            if !controls() {
                 return not_controller();
             }
             {
@@ -94,7 +96,7 @@ pub(super) fn handle(app: &App, id: u64, bytes: &[u8]) -> Option<Vec<u8>> {
             }
         }
         ClientMessage::Load(format, opts, follow, bytes) => {
-            if !controls {
+            if !controls() {
                 return not_controller();
             }
             let f = hairstyle::formats::Format::from_path(Path::new(&format!("x.{}", protocol::FORMATS[format]))).expect("known extension");

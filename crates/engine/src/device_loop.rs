@@ -48,6 +48,23 @@ pub const MAX_PERIOD_STEPS: usize = 10 * MAX_DEVICE_STEPS;
 /// physics thread is stuck; counted in [`PhysicsStats::stalls`], and the record stops matching its replay).
 pub const PHYSICS_STALL: f64 = 0.1;
 
+/// A physics step whose wall time exceeds its CPU time by more than this share of the period counts as
+/// preempted ([`PhysicsStats::preempted`]), dimensionless.
+pub const PREEMPTED: f64 = 0.1;
+
+/// What the physics thread measured ([`PhysicsStats`]).
+struct PhysicsRun {
+    /// Wall time to the model's publication.
+    wall: Histogram,
+    /// CPU time over the same span.
+    cpu: Histogram,
+    /// After the publication until the next hand-over was taken.
+    chores: Histogram,
+    over: u64,
+    preempted: u64,
+    panics: u64,
+}
+
 /// What the device thread hands the physics thread at the start of physics period `period`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Handover {
@@ -86,6 +103,15 @@ pub struct PhysicsStats {
     pub step_p999: f64,
     /// Longest step, s.
     pub step_max: f64,
+    /// The physics thread's CPU time over the same span ([`haptics::realtime::thread_cpu_time`]): mean and 99.9th
+    /// percentile, s (0 where the clock is not available). A step's wall time above its CPU time is time it was
+    /// off its CPU (preempted by a thread of higher priority, or its virtual CPU taken by the host); a CPU-time
+    /// tail as long as the wall-time tail is the step's own cost.
+    pub step_cpu_mean: f64,
+    /// 99.9th percentile of the step's CPU time, s.
+    pub step_cpu_p999: f64,
+    /// Steps off their CPU for more than [`PREEMPTED`] of the period.
+    pub preempted: u64,
     /// What the physics thread did after a step had published its model, before taking the next hand-over (the
     /// record, the viewers' snapshot): mean and longest, s. The device loop does not wait for it.
     pub chores_mean: f64,
@@ -108,7 +134,7 @@ pub struct PhysicsStats {
 /// The running pair of threads; [`DeviceLoop::stop`] ends both.
 pub struct DeviceLoop {
     device: HapticLoop<Box<dyn HapticDevice>>,
-    physics: JoinHandle<(Histogram, Histogram, u64, u64)>,
+    physics: JoinHandle<PhysicsRun>,
     stop: Arc<AtomicBool>,
     extended: Arc<AtomicU64>,
     waits: Arc<AtomicU64>,
@@ -152,7 +178,7 @@ impl DeviceLoop {
                         refused(format!("physics thread: {why}"));
                     }
                 }
-                let (mut hist, mut chores, mut over, mut panics) = (Histogram::new(), Histogram::new(), 0u64, 0u64);
+                let mut run = PhysicsRun { wall: Histogram::new(), cpu: Histogram::new(), chores: Histogram::new(), over: 0, preempted: 0, panics: 0 };
                 let mut next = 1u64;
                 let mut last = first;
                 while !stop_p.load(Ordering::Relaxed) {
@@ -162,10 +188,11 @@ impl DeviceLoop {
                     }
                     let h = *hand_out.read();
                     let t0 = Instant::now();
+                    let cpu0 = haptics::realtime::thread_cpu_time();
                     // The step's model goes to the device loop the moment the step gives it (once a period); the
                     // step's time is until then.
                     let (panicked, unpublished) = (Published { model: HairReaction::none(), step: u64::MAX - h.period, ..last }, last);
-                    let mut took: Option<(f64, Published)> = None;
+                    let mut took: Option<(f64, Option<f64>, Published)> = None;
                     let mut publish = |out: Published| {
                         if took.is_none() {
                             pub_in.write(out);
@@ -173,25 +200,30 @@ impl DeviceLoop {
                             if let Some(t) = device_thread_p.get() {
                                 t.unpark();
                             }
-                            took = Some((t0.elapsed().as_secs_f64(), out));
+                            took = Some((t0.elapsed().as_secs_f64(), haptics::realtime::thread_cpu_time(), out));
                         }
                     };
                     let ran = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| physics(&h, &mut publish)));
                     if ran.is_err() {
-                        panics += 1;
+                        run.panics += 1;
                         // Before its model: no hair for the next period (a model of its own: the device side takes it).
                         publish(panicked);
                     }
                     // A step that never published (a caller's bug) is not waited for past its end.
                     publish(unpublished);
-                    let (took, out) = took.expect("published above");
+                    let (took, cpu1, out) = took.expect("published above");
                     last = out;
-                    hist.add(took);
-                    chores.add(t0.elapsed().as_secs_f64() - took);
-                    over += (took > dt) as u64;
+                    run.wall.add(took);
+                    if let (Some(a), Some(b)) = (cpu0, cpu1) {
+                        let cpu = (b - a).max(0.0);
+                        run.cpu.add(cpu);
+                        run.preempted += (took - cpu > PREEMPTED * dt) as u64;
+                    }
+                    run.chores.add(t0.elapsed().as_secs_f64() - took);
+                    run.over += (took > dt) as u64;
                     next = h.period + 1;
                 }
-                (hist, chores, over, panics)
+                run
             })
             .map_err(|e| format!("cannot start the physics thread: {e}"))?;
 
@@ -301,7 +333,9 @@ impl DeviceLoop {
         let (device, _dev) = self.device.stop();
         self.stop.store(true, Ordering::Relaxed);
         self.physics.thread().unpark();
-        let (hist, chores, over, panics) = self.physics.join().unwrap_or_else(|_| (Histogram::new(), Histogram::new(), 0, 1));
+        let run = self.physics.join().unwrap_or_else(|_| PhysicsRun { wall: Histogram::new(), cpu: Histogram::new(), chores: Histogram::new(), over: 0, preempted: 0, panics: 1 });
+        let (hist, chores) = (&run.wall, &run.chores);
+        let cpu = (run.cpu.n > 0).then_some(&run.cpu);
         let physics = PhysicsStats {
             steps: hist.n,
             step_mean: hist.mean(),
@@ -309,13 +343,16 @@ impl DeviceLoop {
             step_p99: hist.quantile(0.99),
             step_p999: hist.quantile(0.999),
             step_max: hist.max,
+            step_cpu_mean: cpu.map_or(0.0, Histogram::mean),
+            step_cpu_p999: cpu.map_or(0.0, |c| c.quantile(0.999)),
+            preempted: run.preempted,
             chores_mean: chores.mean(),
             chores_max: chores.max,
-            over,
+            over: run.over,
             extended: self.extended.load(Ordering::Relaxed),
             waits: self.waits.load(Ordering::Relaxed),
             stalls: self.stalls.load(Ordering::Relaxed),
-            panics,
+            panics: run.panics,
         };
         (device, physics)
     }

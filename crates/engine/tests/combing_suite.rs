@@ -224,9 +224,10 @@ fn the_combing_law_meets_the_measured_anchors() {
         let f = &r.figures;
         println!("| {} | {} | {} | {:?} |", r.case.label(), OverLayouts::of(&f.peak), OverLayouts::of(&f.median), f.mean_fifths().map(|x| (x * 1000.0).round() / 1000.0));
     }
-    // Every criterion, measured against its bounds. The ones the law does not meet yet are listed in `unmet` (and
-    // in docs/combing.md): printed, not asserted; every other one is asserted.
-    let unmet = ["african wet peak / dry peak"];
+    // Every criterion, measured against its bounds. The ones the law does not meet yet would be listed in `unmet`
+    // (and in docs/combing.md): printed, not asserted; every other one is asserted. Since the curls' hooks
+    // (2026-11-29 night) African wet / dry is met and asserted too.
+    let unmet: [&str; 0] = [];
     // The dry end peak and the wet rise read the layouts' geometry as much as the law (docs/combing.md, "The combing
     // curve's shape"): met on some presets by a few per cent, and a change of round-off alone (main df3070b, no
     // change of the law) flipped GA1's two. Printed and counted, not asserted. Wet, the largest fifth not the tips'

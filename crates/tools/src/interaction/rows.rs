@@ -98,6 +98,8 @@ impl LocalInteraction {
                     // capsule (a comb's spine: `Entanglement::parts`) pushes it as a solid at the fibre's radius.
                     let parting = entanglement.is_some() && wisp_radius > radius;
                     let hair_friction = self.params.hair_contact.map_or(0.0, |hc| hc.friction);
+                    // The wisps' packing: the density of the neighbours a curled parted fibre hooks.
+                    let packing = self.params.hair_contact.unwrap_or_default().packing;
                     // Where the comb entered the wisp: kept while a tooth drags through it, else this step's
                     // shallowest contact.
                     let span = entanglement.map_or(0.0, |e| e.span);
@@ -120,7 +122,7 @@ impl LocalInteraction {
                             let share = crate::entanglement::parted_share(distance, wisp_radius, r_t + r_f);
                             let curl = crate::entanglement::curl_curvature(strand, c.s);
                             Pile::reach(&mut self.piles[k], entry, c.s);
-                            let max_force = friction * share * e.parting_load_piled(ei, r_f, r_t, w, strand.model.length - c.s, curl, hair_friction, c.s - entry);
+                            let max_force = friction * share * e.parting_load_piled(ei, r_f, r_t, w, strand.model.length - c.s, curl, hair_friction, c.s - entry, packing);
                             if max_force > 0.0 {
                                 cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Drag { max_force, slip_speed: e.slip_speed }, velocity: c.tool_velocity });
                                 levers.push(c.lever);

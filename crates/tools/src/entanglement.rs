@@ -284,17 +284,36 @@ impl Entanglement {
         1.5 * (tooth_radius + fibre_radius) / self.span
     }
 
-    /// Whether wet crossings are zipped shut (the module's law): the capillary adhesion between two fibres over a
-    /// span, `w c f_a r_f span` (its energy per unit length `f_a r_f`, at wetness `wetness` and the wettability `c`),
-    /// is at least the bending that aligns two fibres crossing at the tooth's turn `theta_t`
+    /// The zipping ratio of wet crossings, dimensionless (the module's law): the capillary adhesion between two
+    /// fibres over a span, `w c f_a r_f span` (its energy per unit length `f_a r_f`, at wetness `w` and the
+    /// wettability `c`), over the bending that aligns two fibres crossing at the tooth's turn `theta_t`
     /// ([`Entanglement::tooth_turn`]), `2 E I theta_t^2 / span` (the elastocapillary coalescence of wet hair, Bico et
-    /// al., Nature 432, 690 (2004)). For a fibre of flexural rigidity `ei` (N m^2) and radius `fibre_radius` (m) on a
-    /// tooth of radius `tooth_radius` (m). Dry fibres are never zipped (test
-    /// `every_presets_crossings_zip_shut_wet_and_never_dry` gives the presets' margins).
-    pub fn zipped(&self, ei: f64, fibre_radius: f64, tooth_radius: f64, wetness: f64) -> bool {
+    /// al., Nature 432, 690 (2004)):
+    /// `w c f_a r_f span^2 / (2 E I theta_t^2)`. At 1 or more the crossings zip shut ([`Entanglement::zipped`]).
+    /// For a fibre of flexural rigidity `ei` (N m^2) and radius `fibre_radius` (m) on a tooth of radius
+    /// `tooth_radius` (m), at `wetness` (0..1, clamped; not finite counts as dry). 0 dry; infinite for a wet fibre
+    /// without flexural rigidity (`ei <= 0`). It grows with the wetness (the adhesion grows and, with the wet
+    /// modulus, the fibre softens; test `every_presets_crossings_zip_shut_wet_and_never_dry` gives the presets'
+    /// margins).
+    pub fn zipping_ratio(&self, ei: f64, fibre_radius: f64, tooth_radius: f64, wetness: f64) -> f64 {
         let w = if wetness.is_finite() { wetness.clamp(0.0, 1.0) } else { 0.0 };
+        if w <= 0.0 {
+            return 0.0;
+        }
         let theta = self.tooth_turn(fibre_radius, tooth_radius);
-        w > 0.0 && w * self.wettability * self.adhesion * fibre_radius * self.span * self.span >= 2.0 * ei * theta * theta
+        let bending = 2.0 * ei * theta * theta;
+        if bending <= 0.0 {
+            return f64::INFINITY;
+        }
+        w * self.wettability * self.adhesion * fibre_radius * self.span * self.span / bending
+    }
+
+    /// Whether wet crossings are zipped shut (the module's law): the zipping ratio
+    /// ([`Entanglement::zipping_ratio`], adhesion over bending) at least 1. Same arguments. Dry fibres are never
+    /// zipped. The same decision as comparing the adhesion with the bending directly: a correctly rounded quotient
+    /// of two positive numbers is at least 1 exactly when the numerator is at least the denominator.
+    pub fn zipped(&self, ei: f64, fibre_radius: f64, tooth_radius: f64, wetness: f64) -> bool {
+        self.zipping_ratio(ei, fibre_radius, tooth_radius, wetness) >= 1.0
     }
 
     /// The tangles' pile-up factor on the parted fibres' bending load, dimensionless (the module's law):
@@ -630,13 +649,22 @@ mod tests {
 
     #[test]
     fn every_presets_crossings_zip_shut_wet_and_never_dry() {
+        // One case by hand: H1 wet (E I 0.4 x 7.59e-9 = 3.036e-9 N m^2, r_f 46.55 um) on the 0.6 mm tooth, the
+        // default span 6.6 mm: theta_t = 1.5 x 0.64655 mm / 6.6 mm = 0.146943 rad; adhesion over a span
+        // 0.144 N/m x 46.55 um x (6.6 mm)^2 = 2.91991e-10 J, bending 2 x 3.036e-9 x 0.146943^2 = 1.31108e-10 J:
+        // ratio 2.2271 fully wet, 1.1135 half wet (by hand, 1e-4); dry 0.
+        let h1 = Entanglement::default();
+        let (ei_h1, rf_h1, rt_h1) = (0.4 * 7.59e-9, 46.55e-6, 0.6e-3);
+        assert!((h1.zipping_ratio(ei_h1, rf_h1, rt_h1, 1.0) - 2.2271).abs() < 1e-4, "{}", h1.zipping_ratio(ei_h1, rf_h1, rt_h1, 1.0));
+        assert!((h1.zipping_ratio(ei_h1, rf_h1, rt_h1, 0.5) - 1.1135).abs() < 1e-4, "{}", h1.zipping_ratio(ei_h1, rf_h1, rt_h1, 0.5));
+        assert_eq!(h1.zipping_ratio(ei_h1, rf_h1, rt_h1, 0.0), 0.0);
         // Every hair preset, every treatment (its wettability), the built-in comb's and brush's thinnest teeth and a
         // range of wetness, with the preset's own span, fibre radius and flexural rigidity at the wetness
-        // (`WetnessModel::hair`, E I = E(w) I_soft, as the local strands take it): dry, never zipped; the zipping
-        // ratio `w c f_a r_f span^2 / (2 E I theta_t^2)` grows with the wetness (the adhesion grows and the fibre
-        // softens), so once zipped a fibre stays zipped when wetter; fully wet on the comb's tooth every preset is
-        // zipped (the module's law: a wet tress has no straight-fibre tangles). `zipped` is that ratio >= 1, to the
-        // bit. The margins over the family are printed.
+        // (`WetnessModel::hair`, E I = E(w) I_soft, as the local strands take it): dry, the ratio is 0 and nothing
+        // is zipped; the ratio grows with the wetness (the adhesion grows and the fibre softens), so once zipped a
+        // fibre stays zipped when wetter; fully wet on the comb's tooth every preset is zipped, ratio >= 1 (the
+        // module's law: a wet tress has no straight-fibre tangles). `zipped` is the ratio at least 1. The margins
+        // over the family are printed.
         use crate::shape::ToolShape;
         use crate::treatment::Treatment;
         use crate::wetness::WetnessModel;
@@ -653,17 +681,18 @@ mod tests {
                     for k in 0..=20 {
                         let w = k as f64 / 20.0;
                         let ei = wet_model.hair(&hair, w).unwrap().young_modulus * section.i_soft();
-                        let theta = e.tooth_turn(rf, rt);
-                        let ratio = w * e.wettability * e.adhesion * rf * e.span * e.span / (2.0 * ei * theta * theta);
+                        let ratio = e.zipping_ratio(ei, rf, rt, w);
                         let case = format!("{} {} {tool} w {w}: ratio {ratio}", hair.name, t.name());
+                        assert!(ratio.is_finite() && ratio >= 0.0, "{case}");
                         assert_eq!(e.zipped(ei, rf, rt, w), ratio >= 1.0, "{case}");
                         assert!(ratio >= last, "{case}: below the drier {last}");
                         last = ratio;
                         if w == 0.0 {
+                            assert_eq!(ratio, 0.0, "{case}: dry");
                             assert!(!e.zipped(ei, rf, rt, w), "{case}: zipped dry");
                         }
                         if w == 1.0 && tool == "comb" {
-                            assert!(e.zipped(ei, rf, rt, w), "{case}: not zipped wet on the comb");
+                            assert!(ratio >= 1.0 && e.zipped(ei, rf, rt, w), "{case}: not zipped wet on the comb");
                             if t == Treatment::Virgin {
                                 lowest_wet_comb = lowest_wet_comb.min(ratio);
                                 highest_wet_comb = highest_wet_comb.max(ratio);

@@ -84,6 +84,13 @@ pub struct BudgetParams {
     pub raise_after: f64,
     /// Strands added or removed at a change, > 0. Default 4.
     pub step: usize,
+    /// The limit a session starts with, strands, > 0 (taken within [`BudgetParams::min_strands`,
+    /// `SessionParams::max_active`]); from there it rises by `step` at most every `raise_after` while the steps
+    /// afford it (stage 4). Default 24, the floor: a session started at the full 56 strands met the comb's
+    /// entry into the hair with 40-48 strands at 1.1-1.5 ms a step for 10-30 steps before the budget could
+    /// know (bench/HISTORY.md, 2026-11-29 night). A host that affords all 56 gets them after 8 raises (8 s of
+    /// strokes).
+    pub start: usize,
     /// The least strands the budget leaves simulated, > 0 (at most `SessionParams::max_active`). Default 24:
     /// the comb's teeth still meet hair along a stroke (bench/RESULTS.md).
     pub min_strands: usize,
@@ -91,7 +98,7 @@ pub struct BudgetParams {
 
 impl Default for BudgetParams {
     fn default() -> Self {
-        Self { enabled: true, target: 0.45, tail_target: 0.75, tail_share: 0.01, tail_window: 1.0, margin: 0.1, time_constant: 0.05, hold: 0.1, settle: 0.01, raise_after: 1.0, step: 4, min_strands: 24 }
+        Self { enabled: true, target: 0.45, tail_target: 0.75, tail_share: 0.01, tail_window: 1.0, margin: 0.1, time_constant: 0.05, hold: 0.1, settle: 0.01, raise_after: 1.0, step: 4, start: 24, min_strands: 24 }
     }
 }
 
@@ -126,8 +133,8 @@ impl BudgetParams {
         if !(self.tail_window > 0.0 && self.tail_window <= self.raise_after) {
             return p(format!("budget.tail_window must be > 0 s and at most budget.raise_after ({} s), got {}", self.raise_after, self.tail_window));
         }
-        if self.step == 0 || self.min_strands == 0 {
-            return p(format!("budget.step and budget.min_strands must be > 0, got {} and {}", self.step, self.min_strands));
+        if self.step == 0 || self.min_strands == 0 || self.start == 0 {
+            return p(format!("budget.step, budget.start and budget.min_strands must be > 0, got {}, {} and {}", self.step, self.start, self.min_strands));
         }
         Ok(())
     }
@@ -167,12 +174,15 @@ pub struct StrandBudget {
 }
 
 impl StrandBudget {
-    /// A budget for a loop of `period` s allowing at most `max_active` strands, starting there.
+    /// A budget for a loop of `period` s allowing at most `max_active` strands, starting at
+    /// [`BudgetParams::start`] (within the floor and `max_active`; the session applies it before its first step,
+    /// as [`crate::command::Command::LimitStrands`], if below `max_active`).
     pub fn new(params: BudgetParams, period: f64, max_active: usize) -> Self {
-        let report = BudgetReport { enabled: true, lowest: max_active, last: max_active, ..BudgetReport::default() };
+        let limit = params.start.clamp(params.min_strands.min(max_active), max_active);
+        let report = BudgetReport { enabled: true, lowest: limit, last: limit, ..BudgetReport::default() };
         let capacity = ((params.tail_window / period).round() as usize).max(1);
         let (window, scratch) = (Vec::with_capacity(capacity), Vec::with_capacity(capacity));
-        Self { params, period, max: max_active, limit: max_active, mean: None, since_change: 0.0, window, capacity, next: 0, slow: 0, most: 0, scratch, report }
+        Self { params, period, max: max_active, limit, mean: None, since_change: 0.0, window, capacity, next: 0, slow: 0, most: 0, scratch, report }
     }
 
     /// Steps a full tail window may hold over `tail_target` periods.
@@ -283,7 +293,7 @@ pub struct BudgetReport {
     pub enabled: bool,
     /// Times the limit changed.
     pub changes: u64,
-    /// The lowest limit, strands (`SessionParams::max_active` if never lowered).
+    /// The lowest limit, strands (the start, [`BudgetParams::start`], if never lowered).
     pub lowest: usize,
     /// The limit when the session stopped, strands.
     pub last: usize,
@@ -296,6 +306,11 @@ pub struct BudgetReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The default parameters but starting at the session's maximum (56 here): the budget's way down.
+    fn full() -> BudgetParams {
+        BudgetParams { start: 56, ..BudgetParams::default() }
+    }
 
     /// Runs `steps` steps of a loop whose step costs `per_strand` s per simulated strand plus `fixed` s, the
     /// simulated strands being the limit (the comb in the hair); returns the limits after each step.
@@ -330,7 +345,7 @@ mod tests {
         // excess (56 x 450 / 590 = 42, then by a step more while the running mean still remembers the 56 strands)
         // to 38-42 strands (42: 450 us, the most the target allows), in at most three changes, and kept there
         // (4 strands more would be expected to cost over 0.9 x 450 us).
-        let params = BudgetParams::default();
+        let params = full();
         let mut fast = StrandBudget::new(params, 1e-3, 56);
         assert!(run(&mut fast, 3000, 50e-6, 6e-6).iter().all(|&n| n == 56));
         let mut slow = StrandBudget::new(params, 1e-3, 56);
@@ -353,7 +368,7 @@ mod tests {
     fn a_preempted_step_is_not_a_trend_and_a_free_limit_is_not_raised() {
         // One 50 ms step (the host took the CPU) among 300 us steps: it counts as two periods, the mean rises
         // by (2 ms - 0.3 ms) / 50 = 34 us, and nothing changes.
-        let mut b = StrandBudget::new(BudgetParams::default(), 1e-3, 56);
+        let mut b = StrandBudget::new(full(), 1e-3, 56);
         for _ in 0..500 {
             assert_eq!(b.observe(300e-6, 56), None);
         }
@@ -383,7 +398,7 @@ mod tests {
         // Steps always too slow: down to min_strands and no lower; never-ending cheap steps: up to max_active and
         // no higher. A session allowing fewer than min_strands keeps its own maximum as the floor. A NaN time
         // counts as two periods.
-        let params = BudgetParams::default();
+        let params = full();
         let mut b = StrandBudget::new(params, 1e-3, 56);
         assert!(run(&mut b, 5000, 2e-3, 0.0).iter().all(|&n| (24..=56).contains(&n)));
         assert_eq!(b.limit(), 24);
@@ -406,7 +421,7 @@ mod tests {
         // (no raising and lowering in turn); the 99th percentile of the settled steps is within the tail target.
         // A tail within its share (0.5 % of the steps, even at two periods) or under the tail target (every 25th
         // step at 2.4x: 720 us) does not move the limit.
-        let params = BudgetParams::default();
+        let params = full();
         let cost = |every: usize, times: f64| move |i: usize, n: usize| 300e-6 * n as f64 / 56.0 * if i % every == every - 1 { times } else { 1.0 };
         for (every, times) in [(25, 3.0), (50, 3.0), (25, 2.6)] {
             let mut b = StrandBudget::new(params, 1e-3, 56);
@@ -434,7 +449,7 @@ mod tests {
         // (1.42 ms at 56 strands) the first change, in proportion to the cost, leaves the steps still slow (880 us
         // at 29 strands): the tail lowers it again once 11 slow steps came after the change had settled (10 ms),
         // before the 0.1 s hold, and the floor is reached within 50 steps of the comb's entry.
-        let params = BudgetParams::default();
+        let params = full();
         for (most, fixed, within) in [(56, 0.0, 350), (48, 0.0, 350), (56, 300e-6, 50)] {
             let mut b = StrandBudget::new(params, 1e-3, 56);
             let mut simulated = Vec::new();
@@ -456,6 +471,29 @@ mod tests {
     }
 
     #[test]
+    fn a_session_starts_at_the_floor_and_rises_as_far_as_the_host_affords() {
+        // Default parameters: the limit starts at 24 of 56. Comb in the hair (the limit binds): a fast host (6 us a
+        // strand + 50 us, 386 us at 56) gets all 56 in raises of 4 at least a second apart, within 9 s; a slow
+        // host (10 us a strand + 30 us) rises while 4 more strands would stay under 0.9 x 450 us and stops there
+        // (36: 390 us; 40 would cost 430 us, over 405 us), its mean within the target throughout. The comb out
+        // of the hair (2 strands simulated): nothing rises.
+        let params = BudgetParams::default();
+        let mut fast = StrandBudget::new(params, 1e-3, 56);
+        assert_eq!((fast.limit(), fast.report().lowest), (24, 24));
+        let limits = run(&mut fast, 9000, 50e-6, 6e-6);
+        assert_eq!(*limits.last().unwrap(), 56);
+        let raised: Vec<usize> = (1..limits.len()).filter(|&i| limits[i] != limits[i - 1]).collect();
+        assert_eq!(raised.len(), 8);
+        assert!(raised.windows(2).all(|w| w[1] - w[0] >= 1000) && limits.windows(2).all(|w| w[1] >= w[0]), "raised at steps {raised:?}");
+        let mut slow = StrandBudget::new(params, 1e-3, 56);
+        let limits = run(&mut slow, 9000, 30e-6, 10e-6);
+        assert_eq!(*limits.last().unwrap(), 36, "{:?}", slow.report());
+        assert!(limits.iter().all(|&n| 30e-6 + 10e-6 * n as f64 <= 0.45e-3));
+        let mut idle = StrandBudget::new(params, 1e-3, 56);
+        assert!((0..5000).all(|_| idle.observe(60e-6, 2).is_none()) && idle.limit() == 24);
+    }
+
+    #[test]
     fn bad_parameters_are_named() {
         for (bad, field) in [
             (BudgetParams { target: 1.0, ..Default::default() }, "budget.target"),
@@ -464,10 +502,11 @@ mod tests {
             (BudgetParams { tail_share: 0.5, ..Default::default() }, "budget.tail_share"),
             (BudgetParams { tail_window: 2.0, ..Default::default() }, "budget.tail_window"),
             (BudgetParams { settle: 0.2, ..Default::default() }, "budget.settle"),
+            (BudgetParams { start: 0, ..Default::default() }, "budget.step, budget.start and budget.min_strands"),
             (BudgetParams { time_constant: 0.0, ..Default::default() }, "budget.time_constant"),
             (BudgetParams { hold: f64::NAN, ..Default::default() }, "budget.hold"),
             (BudgetParams { raise_after: 0.05, ..Default::default() }, "budget.raise_after"),
-            (BudgetParams { min_strands: 0, ..Default::default() }, "budget.step and budget.min_strands"),
+            (BudgetParams { min_strands: 0, ..Default::default() }, "budget.step, budget.start and budget.min_strands"),
         ] {
             let e = bad.validate().unwrap_err().to_string();
             assert!(e.contains(field), "{e}");

@@ -191,7 +191,12 @@ impl Session {
         let epoch_h = reset_epoch.clone();
         let publish_every = params.publish_every;
         let budget_report = Arc::new(std::sync::Mutex::new(BudgetReport { lowest: params.max_active, last: params.max_active, ..BudgetReport::default() }));
-        let mut budget = params.budget.enabled.then(|| BudgetRun { budget: StrandBudget::new(params.budget, dt, params.max_active), change: None, shared: budget_report.clone() });
+        let mut budget = params.budget.enabled.then(|| {
+            let budget = StrandBudget::new(params.budget, dt, params.max_active);
+            // The limit it starts with, applied and recorded before the first step as its changes are.
+            let change = (budget.limit() < params.max_active).then(|| Command::LimitStrands(budget.limit() as u32));
+            BudgetRun { budget, change, shared: budget_report.clone() }
+        });
         // The physics thread's step (the device loop runs the coupling, `crate::device_loop`): the commands and
         // the physics step with the proxy's state the device thread handed over; then the record of the period
         // before (its device readings came with this hand-over), the tool input and the viewers' snapshot.

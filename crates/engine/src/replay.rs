@@ -120,7 +120,7 @@ mod tests {
         // the record replayed in lockstep, where nothing is timed, gives every force again to the bit.
         use crate::budget::BudgetParams;
         let scene = small_scene();
-        let budget = BudgetParams { target: 0.001, hold: 0.02, ..BudgetParams::default() };
+        let budget = BudgetParams { target: 0.001, hold: 0.02, start: 56, ..BudgetParams::default() };
         let params = SessionParams { budget, ..SessionParams::default() };
         let (path, sink) = record_file("replay-budget", &params);
         let (session, mut io) = Session::start_recording(scene.clone(), params, None, Some(sink)).unwrap();

@@ -2,7 +2,8 @@
 # The live loop driven by a haptic device (issues 13, 31): `coiffure serve --device` on the built-in head (100k
 # render strands), the physics at 1 kHz and the device loop at 4 and 10 kHz (`--device-rate`), with
 # `coiffure device-sim` streaming the comb strokes of bench/device-comb.toml (in the back hair from 0.3 s to
-# 5.55 s) at 1 kHz. Prints, per device rate, the server's haptic line (the physics: step p50, p99, p99.9, steps
+# 5.55 s) at 1 kHz. Prints, per device rate, the server's haptic line (the physics: step p50, p99, p99.9, its CPU
+# time's mean and p99.9 and the steps preempted (wall over CPU time by 0.1 periods), steps
 # over the period; the device loop: step p99.9, misses), its strand budget line, and device-sim's round trip
 # distribution, and keeps the device-sim traces in bench/out/ (their force quality: python3
 # bench/device_forces.py bench/out/device-4000.csv). Run after `cargo build --release -p coiffure-server`.

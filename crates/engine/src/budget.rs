@@ -34,8 +34,9 @@
 //!    over `target`
 //!    and `slow / tail_target`, `slow` the tail window's step just past the allowed share (the shortest of its
 //!    slowest `tail_share` x window + 1), and by at least [`BudgetParams::step`] strands, not below
-//!    [`BudgetParams::min_strands`]. (Lowered by `step` at a time, the comb entering the hair at 56 strands took
-//!    0.8 s to come down to what the host could afford, and most of a run's slowest steps were in it.)
+//!    [`BudgetParams::min_strands`]. (Lowered by `step` at a time, the comb entering the hair took most of a
+//!    second to come down to what the host could afford, and most of a run's slowest steps were in it;
+//!    bench/HISTORY.md, 2026-11-29 night.)
 //! 4. The limit rises by `step` (not above `SessionParams::max_active`) if the mean, scaled by the strands `step`
 //!    more would add, stays below `target (1 - margin)` periods and at most `tail_share` of the tail window's
 //!    steps, scaled the same way, are over `tail_target (1 - margin)` periods; but only
@@ -56,8 +57,8 @@ pub struct BudgetParams {
     /// periods keeps it near one; the tail itself is held by `tail_target`.
     pub target: f64,
     /// Step wall time, as a share of the haptic period, that at most `tail_share` of the steps may exceed,
-    /// dimensionless in (0, 1]. Default 0.75: the 99th percentile held at 0.75 periods; in the server the 99.9th
-    /// percentile has been 1.2-1.3x the 99th (bench/HISTORY.md, 2026-11-29 night), within the period.
+    /// dimensionless in (0, 1]. Default 0.75: the 99th percentile held at 0.75 periods, so that the 99.9th, a
+    /// little above it in the server (bench/HISTORY.md, 2026-11-29 night), stays within the period.
     pub tail_target: f64,
     /// Share of the steps allowed over `tail_target` periods, dimensionless in (0, 0.5). Default 0.01 (the 99th
     /// percentile; with a 1 s window at 1 kHz, ten steps).
@@ -76,7 +77,7 @@ pub struct BudgetParams {
     /// Time after a change whose steps the tail window does not take, and after which the tail alone may lower
     /// the limit again (before `hold`), s, in [0, `hold`]. Default 0.01: the strands beyond a lowered limit are
     /// let go at the next step, and a new choice of the active set is ten steps long; waiting the whole `hold`
-    /// let the comb entering the hair run 100 more steps at 1.5-2x the period (bench/HISTORY.md, 2026-11-29 night).
+    /// let the comb entering the hair run many more slow steps (bench/HISTORY.md, 2026-11-29 night).
     pub settle: f64,
     /// Least time since the last change before the limit is raised, s, >= `hold`. Default 1: the cheap
     /// moments of a stroke (the comb turning at its end) do not bring back strands that the next pass
@@ -87,9 +88,9 @@ pub struct BudgetParams {
     /// The limit a session starts with, strands, > 0 (taken within [`BudgetParams::min_strands`,
     /// `SessionParams::max_active`]); from there it rises by `step` at most every `raise_after` while the steps
     /// afford it (stage 4). Default 24, the floor: a session started at the full 56 strands met the comb's
-    /// entry into the hair with 40-48 strands at 1.1-1.5 ms a step for 10-30 steps before the budget could
-    /// know (bench/HISTORY.md, 2026-11-29 night). A host that affords all 56 gets them after 8 raises (8 s of
-    /// strokes).
+    /// entry into the hair with more strands than the host could afford, and its first slow steps came before
+    /// the budget could know (bench/HISTORY.md, 2026-11-29 night). A host that affords all 56 gets them after
+    /// (56 - 24) / `step` raises, `raise_after` apart.
     pub start: usize,
     /// The least strands the budget leaves simulated, > 0 (at most `SessionParams::max_active`). Default 24:
     /// the comb's teeth still meet hair along a stroke (bench/RESULTS.md).

@@ -190,9 +190,10 @@ impl Session {
         // Haptic thread.
         let epoch_h = reset_epoch.clone();
         let publish_every = params.publish_every;
-        let budget_report = Arc::new(std::sync::Mutex::new(BudgetReport { lowest: params.max_active, last: params.max_active, ..BudgetReport::default() }));
-        let mut budget = params.budget.enabled.then(|| {
-            let budget = StrandBudget::new(params.budget, dt, params.max_active);
+        let budget = params.budget.enabled.then(|| StrandBudget::new(params.budget, dt, params.max_active));
+        // The report until the haptic thread hands over its own: the budget's (its starting limit), or none.
+        let budget_report = Arc::new(std::sync::Mutex::new(budget.as_ref().map_or(BudgetReport { lowest: params.max_active, last: params.max_active, ..BudgetReport::default() }, StrandBudget::report)));
+        let mut budget = budget.map(|budget| {
             // The limit it starts with, applied and recorded before the first step as its changes are.
             let change = (budget.limit() < params.max_active).then(|| Command::LimitStrands(budget.limit() as u32));
             BudgetRun { budget, change, shared: budget_report.clone() }

@@ -330,6 +330,10 @@ impl Entanglement {
         let mu = if hair_friction.is_finite() { hair_friction.max(0.0) } else { 0.0 };
         let n = if travel.is_finite() { travel.abs() / self.span } else { 0.0 };
         let turn = self.tooth_turn(fibre_radius, tooth_radius);
+        // The hook's angle: the end slope of the curl's arc beyond the tooth's turn, `4 h_k / span` with `h_k`
+        // [`Entanglement::hook_depth`]. Written in this order, not through `hook_depth`: the two differ in the last
+        // bit, and a wet African tress's six-layout peak moves by a few per cent with it (the anchors' round-off sensitivity,
+        // docs/combing.md).
         let hook = (4.0 * self.sagitta(curvature) / self.span - turn).max(0.0);
         let theta = if zipped { hook } else { hook.max(turn) };
         1.0 + mu * theta * n

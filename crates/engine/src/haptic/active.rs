@@ -129,6 +129,10 @@ pub(crate) struct GuideBounds {
     centres: Vec<Vector3<f64>>,
     /// Its reference's length (rounding allowance included), m.
     radii: Vec<f64>,
+    /// Per guide, per reference sample: the reference's length from that sample to the tip (rounding allowance
+    /// included), m. Carried sample k lies within it of every carried sample before it, so a scan that finds a
+    /// sample farther than that from the tool's reach passes over the rest of the guide.
+    beyond: Vec<Vec<f64>>,
 }
 
 impl GuideBounds {
@@ -140,7 +144,20 @@ impl GuideBounds {
     pub fn new(scene: &crate::scene::Scene) -> Self {
         let centres = scene.guides.iter().map(|g| g.reference.first().copied().unwrap_or_default()).collect();
         let radii = scene.guides.iter().map(|g| g.reference.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>() * (1.0 + 1e-12) + Self::ROUNDING).collect();
-        Self { centres, radii }
+        let beyond = scene
+            .guides
+            .iter()
+            .map(|g| {
+                let mut left: Vec<f64> = g.reference.windows(2).rev().scan(0.0, |sum, w| {
+                    *sum += (w[1] - w[0]).norm();
+                    Some(*sum)
+                }).collect();
+                left.reverse();
+                left.push(0.0);
+                left.iter().map(|l| l * (1.0 + 1e-12) + Self::ROUNDING).collect()
+            })
+            .collect();
+        Self { centres, radii, beyond }
     }
 }
 
@@ -261,10 +278,16 @@ impl HapticCore {
                 continue;
             }
             let mut d = f64::INFINITY;
-            for x in self.model.scene.guide_points(nodes, head, g) {
-                // Cheap rejection by the shape's bounding sphere swept along the way.
+            let weights = self.model.scene.guide_hold_weights(g);
+            for (k, x) in self.model.scene.guide_points_each(nodes, head, g, &weights).enumerate() {
+                // Cheap rejection by the shape's bounding sphere swept along the way; the samples after this one
+                // lie within `beyond` of it: if they are all as far, none is carried (the same choice).
                 let limit = r.min(d);
-                if point_segment_distance(&x, &tool, &ahead) - reach >= limit {
+                let far = point_segment_distance(&x, &tool, &ahead) - reach;
+                if far - self.model.bounds.beyond[g].get(k).copied().unwrap_or(f64::INFINITY) >= limit {
+                    break;
+                }
+                if far >= limit {
                     continue;
                 }
                 for o in &poses {
@@ -876,8 +899,9 @@ mod tests {
     #[test]
     fn the_guide_balls_hold_every_mapped_sample_and_the_scan_chooses_the_same_guides() {
         // Lattice nodes moved by a smooth field (up to ~1 cm), the head still or turned and moved: every guide
-        // sample carried by them lies in its guide's ball (its length about its root), and a choice made with the
-        // balls is the choice made sample by sample (balls disabled), for tools all over the head.
+        // sample carried by them lies in its guide's ball (its length about its root) and every later sample within
+        // the rest length beyond it, and a choice made with the balls and the early stop along a guide is the choice
+        // made sample by sample (both disabled), for tools all over the head.
         let scene = small_scene();
         let params = SessionParams::default();
         let mut core = HapticCore::new(scene.clone(), params).unwrap();
@@ -888,9 +912,16 @@ mod tests {
             let nodes: Vec<Point3<f64>> = rest.iter().map(|p| head * p + Vector3::new(a * (7.0 * p.y).sin(), a * (5.0 * p.z).cos(), -a * p.x)).collect();
             for g in 0..scene.guides.len() {
                 let centre = (head * Point3::from(core.model.bounds.centres[g])).coords;
-                for x in scene.guide_points(&nodes, &head, g) {
+                let points = scene.guide_points(&nodes, &head, g);
+                for (j, x) in points.iter().enumerate() {
                     assert!((x - centre).norm() <= core.model.bounds.radii[g], "guide {g}, a {a}");
+                    // Every later sample within the rest length beyond this one.
+                    let beyond = core.model.bounds.beyond[g][j];
+                    assert!(points[j..].iter().all(|y| (y - x).norm() <= beyond), "guide {g}, sample {j}, a {a}");
                 }
+                // One at a time, the same numbers.
+                let weights = scene.guide_hold_weights(g);
+                assert_eq!(scene.guide_points_each(&nodes, &head, g, &weights).collect::<Vec<_>>(), points, "guide {g}");
             }
             for k in 0..12 {
                 let angle = k as f64 * 0.52;
@@ -898,8 +929,10 @@ mod tests {
                 let ahead = tool + Vector3::new(0.0, 0.0, -0.015);
                 let with = core.choose(&tool, &ahead, &test_rot(), &nodes, &head);
                 let radii = std::mem::replace(&mut core.model.bounds.radii, vec![f64::INFINITY; scene.guides.len()]);
+                let beyond = std::mem::replace(&mut core.model.bounds.beyond, vec![Vec::new(); scene.guides.len()]);
                 let without = core.choose(&tool, &ahead, &test_rot(), &nodes, &head);
                 core.model.bounds.radii = radii;
+                core.model.bounds.beyond = beyond;
                 assert_eq!(with, without, "tool at {tool:?}, a {a}");
                 compared += with.len();
             }

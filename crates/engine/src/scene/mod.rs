@@ -147,6 +147,12 @@ impl Scene {
         carry_strand(&self.lattice.ffd, nodes, head, &self.guides[g].reference, &self.guide_hold_weights(g), &mut out);
         out
     }
+
+    /// [`Scene::guide_points`] one at a time, root first ([`CarriedPoints`]), `weights` being
+    /// [`Scene::guide_hold_weights`] of guide `g`.
+    pub fn guide_points_each<'a>(&'a self, nodes: &'a [Point3<f64>], head: &'a Isometry3<f64>, g: usize, weights: &'a [f64]) -> CarriedPoints<'a> {
+        CarriedPoints::new(&self.lattice.ffd, nodes, head, &self.guides[g].reference, weights)
+    }
 }
 
 /// Weight of the lattice's motion, in [0, 1], at rest arc length `s` (m) from a strand's root, the head
@@ -180,10 +186,55 @@ pub fn carried(ffd: &FfdLattice, nodes: &[Point3<f64>], head: &Isometry3<f64>, p
 /// strand then has its rest segment lengths exactly, whatever the targets.
 pub fn follow_the_leader(rest: &[Vector3<f64>], head: &Isometry3<f64>, points: &mut [Vector3<f64>]) {
     for k in 1..points.len().min(rest.len()) {
-        let length = (rest[k] - rest[k - 1]).norm();
-        let to = points[k] - points[k - 1];
-        let dir = if to.norm() > 1e-12 { to / to.norm() } else { (head.rotation * (rest[k] - rest[k - 1])).try_normalize(0.0).unwrap_or_else(Vector3::zeros) };
-        points[k] = points[k - 1] + dir * length;
+        points[k] = lead(&points[k - 1], &points[k], &rest[k - 1], &rest[k], head);
+    }
+}
+
+/// One point of [`follow_the_leader`]: the point after `previous` (m, world) towards its `target` (m, world), at
+/// the rest distance from `rest_before` to `rest_here` (m, head frame), along that rest segment turned by `head`
+/// if the target is on `previous`.
+fn lead(previous: &Vector3<f64>, target: &Vector3<f64>, rest_before: &Vector3<f64>, rest_here: &Vector3<f64>, head: &Isometry3<f64>) -> Vector3<f64> {
+    let length = (rest_here - rest_before).norm();
+    let to = target - previous;
+    let dir = if to.norm() > 1e-12 { to / to.norm() } else { (head.rotation * (rest_here - rest_before)).try_normalize(0.0).unwrap_or_else(Vector3::zeros) };
+    previous + dir * length
+}
+
+/// [`carry_strand`]'s points one at a time, root first: each target ([`carried`]) then its [`follow_the_leader`]
+/// point, the same operations on the same numbers (so the same points), for a caller that may stop before the
+/// tip (the choice of the local strands passes over the rest of a guide that cannot come near the tool). Point k
+/// is within the rest length from sample k to sample j of point j (the segments keep their rest lengths).
+pub struct CarriedPoints<'a> {
+    ffd: &'a FfdLattice,
+    nodes: &'a [Point3<f64>],
+    head: &'a Isometry3<f64>,
+    rest: &'a [Vector3<f64>],
+    weights: &'a [f64],
+    next: usize,
+    last: Vector3<f64>,
+}
+
+impl<'a> CarriedPoints<'a> {
+    /// The points of the strand of rest points `rest` (head frame, root first, m) with the lattice weights
+    /// `weights`, carried by the head at `head` and the lattice `nodes` ([`carry_strand`]).
+    pub fn new(ffd: &'a FfdLattice, nodes: &'a [Point3<f64>], head: &'a Isometry3<f64>, rest: &'a [Vector3<f64>], weights: &'a [f64]) -> Self {
+        Self { ffd, nodes, head, rest, weights, next: 0, last: Vector3::zeros() }
+    }
+}
+
+impl Iterator for CarriedPoints<'_> {
+    type Item = Vector3<f64>;
+
+    fn next(&mut self) -> Option<Vector3<f64>> {
+        let k = self.next;
+        if k >= self.rest.len().min(self.weights.len()) {
+            return None;
+        }
+        let target = carried(self.ffd, self.nodes, self.head, &self.rest[k], self.weights[k]);
+        let x = if k == 0 { target } else { lead(&self.last, &target, &self.rest[k - 1], &self.rest[k], self.head) };
+        self.next += 1;
+        self.last = x;
+        Some(x)
     }
 }
 
@@ -196,8 +247,7 @@ pub fn follow_the_leader(rest: &[Vector3<f64>], head: &Isometry3<f64>, points: &
 /// lengths. Fills `out` (cleared first) with the points now, m (world).
 pub fn carry_strand(ffd: &FfdLattice, nodes: &[Point3<f64>], head: &Isometry3<f64>, rest: &[Vector3<f64>], weights: &[f64], out: &mut Vec<Vector3<f64>>) {
     out.clear();
-    out.extend(rest.iter().zip(weights).map(|(p, &w)| carried(ffd, nodes, head, p, w)));
-    follow_the_leader(rest, head, out);
+    out.extend(CarriedPoints::new(ffd, nodes, head, rest, weights));
 }
 
 /// FFD of a head-frame point through lattice nodes (clamped to the embedded volume;

@@ -230,7 +230,7 @@ impl Session {
                 // with this hand-over.
                 if let Some((commands, lattice_version)) = pending.take() {
                     let (first, more) = h.previous_readings().split_first().map_or((None, &[][..]), |(a, b)| (*a, b));
-                    r.send(StepRecord { reading: first, more_readings: more.to_vec(), lattice_version, commands, force: h.force });
+                    r.send(StepRecord { reading: first, more_readings: more.to_vec(), lattice_version, commands, force: h.force, carried: h.carried });
                 }
                 pending = Some((cmds, lattice.version));
             }

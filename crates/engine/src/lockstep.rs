@@ -73,15 +73,21 @@ impl Lockstep {
     /// `commands` and the physics step with the latest lattice snapshot (recorded if asked for). Returns the
     /// period's last device command.
     pub fn haptic_step(&mut self, commands: &[Command], readings: &[Option<DeviceReading>]) -> DeviceCommand {
+        self.haptic_period(commands, readings, 0)
+    }
+
+    /// [`Lockstep::haptic_step`] with `carried` device steps before the last one, with the reading before it
+    /// ([`StepRecord::carried`], as a live device loop that lost ticks ran them).
+    pub fn haptic_period(&mut self, commands: &[Command], readings: &[Option<DeviceReading>], carried: u32) -> DeviceCommand {
         let mut period = std::mem::take(&mut self.device_commands);
         period.clear();
-        self.haptic.step_rates(commands, readings, &self.lattice, self.dt, |_, c| period.push(*c));
+        self.haptic.step_rates(commands, readings, carried, &self.lattice, self.dt, |_, c| period.push(*c));
         let last = period.last().copied().unwrap_or_default();
         self.device_commands = period;
         if let Some(r) = self.record.as_mut() {
             let reading = readings.first().copied().flatten();
             let more_readings = readings.get(1..).unwrap_or_default().to_vec();
-            r.steps.push(StepRecord { reading, more_readings, lattice_version: self.lattice.version, commands: commands.to_vec(), force: last.force });
+            r.steps.push(StepRecord { reading, more_readings, lattice_version: self.lattice.version, commands: commands.to_vec(), force: last.force, carried });
         }
         last
     }
@@ -101,7 +107,7 @@ impl Lockstep {
                 self.global_step(&input);
                 each(self, None);
             }
-            let cmd = self.haptic_step(&s.commands, &s.readings());
+            let cmd = self.haptic_period(&s.commands, &s.readings(), s.carried);
             each(self, Some(&cmd));
         }
     }

@@ -36,7 +36,7 @@ fn stroke(scene: &Arc<Scene>, speed: f64, rate: f64) -> (Vec<Vector3<f64>>, f64)
             })
             .collect();
         let lattice = ls.lattice.clone();
-        ls.haptic.step_rates(&[], &readings, &lattice, ls.dt, |_, c| forces.push(c.force));
+        ls.haptic.step_rates(&[], &readings, 0, &lattice, ls.dt, |_, c| forces.push(c.force));
         let c = ls.haptic.coupling();
         lowest = lowest.min(c.energy).min(c.rotational_energy);
     }

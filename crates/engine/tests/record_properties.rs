@@ -56,7 +56,7 @@ fn reading() -> impl Strategy<Value = Option<DeviceReading>> {
 /// steps produced), with 1 to 5 device steps (0 to 4 further readings).
 fn step(versions: u64) -> impl Strategy<Value = StepRecord> {
     let more = prop::collection::vec(reading(), 0..5);
-    (reading(), more, 0..=versions, prop::collection::vec(command(), 0..4), v3()).prop_map(|(reading, more_readings, lattice_version, commands, force)| StepRecord { reading, more_readings, lattice_version, commands, force })
+    (reading(), more, 0..=versions, prop::collection::vec(command(), 0..4), v3(), prop_oneof![Just(0u32), 1u32..=200]).prop_map(|(reading, more_readings, lattice_version, commands, force, carried)| StepRecord { reading, more_readings, lattice_version, commands, force, carried })
 }
 
 fn settings() -> impl Strategy<Value = Option<RecordSettings>> {

@@ -212,6 +212,17 @@ impl DeviceSide {
         DeviceCommand { force, torque: self.coupling.torque }
     }
 
+    /// [`DeviceSide::step`] with `reading` after `carried` device steps with `before` (the reading from before a
+    /// loss of device ticks; each step `dt` s): a device loop that lost more ticks than its period had room for
+    /// runs the rest here, so the device side's clock keeps the hand's pace (dropped, the follower caught up through
+    /// the coupling's damper: a force pulse). Returns the last step's command (the others are not sent).
+    pub fn step_after(&mut self, before: Option<DeviceReading>, carried: u32, reading: Option<DeviceReading>, dt: f64, published: &Published) -> DeviceCommand {
+        for _ in 0..carried {
+            self.step(before, dt, published);
+        }
+        self.step(reading, dt, published)
+    }
+
     /// The proxy's state now, for the physics step.
     pub fn proxy_state(&self) -> ProxyState {
         let c = &self.coupling;

@@ -285,7 +285,7 @@ impl HapticCore {
     /// command for the device.
     pub fn step(&mut self, reading: Option<DeviceReading>, lattice: &LatticeSnapshot, dt: f64) -> DeviceCommand {
         let mut last = DeviceCommand::default();
-        self.period(&[], &[reading], lattice, dt, dt, |_, c| last = *c);
+        self.period(&[], &[reading], 0, lattice, dt, dt, |_, c| last = *c);
         last
     }
 
@@ -295,18 +295,26 @@ impl HapticCore {
     /// render the local force model the previous physics step published (with its tool and head pose), while
     /// this period's physics step runs after the viewer `commands`, with the proxy's state at the period's
     /// start; its model is rendered in the next period (the live physics thread has the whole period to make
-    /// it). `each(i, command)` sees each device step's command.
-    pub fn step_rates(&mut self, commands: &[Command], readings: &[Option<DeviceReading>], lattice: &LatticeSnapshot, dt: f64, each: impl FnMut(usize, &DeviceCommand)) {
+    /// it). `carried` device steps run before the last one, with the reading before it (a live device loop that
+    /// lost more ticks than the period had room for, [`crate::device_loop::MAX_PERIOD_STEPS`], ran them so,
+    /// [`DeviceSide::step_after`]; 0 otherwise). `each(i, command)` sees each reading's device step's command.
+    pub fn step_rates(&mut self, commands: &[Command], readings: &[Option<DeviceReading>], carried: u32, lattice: &LatticeSnapshot, dt: f64, each: impl FnMut(usize, &DeviceCommand)) {
         let h = dt / self.model.params.device_steps() as f64;
-        self.period(commands, readings, lattice, dt, h, each);
+        self.period(commands, readings, carried, lattice, dt, h, each);
     }
 
     /// [`HapticCore::step_rates`] with device steps of `h` s.
-    fn period(&mut self, commands: &[Command], readings: &[Option<DeviceReading>], lattice: &LatticeSnapshot, dt: f64, h: f64, mut each: impl FnMut(usize, &DeviceCommand)) {
+    #[allow(clippy::too_many_arguments)]
+    fn period(&mut self, commands: &[Command], readings: &[Option<DeviceReading>], carried: u32, lattice: &LatticeSnapshot, dt: f64, h: f64, mut each: impl FnMut(usize, &DeviceCommand)) {
         let published = self.published();
         let proxy = self.side.proxy_state();
         for (i, r) in readings.iter().enumerate() {
-            let c = self.side.step(*r, h, &published);
+            let c = if i + 1 == readings.len() && carried > 0 {
+                let before = if i > 0 { readings[i - 1] } else { None };
+                self.side.step_after(before, carried, *r, h, &published)
+            } else {
+                self.side.step(*r, h, &published)
+            };
             each(i, &c);
         }
         self.physics_period(commands, &proxy, lattice, dt);

@@ -50,7 +50,16 @@ fn put_reading(b: &mut Vec<u8>, r: &Option<DeviceReading>) {
 
 /// Appends a haptic step.
 fn put_step(b: &mut Vec<u8>, s: &StepRecord) {
-    if s.more_readings.is_empty() {
+    if s.carried > 0 {
+        // Device steps run beyond the readings: flag 3, the device steps' count, each reading, then the carried
+        // steps (u32). Records without them read as before (older records have none).
+        b.push(3);
+        b.push((1 + s.more_readings.len()).min(255) as u8);
+        for r in std::iter::once(&s.reading).chain(&s.more_readings).take(255) {
+            put_reading(b, r);
+        }
+        b.extend_from_slice(&s.carried.to_le_bytes());
+    } else if s.more_readings.is_empty() {
         put_reading(b, &s.reading);
     } else {
         // Several device steps: flag 2, their count, each reading.
@@ -366,18 +375,28 @@ fn read_global(r: &mut Reader) -> Result<GlobalRecord, RecordError> {
 }
 
 fn read_step(r: &mut Reader) -> Result<StepRecord, RecordError> {
-    let (reading, more_readings) = match r.u8()? {
-        2 => {
+    let (reading, more_readings, carried) = match r.u8()? {
+        k @ (2 | 3) => {
             let at = r.at();
             let n = r.u8()?;
-            if n < 2 {
-                return Err(RecordError::Bad { offset: at, what: format!("{n} device steps after flag 2 (at least 2)") });
+            let least = if k == 2 { 2 } else { 1 };
+            if n < least {
+                return Err(RecordError::Bad { offset: at, what: format!("{n} device steps after flag {k} (at least {least})") });
             }
             let first = r.reading()?;
             let more = (1..n).map(|_| r.reading()).collect::<Result<Vec<_>, _>>()?;
-            (first, more)
+            let carried = if k == 3 {
+                let at = r.at();
+                match r.u32()? {
+                    0 => return Err(RecordError::Bad { offset: at, what: "0 carried device steps after flag 3 (at least 1)".into() }),
+                    c => c,
+                }
+            } else {
+                0
+            };
+            (first, more, carried)
         }
-        k => (r.reading_after(k)?, Vec::new()),
+        k => (r.reading_after(k)?, Vec::new(), 0),
     };
     let lattice_version = r.u64()?;
     let force = Vector3::new(r.f64()?, r.f64()?, r.f64()?);
@@ -401,7 +420,7 @@ fn read_step(r: &mut Reader) -> Result<StepRecord, RecordError> {
             k => return Err(RecordError::Bad { offset: at, what: format!("command kind {k}") }),
         });
     }
-    Ok(StepRecord { reading, more_readings, lattice_version, commands, force })
+    Ok(StepRecord { reading, more_readings, lattice_version, commands, force, carried })
 }
 
 /// The hair formats' little-endian reader (one byte reader in the project) on a chunk's payload, its errors as
@@ -475,7 +494,7 @@ mod tests {
     use super::*;
 
     fn step(v: u64, commands: Vec<Command>) -> StepRecord {
-        StepRecord { reading: None, more_readings: Vec::new(), lattice_version: v, commands, force: Vector3::new(1.0, 2.0, v as f64) }
+        StepRecord { reading: None, more_readings: Vec::new(), lattice_version: v, commands, force: Vector3::new(1.0, 2.0, v as f64), carried: 0 }
     }
 
     #[test]

@@ -28,7 +28,9 @@
 //!   u8 type, f64 curliness, f64 ease; 2 reset; 3 head: 3 f64 position (m), 3 f64 rotation vector (rad); 4
 //!   strand limit: u32; 5 treatment: u8 id). A haptic step with several device steps
 //!   (`SessionParams::device_steps`) writes has-reading 2, then u8 count of device steps and each one's reading
-//!   as above (u8 has-reading 0 or 1, and if 1 the reading).
+//!   as above (u8 has-reading 0 or 1, and if 1 the reading). A haptic step whose period ran device steps beyond
+//!   its readings ([`StepRecord::carried`]) writes has-reading 3, the count and the readings as after 2 (at
+//!   least one), then u32 carried steps (at least 1); records written before it have none and read as they did.
 //!
 //! Older versions are refused with an error naming their version: a record replays bit for bit only on the code
 //! that wrote it. `CFREC1`, `CFREC2`: one block written at a clean exit, before records were streamed; `CFREC3`:
@@ -63,6 +65,11 @@ pub struct StepRecord {
     pub commands: Vec<Command>,
     /// Force sent to the device, N (by the period's last device step).
     pub force: Vector3<f64>,
+    /// Device steps the period ran before its last one beyond its readings, with the reading before the last (0:
+    /// none): the device loop lost more ticks than the period had room for
+    /// ([`crate::device_loop::MAX_PERIOD_STEPS`]) and ran the rest there
+    /// ([`crate::haptic::DeviceSide::step_after`]), so the replay runs them so.
+    pub carried: u32,
 }
 
 impl StepRecord {

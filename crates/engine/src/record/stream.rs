@@ -374,7 +374,7 @@ mod tests {
             }
             let commands = if i % 997 == 0 { vec![Command::SelectTool(Tool::Comb), Command::LimitStrands(40)] } else { vec![] };
             let reading = (i % 50 != 0).then(|| DeviceReading { time: i as f64 * 1e-3, position: Vector3::new(next(), next(), next()), rotation: Matrix3::identity(), buttons: (i % 3) as u32 });
-            let st = StepRecord { reading, more_readings: Vec::new(), lattice_version: rec.global_inputs.len() as u64, commands, force: Vector3::new(next(), next(), next()) };
+            let st = StepRecord { reading, more_readings: Vec::new(), lattice_version: rec.global_inputs.len() as u64, commands, force: Vector3::new(next(), next(), next()), carried: 0 };
             rec.steps.push(st.clone());
             order.push(Err(st));
         }

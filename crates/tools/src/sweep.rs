@@ -81,8 +81,9 @@ impl SweepAndPrune {
         let [hi0, hi1, hi2] = &self.hi;
         let group = &self.group;
         let lane = |v: &[f64], y: usize| f64x4::from(<[f64; LANES]>::try_from(&v[y..y + LANES]).expect("padded for the last lanes"));
-        // Each block's pairs are written without branching: every lane's positions are stored after the hits among
-        // the lanes before it and the count moves past the hits (the hits' storage stays LANES ahead of the count).
+        // A block with pairs writes them without branching on each lane: every lane's positions are stored after the
+        // hits among the lanes before it and the count moves past the hits (the hits' storage stays LANES ahead of
+        // the count); a block without any (most: boxes apart on another axis) stores nothing.
         let hits = &mut self.hits;
         let mut count = 0;
         for x in 0..n {
@@ -106,14 +107,16 @@ impl SweepAndPrune {
                     & lane(lo2, y).cmp_le(p_hi2)
                     & lane(group, y).cmp_ne(p_group);
                 let mask = (overlap.move_mask() & before) as usize;
-                if hits.len() < count + LANES {
-                    hits.resize(2 * (count + LANES), [0; 2]);
+                if mask != 0 {
+                    if hits.len() < count + LANES {
+                        hits.resize(2 * (count + LANES), [0; 2]);
+                    }
+                    for l in 0..LANES {
+                        // Lane l goes after the hits among the lanes before it (independent stores, in lane order).
+                        hits[count + (mask & ((1 << l) - 1)).count_ones() as usize] = [x as u32, (y + l) as u32];
+                    }
+                    count += mask.count_ones() as usize;
                 }
-                for l in 0..LANES {
-                    // Lane l goes after the hits among the lanes before it (independent stores, in lane order).
-                    hits[count + (mask & ((1 << l) - 1)).count_ones() as usize] = [x as u32, (y + l) as u32];
-                }
-                count += mask.count_ones() as usize;
                 if stop != 0 {
                     break;
                 }

@@ -317,20 +317,12 @@ impl DeviceLoop {
             let now = Instant::now();
             let lag = stepped.map_or(0.0, |s: Instant| (now.saturating_duration_since(s).as_secs_f64() - s.saturating_duration_since(now).as_secs_f64()) / h - 1.0);
             let due_steps = ((1.0 + lag).round().max(1.0)) as usize;
-            let n = due_steps.min(MAX_PERIOD_STEPS - count).max(1);
-            stepped = Some(if n < due_steps { now } else { stepped.map_or(now, |s| s + tick * n as u32) });
-            // The lost ticks were before this reading arrived: they step with the one before it (the follower
-            // extrapolates it), the last with this one. Handed the new sample first, the follower took its clock,
-            // still behind by the lost ticks, for the device's and ran ahead of the hand by as much. The ticks beyond
-            // the period's room run too, before the last step (`DeviceSide::step_after`, with the reading from
-            // before the loss, as the others; the period's last step, since the period is then full), at most
-            // MAX_CARRIED_STEPS: dropped, the follower caught up with the hand through the coupling's damper.
-            let extra = (due_steps - n).min(MAX_CARRIED_STEPS) as u32;
-            for i in 0..n {
-                last = if i + 1 < n { side.step(previous, h, &published) } else { side.step_after(previous, extra, reading, h, &published) };
-                readings[count] = if i + 1 < n { previous } else { reading };
+            let (n, extra) = step_due(&mut side, previous, reading, due_steps, MAX_PERIOD_STEPS - count, MAX_CARRIED_STEPS, h, &published, |r, c| {
+                readings[count] = r;
                 count += 1;
-            }
+                last = *c;
+            });
+            stepped = Some(if n < due_steps { now } else { stepped.map_or(now, |s| s + tick * n as u32) });
             carried += extra;
             previous = reading;
             force = last.force;
@@ -375,6 +367,30 @@ impl DeviceLoop {
         };
         (device, physics)
     }
+}
+
+/// The device steps due at one tick of the device loop (the module's last stage), `due` (>= 1) of `h` s each by the
+/// wall clock, of which the period has room for `room` (at least one is run). The lost ticks were before `reading`
+/// arrived: they step with `previous`, the reading before the loss (the follower extrapolates it), the last with
+/// `reading` (handed the new sample first, the follower took its clock, still behind by the lost ticks, for the
+/// device's and ran ahead of the hand by as much). The ticks beyond the room run before that last step, at most
+/// `max_carried` ([`DeviceSide::step_after`], with `previous` as the others; the period is then full): dropped, the
+/// follower caught up with the hand through the coupling's damper, a force pulse. `each(r, command)` sees each
+/// step run with a reading of its own, in order. Returns those steps' count and the carried ones'.
+#[allow(clippy::too_many_arguments)]
+fn step_due(side: &mut DeviceSide, previous: Option<DeviceReading>, reading: Option<DeviceReading>, due: usize, room: usize, max_carried: usize, h: f64, published: &Published, mut each: impl FnMut(Option<DeviceReading>, &DeviceCommand)) -> (usize, u32) {
+    let n = due.min(room).max(1);
+    let extra = (due.saturating_sub(n)).min(max_carried) as u32;
+    for i in 0..n {
+        if i + 1 < n {
+            let c = side.step(previous, h, published);
+            each(previous, &c);
+        } else {
+            let c = side.step_after(previous, extra, reading, h, published);
+            each(reading, &c);
+        }
+    }
+    (n, extra)
 }
 
 #[cfg(test)]
@@ -453,14 +469,13 @@ mod tests {
             tick += 1 + lost;
             let r = reading(tick);
             let due = 1 + lost as usize;
-            let n = due.min(room);
-            let extra = if carried { (due - n) as u32 } else { 0 };
-            for i in 0..n {
-                let c = if i + 1 < n { side.step(previous, h, &Published::default()) } else { side.step_after(previous, extra, r, h, &Published::default()) };
+            // The loop's own stage: carried up to MAX_CARRIED_STEPS, or none (dropped, as before).
+            let max_carried = if carried { MAX_CARRIED_STEPS } else { 0 };
+            step_due(&mut side, previous, r, due, room, max_carried, h, &Published::default(), |_, c| {
                 if tick as f64 * h > 0.1 {
                     peak = peak.max(c.force.norm());
                 }
-            }
+            });
             previous = r;
         }
         peak

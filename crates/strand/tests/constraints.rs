@@ -280,6 +280,43 @@ fn a_drag_carries_a_free_point_up_to_its_bound() {
     assert!(hanging().step_constrained(h, &[], &[bad], &opts).is_err());
 }
 
+#[test]
+fn a_cushion_pushes_with_its_load_until_its_point_reaches_the_obstacle() {
+    // A cushion at the tip of a hanging 10 cm strand (a spine pressing a wisp's outer fibres), normal +x.
+    // Clear of the obstacle (depth < 0): the step is the free step under the point force `load` along the normal
+    // (an independent path: the force in the step's right-hand side; 1e-9 relative), the impulse exactly load x h,
+    // and its friction at most mu load h however fast the obstacle slides along the strand. Packed (depth > 0):
+    // with no load it is the plain contact, to the bit; with a load below the contact's push the contact's push,
+    // above it the load.
+    let n = Vector3::x();
+    let h = 1e-3;
+    let opts = ConstraintOptions::default();
+    let cushion = |depth: f64, load: f64, v: Vector3<f64>| PointConstraint { s: 0.1, kind: ConstraintKind::Cushion { normal: n, depth, friction: 0.3, load }, velocity: v };
+    let load = 2e-6;
+    let mut s = hanging();
+    let p = s.step_constrained(h, &[], &[cushion(-1e-4, load, Vector3::zeros())], &opts).unwrap()[0];
+    assert!((p - n * load * h).norm() <= 1e-15 * load * h, "impulse {p:?}");
+    let mut forced = hanging();
+    forced.step(h, &[strand::PointForce { s: 0.1, force: n * load, torque: Vector3::zeros() }]).unwrap();
+    let scale = forced.state.qdot.amax();
+    assert!(scale > 0.0 && (&s.state.qdot - &forced.state.qdot).amax() <= 1e-9 * scale, "velocities differ by {:e} of {scale:e}", (&s.state.qdot - &forced.state.qdot).amax());
+    let sliding = Vector3::new(0.0, 0.0, 0.5);
+    let p = hanging().step_constrained(h, &[], &[cushion(-1e-4, load, sliding)], &opts).unwrap()[0];
+    let tangential = (p - n * p.dot(&n)).norm();
+    assert!((p.dot(&n) - load * h).abs() <= 1e-15 * load * h && tangential <= 0.3 * load * h * (1.0 + 1e-12) && tangential > 0.0, "impulse {p:?}");
+    let v = Vector3::new(0.25, 0.0, 0.0);
+    let plain = PointConstraint { s: 0.1, kind: ConstraintKind::Contact { normal: n, depth: 1e-4, friction: 0.3 }, velocity: v };
+    let pc = hanging().step_constrained(h, &[], &[plain], &opts).unwrap()[0];
+    assert_eq!(hanging().step_constrained(h, &[], &[cushion(1e-4, 0.0, v)], &opts).unwrap()[0], pc);
+    let below = hanging().step_constrained(h, &[], &[cushion(1e-4, 0.1 * pc.x / h, v)], &opts).unwrap()[0];
+    assert!((below - pc).norm() <= 1e-12 * pc.norm(), "{below:?} vs {pc:?}");
+    let above = hanging().step_constrained(h, &[], &[cushion(1e-4, 10.0 * pc.x / h, v)], &opts).unwrap()[0];
+    assert!((above.x - 10.0 * pc.x).abs() <= 1e-12 * above.x, "{above:?} vs {pc:?}");
+    for bad in [cushion(f64::NAN, load, v), cushion(-1e-4, -1.0, v), cushion(0.0, f64::INFINITY, v)] {
+        assert!(hanging().step_constrained(h, &[], &[bad], &opts).is_err());
+    }
+}
+
 /// Two identical horizontal cantilevers side by side along x, roots `gap` apart in z, whose tips are held on the
 /// same height by one contact between them (`linked`: a [`ConstraintLink`] solving both strands together) or
 /// the upper tip by an obstacle that follows the lower tip, which moves freely (`!linked`). Returns the contact force on the

@@ -92,8 +92,8 @@
 //! axis, the parted share is the share of the wisp's section within `r_t + r_f` of the axis
 //! ([`parted_share`]): it goes smoothly to 0 as the wisp leaves the tooth, so the force has no steps. The
 //! drag is a Coulomb force (rate independent), as combing forces of tresses are at 0.1-0.5 m/s. Only a tooth
-//! thinner than the wisp parts it ([`Entanglement::parts`]); a thicker body (a comb's spine) pushes the wisp
-//! aside as a solid.
+//! thinner than the wisp parts it ([`Entanglement::parts`]); a thicker body (a comb's spine) presses the fibres it
+//! reaches against the others and pushes the wisp as a solid once it reaches its centreline ([`crate::cushion`]).
 //!
 //! Calibration: `span` is the one number set from a measurement (the dry combing force of a 4.75 g tress of
 //! H1, see [`Entanglement::span`]); stiffness, curl, friction, wetness and the tress's size then set every other
@@ -374,7 +374,8 @@ impl Entanglement {
     /// Whether a tooth of radius `tooth_radius` (m) passes through the fibres, parting them (the beam law above):
     /// a tooth whose diameter is at most half a span, so that the parted fibres' deflection stays small against
     /// the span they bend over (a comb's teeth, 1.2 mm, a brush's bristles). A thicker body (a comb's 6 mm spine,
-    /// a finger) is not passed through: it pushes the wisp aside as a solid.
+    /// a finger) is not passed through: it presses the wisp's fibres it reaches ([`crate::cushion`]) and pushes the
+    /// wisp aside as a solid once it reaches the centreline.
     pub fn parts(&self, tooth_radius: f64) -> bool {
         4.0 * tooth_radius <= self.span
     }

@@ -11,6 +11,7 @@
 
 pub mod bvh;
 pub mod contact;
+pub mod cushion;
 pub mod dryer;
 pub mod entanglement;
 pub mod geometry;

@@ -26,8 +26,8 @@
 //!     resolve to a finite compromise instead of an impulse race.
 //!   Where the point moves freely (mobility `W >> R`) the constraint is as rigid as before.
 //!
-//! For a contact the normal impulse is >= 0, the tangential impulse is clamped to the Coulomb cone
-//! `|p_t| <= mu p_n`; a pin's impulse follows its target's velocity. After the step the positions are projected
+//! For a contact the normal impulse is >= 0 (a cushion's at least its layer's load times `h`), the tangential
+//! impulse is clamped to the Coulomb cone `|p_t| <= mu p_n`; a pin's impulse follows its target's velocity. After the step the positions are projected
 //! back onto the pins (post-stabilization, Cline and Pai 2003), by at most `v_max h` per step, so a pinned point
 //! does not drift. The force on the strand is `p / h`; the obstacle receives `-p / h`.
 
@@ -51,6 +51,24 @@ pub enum ConstraintKind {
     Pin {
         /// Where the point must be, m.
         target: Vector3<f64>,
+    },
+    /// A contact through a compressible layer between the obstacle and the point (a wisp of many fibres pressed by
+    /// a body too thick to part it, the point being the wisp's centreline: `tools::entanglement::Entanglement::cushion_load`):
+    /// the layer pushes the point along `normal` with `load` (N) whatever its motion (the fibres the obstacle has
+    /// reached, bent aside, press on the others), and where the point itself reaches the obstacle (`depth > 0`: the
+    /// layer packed) the contact is also non-penetrating as [`ConstraintKind::Contact`], the normal force being then
+    /// the larger of the two. Coulomb friction `friction` on the whole normal force. With `load` 0 and `depth > 0`
+    /// it is [`ConstraintKind::Contact`].
+    Cushion {
+        /// Unit normal from the obstacle towards the point.
+        normal: Vector3<f64>,
+        /// Penetration of the point itself into the obstacle along the normal, m (finite; `<= 0`: the point is
+        /// clear of it, the layer's load alone acts).
+        depth: f64,
+        /// Coulomb friction coefficient.
+        friction: f64,
+        /// The layer's push, N (>= 0).
+        load: f64,
     },
     /// Coulomb drag without a normal direction: the point is carried along with the constraint's velocity by
     /// a force of at most `max_force` (N), opposing the relative motion (e.g. a tooth passing through a wisp,
@@ -169,6 +187,14 @@ impl PointConstraint {
                 }
                 if !(depth.is_finite() && depth >= 0.0) || !(friction.is_finite() && friction >= 0.0) {
                     return bad("depth and friction must be finite and >= 0");
+                }
+            }
+            ConstraintKind::Cushion { normal, depth, friction, load } => {
+                if !normal.iter().all(|x| x.is_finite()) || (normal.norm() - 1.0).abs() > 1e-6 {
+                    return bad("contact normal must be a unit vector");
+                }
+                if !depth.is_finite() || !(friction.is_finite() && friction >= 0.0) || !(load.is_finite() && load >= 0.0) {
+                    return bad("cushion depth must be finite, friction and load finite and >= 0");
                 }
             }
             ConstraintKind::Pin { target } => {

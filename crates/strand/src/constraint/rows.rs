@@ -52,11 +52,14 @@ impl ContactFrame {
     }
 
     /// The contact's new impulse from its old one `p_old` and the relative velocity `rel` of the point to the
-    /// obstacle (both without this iteration's update): normal impulse `>= 0` aiming at the separation speed
+    /// obstacle (both without this iteration's update): normal impulse `>= least` aiming at the separation speed
     /// `want_n`, tangential impulse aiming at no slip, clamped to the Coulomb cone of `friction`.
-    pub(super) fn update(&self, normal: &Vector3<f64>, friction: f64, want_n: f64, rel: &Vector3<f64>, p_old: &Vector3<f64>, mix: f64) -> Vector3<f64> {
+    /// `least`: the smallest normal impulse, N s (0 for a plain contact; a cushion's load times the step; with
+    /// `want_n` minus infinity the normal impulse is `least`).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn update(&self, normal: &Vector3<f64>, friction: f64, want_n: f64, rel: &Vector3<f64>, p_old: &Vector3<f64>, mix: f64, least: f64) -> Vector3<f64> {
         let pn_old = p_old.dot(normal);
-        let mut pn = (pn_old + (want_n - rel.dot(normal) - mix * pn_old) / self.wnn).max(0.0);
+        let mut pn = (pn_old + (want_n - rel.dot(normal) - mix * pn_old) / self.wnn).max(least);
         let rt = nalgebra::Vector2::new(rel.dot(&self.t1), rel.dot(&self.t2));
         let pt_old = nalgebra::Vector2::new(p_old.dot(&self.t1), p_old.dot(&self.t2));
         let mut pt = pt_old - self.wt2_inv * (rt + pt_old * mix);
@@ -149,7 +152,8 @@ impl ConstraintRows {
 
     /// Starts the solve of row `c` from the impulse `p` (N s; e.g. the same contact's impulse at the last step)
     /// instead of zero, projected onto what the row allows now: a contact's normal part >= 0 and its tangential part
-    /// within the Coulomb cone (its current normal and friction), a drag's within its largest force. Ignored for a
+    /// within the Coulomb cone (its current normal and friction; a cushion's normal part at least its load's, exactly
+    /// its load's while its point is clear of the obstacle), a drag's within its largest force. Ignored for a
     /// row the solve skips (no mobility), a non-finite `p` or a missing row. Call after the rows are built
     /// ([`Strand::fill_constraint_rows`](crate::integrator::Strand::fill_constraint_rows)) and before [`solve`](super::solve); a linked contact's second row must hold minus
     /// the first's.
@@ -160,6 +164,10 @@ impl ConstraintRows {
         self.impulses[c] = match self.constraints[c].kind {
             ConstraintKind::Contact { normal, friction, .. } => {
                 let pn = p.dot(&normal).max(0.0);
+                normal * pn + clamp_norm(p - normal * p.dot(&normal), friction * pn)
+            }
+            ConstraintKind::Cushion { normal, friction, load, depth } => {
+                let pn = if depth > 0.0 { p.dot(&normal).max(load * self.h) } else { load * self.h };
                 normal * pn + clamp_norm(p - normal * p.dot(&normal), friction * pn)
             }
             ConstraintKind::Drag { max_force, .. } => clamp_norm(*p, max_force * self.h),
@@ -205,7 +213,14 @@ impl ConstraintRows {
             }
             ConstraintKind::Contact { normal, depth, friction } => {
                 let Rule::Contact(frame) = self.rule[c] else { return };
-                frame.update(&normal, friction, (beta * depth).min(v_max), &rel, &p, mix)
+                frame.update(&normal, friction, (beta * depth).min(v_max), &rel, &p, mix, 0.0)
+            }
+            ConstraintKind::Cushion { normal, depth, friction, load } => {
+                let Rule::Contact(frame) = self.rule[c] else { return };
+                // Clear of the obstacle the point takes the layer's load alone; packed against it, the contact's
+                // non-penetration too.
+                let want = if depth > 0.0 { (beta * depth).min(v_max) } else { f64::NEG_INFINITY };
+                frame.update(&normal, friction, want, &rel, &p, mix, load * self.h)
             }
         };
         self.impulses[c] = if new.iter().all(|x| x.is_finite()) { new } else { Vector3::zeros() };

@@ -77,7 +77,7 @@ pub fn solve(rows: &mut [ConstraintRows], links: &[ConstraintLink], opts: &Const
                         let ((a, i), (b, j)) = (links[l].first, links[l].second);
                         let (Some(frame), ConstraintKind::Contact { normal, depth, friction }) = (frames[l], rows[a].constraints[i].kind) else { continue };
                         let rel = rows[a].velocity(i) - rows[b].velocity(j);
-                        let p = frame.update(&normal, friction, (beta * depth).min(v_max), &rel, &rows[a].impulses[i], mix);
+                        let p = frame.update(&normal, friction, (beta * depth).min(v_max), &rel, &rows[a].impulses[i], mix, 0.0);
                         let p = if p.iter().all(|x| x.is_finite()) { p } else { Vector3::zeros() };
                         rows[a].impulses[i] = p;
                         rows[b].impulses[j] = -p;

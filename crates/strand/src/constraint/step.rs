@@ -116,7 +116,7 @@ impl Strand {
             rows.span.push(span);
             rows.pin_error.push(match pc.kind {
                 ConstraintKind::Pin { target } => target - x,
-                ConstraintKind::Contact { .. } | ConstraintKind::Drag { .. } => Vector3::zeros(),
+                ConstraintKind::Contact { .. } | ConstraintKind::Cushion { .. } | ConstraintKind::Drag { .. } => Vector3::zeros(),
             });
         }
         // Delassus blocks W[c][d] = J_c A^-1 J_d^T = sum_m (L^-1 J_c^T)[m] (D^-1 L^-1 J_d^T)[m]^T (3 x 3), over the
@@ -160,7 +160,7 @@ impl Strand {
             let w = rows.w[c * n + c];
             let inverse = |projection: Matrix3<f64>| if mix > 0.0 { (w + Matrix3::identity() * mix).try_inverse().unwrap_or_else(|| pinv3(&w)) } else { projection };
             rows.rule.push(match pc.kind {
-                ConstraintKind::Contact { normal, .. } => Rule::Contact(ContactFrame::new(&normal, &w, mix)),
+                ConstraintKind::Contact { normal, .. } | ConstraintKind::Cushion { normal, .. } => Rule::Contact(ContactFrame::new(&normal, &w, mix)),
                 ConstraintKind::Pin { .. } => {
                     let projection = pinv3(&w);
                     Rule::Pin { inverse: inverse(projection), projection }
@@ -219,7 +219,7 @@ impl Strand {
                         // At most `v_max h` per step: a pin far from its target is drawn back, not teleported.
                         if e.norm() > v_max * h { e * (v_max * h / e.norm()) } else { e }
                     }
-                    ConstraintKind::Contact { .. } | ConstraintKind::Drag { .. } => Vector3::zeros(),
+                    ConstraintKind::Contact { .. } | ConstraintKind::Cushion { .. } | ConstraintKind::Drag { .. } => Vector3::zeros(),
                 })
                 .collect();
             for _ in 0..opts.iterations.max(1) {

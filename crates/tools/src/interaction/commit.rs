@@ -40,9 +40,9 @@ impl LocalInteraction {
                     // it also twists the strand (brush torque). Applied at the next step; the tool feels the
                     // opposite torque now.
                     let r = strand.model.section.semi_major;
-                    for ((impulse, c), w) in p.iter().zip(&job.touching).zip(&mobility) {
+                    for (((impulse, c), w), &solid) in p.iter().zip(&job.touching).zip(&mobility).zip(&job.solid) {
                         let Some(c) = c else { continue };
-                        if impulse.dot(&c.normal) > 0.0 {
+                        if solid && impulse.dot(&c.normal) > 0.0 {
                             let g = 1.0 / (dt * (w + mix));
                             let nn = c.normal * c.normal.transpose();
                             frame.result.damping += nn * g + (Matrix3::identity() - nn) * (friction * g);

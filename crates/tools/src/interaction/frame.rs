@@ -61,6 +61,9 @@ pub(super) struct Pending {
     pub tags: Vec<(WarmTag, f64)>,
     pub levers: Vec<Vector3<f64>>,
     pub touching: Vec<Option<Contact>>,
+    /// Per tool constraint: whether it is a non-penetrating contact (its compliance enters the reaction's damping
+    /// and stiffness; a spine's cushion clear of the centreline's fibre pushes with its load alone).
+    pub solid: Vec<bool>,
     pub solved: Solved,
     pub touched: bool,
 }

@@ -86,16 +86,20 @@ impl LocalInteraction {
                 ForceModel::Constraint { friction, options } => {
                     // Each tool contact found within the wisp's reach: a non-penetration contact where the
                     // capsule touches the centreline's fibre, and (with the entanglement) a drag against the
-                    // fibres it parts. `touching[i]`: the contact behind tool constraint i, if a contact.
+                    // fibres it parts, or the cushion of the fibres a capsule too thick to part them presses.
+                    // `touching[i]`: the contact behind tool constraint i, if a contact; `solid[i]`: whether it is
+                    // non-penetrating (a cushion clear of the centreline's fibre pushes with its load alone).
                     cons.clear();
                     let mut levers: Vec<Vector3<f64>> = Vec::with_capacity(2 * mine.len());
                     let mut touching: Vec<Option<Contact>> = Vec::with_capacity(2 * mine.len());
                     let mut tags: Vec<(WarmTag, f64)> = Vec::with_capacity(2 * mine.len());
+                    let mut solid: Vec<bool> = Vec::with_capacity(2 * mine.len());
                     let r_f = strand.model.section.semi_major;
                     let ei = strand.model.material.young_modulus * strand.model.section.i_soft();
                     let w = self.wetness.get(k).copied().unwrap_or(0.0);
                     // A wisp of many fibres parts around a tooth (the drag) instead of being pushed aside; a thick
-                    // capsule (a comb's spine: `Entanglement::parts`) pushes it as a solid at the fibre's radius.
+                    // capsule (a comb's spine: `Entanglement::parts`) presses the fibres it reaches against the others
+                    // (`crate::cushion`) and pushes the wisp as a solid once it reaches the centreline's fibre.
                     let parting = entanglement.is_some() && wisp_radius > radius;
                     let hair_friction = self.params.hair_contact.map_or(0.0, |hc| hc.friction);
                     // The wisps' packing: the density of the neighbours a curled parted fibre hooks.
@@ -108,10 +112,21 @@ impl LocalInteraction {
                         let r_t = self.shape.capsules.get(c.primitive).map_or(0.0, |cap| cap.radius);
                         let parts = parting && entanglement.is_some_and(|e| e.parts(r_t));
                         let fibre_depth = c.depth - (reach - radius);
-                        if fibre_depth > 0.0 && !parts {
+                        let cushion = match entanglement {
+                            Some(e) if parting && !parts => Some(crate::cushion::cushion_load(&e, ei, r_f, wisp_radius, reach - c.depth)),
+                            _ => None,
+                        };
+                        if let Some(load) = cushion.filter(|&l| l > 0.0 || fibre_depth > 0.0) {
+                            cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Cushion { normal: c.normal, depth: fibre_depth, friction, load }, velocity: c.tool_velocity });
+                            levers.push(c.lever);
+                            touching.push(Some(**c));
+                            solid.push(fibre_depth > 0.0);
+                            tags.push((WarmTag::Tool(c.primitive), c.s));
+                        } else if fibre_depth > 0.0 && !parts && cushion.is_none() {
                             cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Contact { normal: c.normal, depth: fibre_depth, friction }, velocity: c.tool_velocity });
                             levers.push(c.lever);
                             touching.push(Some(**c));
+                            solid.push(true);
                             tags.push((WarmTag::Tool(c.primitive), c.s));
                         }
                         // One drag per crossing of a capsule and the wisp: the deepest of the strand's contacts
@@ -127,6 +142,7 @@ impl LocalInteraction {
                                 cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Drag { max_force, slip_speed: e.slip_speed }, velocity: c.tool_velocity });
                                 levers.push(c.lever);
                                 touching.push(None);
+                                solid.push(false);
                                 tags.push((WarmTag::Drag(c.primitive), c.s));
                             }
                         }
@@ -172,7 +188,7 @@ impl LocalInteraction {
                     self.warm[k] = last;
                     self.warm[k].clear();
                     match outcome {
-                        Ok(solved) => frame.pending.push(Pending { strand: k, tags, levers, touching, solved, touched }),
+                        Ok(solved) => frame.pending.push(Pending { strand: k, tags, levers, touching, solid, solved, touched }),
                         Err(e) => {
                             frame.first_error.get_or_insert(e);
                         }

@@ -166,9 +166,8 @@ pub struct HapticParams {
     pub choice_steps: usize,
     /// Most guides that join the active set in one haptic step: the guides a finished choice adds join in
     /// turns, nearest first, from the step after the scan ended (a joining strand's set-up is paid in the step
-    /// it joins, and at the strand limit so is the relaxing strand it replaces; a choice adds up to `max_chosen`),
-    /// >= 1. Default 1 (48 guides join within 48 ms, less than `lookahead`): at 4 the joining steps (4 joins and 4
-    /// let-goes) were 60 of the slowest 1 % of the live comb's steps at the strand budget's floor (bench/RESULTS.md).
+    /// it joins; a choice adds up to `max_chosen`), >= 1. Default 4 (48 guides join within 12 ms, far less than
+    /// `lookahead`).
     pub joins_per_step: usize,
     /// The clip pins the strand point nearest its jaws if it is within this distance, m. Default 0.01.
     pub clip_reach: f64,
@@ -284,7 +283,7 @@ pub struct HapticParams {
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 1, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, handover_distance: 0.002, max_relax_time: 1.5, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03, hold_damping: 1.0, treatment: tools::treatment::Treatment::Virgin }
+        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, handover_distance: 0.002, max_relax_time: 1.5, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03, hold_damping: 1.0, treatment: tools::treatment::Treatment::Virgin }
     }
 }
 

@@ -412,16 +412,16 @@ impl HapticCore {
     }
 
     /// While more than `limit` strands (`max_active`, or the strand limit) would stay simulated, relaxing ones are
-    /// let go (marked Fading): those whose hair drawn is nearest its carried place at the tip first (the least for
-    /// the global layer to take over and bring back; [`HapticCore::tip_offset`]), then those that left first. Chosen
-    /// strands are never let go here: a choice takes at most [`HapticCore::chosen_limit`] <= `limit`.
+    /// let go (marked Fading): those whose hair drawn is nearest its carried place first (the least for the
+    /// global layer to take over and bring back; [`HapticCore::shown_offset`]), then those that left first. Chosen strands are never let go here: a
+    /// choice takes at most [`HapticCore::chosen_limit`] <= `limit`.
     fn let_go_beyond(&self, limit: usize, members: &mut [Member]) {
         let mut over = members.iter().filter(|m| m.phase != Phase::Fading).count().saturating_sub(limit);
         if over == 0 {
             return;
         }
         let mut relaxing: Vec<(f64, f64, usize)> = members.iter().enumerate().filter_map(|(i, m)| match m.phase {
-            Phase::Relaxing { since, .. } => Some((self.tip_offset(i), since, i)),
+            Phase::Relaxing { since, .. } => Some((self.shown_offset(i), since, i)),
             _ => None,
         }).collect();
         relaxing.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.total_cmp(&a.1)).then(a.2.cmp(&b.2)));
@@ -435,18 +435,17 @@ impl HapticCore {
         }
     }
 
-    /// How far the tip of the hair drawn for simulated strand `slot` is from where the global layer carries its
-    /// guide's last sample (at the nodes last seen, the hold's cache), m: the let-go order's measure of what its
-    /// hand-over would move it by (a strand hangs from its root on the head, and its tip is its sample that moves
-    /// farthest but where the comb bends it; the tip costs one pass of the segment frames, where every sample's
-    /// displacement cost a step that let strands go 100-130 k instructions, bench/HISTORY.md); infinite for a slot
-    /// not simulated yet.
-    fn tip_offset(&self, slot: usize) -> f64 {
+    /// How far the hair drawn for simulated strand `slot` is from where the global layer carries its guide (at the
+    /// nodes last seen, the hold's cache), m: what its hand-over would move it by; infinite for a slot not
+    /// simulated yet.
+    fn shown_offset(&self, slot: usize) -> f64 {
         let (Some(&g), Some(s)) = (self.set.active.get(slot), self.interaction.strands.get(slot)) else { return f64::INFINITY };
         let weight = self.set.members.get(slot).map_or(1.0, |m| m.weight);
+        let guide = &self.model.scene.guides[g];
+        let pts = samples_along(s, guide.model.length, self.model.scene.samples());
         let mut cache = self.shown.references.borrow_mut();
         let ok = cache.has_nodes(self.model.scene.lattice.node_count());
-        cache.bases(&self.model.scene, g, ok).last().map_or(f64::INFINITY, |b| (tip(s) - b).norm() * weight)
+        pts.iter().zip(cache.bases(&self.model.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max)
     }
 
     /// Moves the strands to the new membership `guides` (`members` parallel): the staying strands move over,

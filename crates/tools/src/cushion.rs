@@ -18,7 +18,9 @@
 //! is `k_f` times the share of the wisp's fibres the body has reached: continuous in the depth, with its slope. When
 //! the body reaches the centreline's fibre (`g = r_f`, half the fibres reached, each pushed `4 R / (3 pi)` on mean)
 //! the wisp is packed against it and the contact also becomes the non-penetrating one at the fibre
-//! (`strand::constraint::ConstraintKind::Cushion`), which takes over where it asks for more. Before, the spine was
+//! (`strand::constraint::ConstraintKind::Cushion`), which takes over where it asks for more. The load is taken at
+//! the step's end with its stiffness ([`cushion_stiffness`], an implicit spring): `k_f` on a few centimetres of one
+//! fibre is too stiff for an explicit millisecond step. Before, the spine was
 //! that non-penetrating contact alone: nothing until it touched the centreline's fibre, then the whole wisp pushed
 //! as a solid in one step (docs/combing.md, "The spine's cushion").
 //!
@@ -58,6 +60,31 @@ pub fn cushion_load(entanglement: &Entanglement, ei: f64, fibre_radius: f64, wis
     let k = entanglement.fibre_stiffness(ei);
     let load = k * packed_deflection(gap - fibre_radius, wisp_radius - fibre_radius);
     if load.is_finite() { load.max(0.0) } else { 0.0 }
+}
+
+/// Share (0..1) of a wisp's fibres, their centres uniform over a disc of radius `radius` (m), that a flat face holding
+/// every centre at most `a` (m) from the disc's centre has reached (centres beyond `a`): minus the slope of
+/// [`packed_deflection`] in `a`.
+pub fn reached_share(a: f64, radius: f64) -> f64 {
+    let r = radius.max(0.0);
+    if !(a < r) {
+        return 0.0;
+    }
+    if a <= -r {
+        return 1.0;
+    }
+    let root = (r * r - a * a).max(0.0).sqrt();
+    let beyond = r * r * (std::f64::consts::FRAC_PI_2 - (a / r).clamp(-1.0, 1.0).asin()) - a * root;
+    (beyond / (std::f64::consts::PI * r * r)).clamp(0.0, 1.0)
+}
+
+/// How fast [`cushion_load`] grows as the body comes closer (`gap` falls), N/m: the fibre's lateral stiffness
+/// `48 E I / span^3` times the share of the wisp's fibres reached ([`reached_share`]). The constraint takes the load
+/// implicitly with it (`strand::constraint::ConstraintKind::Cushion::stiffness`): a fibre's stiffness on the mass of
+/// a few centimetres of one fibre is too stiff for an explicit step of a millisecond. Same arguments.
+pub fn cushion_stiffness(entanglement: &Entanglement, ei: f64, fibre_radius: f64, wisp_radius: f64, gap: f64) -> f64 {
+    let k = entanglement.fibre_stiffness(ei) * reached_share(gap - fibre_radius, wisp_radius - fibre_radius);
+    if k.is_finite() { k.max(0.0) } else { 0.0 }
 }
 
 #[cfg(test)]
@@ -126,6 +153,13 @@ mod tests {
         let (d1, d2) = (1e-6, 4e-6);
         let ratio = cushion_load(&e, ei, rf, rw, rw - d2) / cushion_load(&e, ei, rf, rw, rw - d1);
         assert!((ratio / 4f64.powf(2.5) - 1.0).abs() < 0.02, "{ratio}");
+        // The stiffness is the load's slope (a central difference, 1e-6 relative), k_f at most.
+        for g in [0.69e-3, 0.5e-3, 0.3e-3, rf, 0.0] {
+            let slope = (cushion_load(&e, ei, rf, rw, g - 1e-9) - cushion_load(&e, ei, rf, rw, g + 1e-9)) / 2e-9;
+            let got = cushion_stiffness(&e, ei, rf, rw, g);
+            assert!((got - slope).abs() <= 1e-6 * k && got <= k, "g = {g}: {got} vs {slope}");
+        }
+        assert_eq!(cushion_stiffness(&e, ei, rf, rw, rw), 0.0);
         let packed = cushion_load(&e, ei, rf, rw, rf);
         assert!((packed - k * 2.0 * (rw - rf) / (3.0 * std::f64::consts::PI)).abs() < 1e-12 * packed);
         assert!((cushion_load(&e, ei, rf, rf, 0.5 * rf) - k * 0.5 * rf).abs() < 1e-18);

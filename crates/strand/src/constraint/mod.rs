@@ -57,8 +57,10 @@ pub enum ConstraintKind {
     /// the layer pushes the point along `normal` with `load` (N) whatever its motion (the fibres the obstacle has
     /// reached, bent aside, press on the others), and where the point itself reaches the obstacle (`depth > 0`: the
     /// layer packed) the contact is also non-penetrating as [`ConstraintKind::Contact`], the normal force being then
-    /// the larger of the two. Coulomb friction `friction` on the whole normal force. With `load` 0 and `depth > 0`
-    /// it is [`ConstraintKind::Contact`].
+    /// the larger of the two. The layer's load is taken at the step's end, as an implicit spring of `stiffness`:
+    /// `load + stiffness h (v_obstacle - u) . normal` (`u` the point's velocity after the step; at least 0), so a
+    /// stiff layer on a light point is stable at any step. Coulomb friction `friction` on the whole normal force.
+    /// With `load` and `stiffness` 0 and `depth > 0` it is [`ConstraintKind::Contact`].
     Cushion {
         /// Unit normal from the obstacle towards the point.
         normal: Vector3<f64>,
@@ -67,8 +69,10 @@ pub enum ConstraintKind {
         depth: f64,
         /// Coulomb friction coefficient.
         friction: f64,
-        /// The layer's push, N (>= 0).
+        /// The layer's push at the step's start, N (>= 0).
         load: f64,
+        /// How fast the layer's push grows as the obstacle comes closer to the point, N/m (>= 0).
+        stiffness: f64,
     },
     /// Coulomb drag without a normal direction: the point is carried along with the constraint's velocity by
     /// a force of at most `max_force` (N), opposing the relative motion (e.g. a tooth passing through a wisp,
@@ -189,12 +193,13 @@ impl PointConstraint {
                     return bad("depth and friction must be finite and >= 0");
                 }
             }
-            ConstraintKind::Cushion { normal, depth, friction, load } => {
+            ConstraintKind::Cushion { normal, depth, friction, load, stiffness } => {
                 if !normal.iter().all(|x| x.is_finite()) || (normal.norm() - 1.0).abs() > 1e-6 {
                     return bad("contact normal must be a unit vector");
                 }
-                if !depth.is_finite() || !(friction.is_finite() && friction >= 0.0) || !(load.is_finite() && load >= 0.0) {
-                    return bad("cushion depth must be finite, friction and load finite and >= 0");
+                let finite_positive = |x: f64| x.is_finite() && x >= 0.0;
+                if !depth.is_finite() || !finite_positive(friction) || !finite_positive(load) || !finite_positive(stiffness) {
+                    return bad("cushion depth must be finite, friction, load and stiffness finite and >= 0");
                 }
             }
             ConstraintKind::Pin { target } => {

@@ -54,6 +54,22 @@ impl ContactFrame {
     /// The contact's new impulse from its old one `p_old` and the relative velocity `rel` of the point to the
     /// obstacle (both without this iteration's update): normal impulse `>= least` aiming at the separation speed
     /// `want_n`, tangential impulse aiming at no slip, clamped to the Coulomb cone of `friction`.
+    /// The normal impulse (N s, >= 0) of a layer pushing with `load` (N) at the step's start and growing by
+    /// `stiffness` (N/m) as the obstacle comes closer, taken at the step's end (an implicit spring): `p = h load + h^2
+    /// stiffness (v_obstacle - u) . n` with `u` the point's velocity after the step, `rel` its relative velocity with
+    /// the impulses `p_old` (this row's included) and the point's normal mobility `wnn - mix`, so
+    /// `p (1 + h^2 k W_nn) = h load - h^2 k (rel . n - W_nn p_old . n)`. `h load` exactly for a stiffness of 0.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn spring(&self, normal: &Vector3<f64>, load: f64, stiffness: f64, h: f64, rel: &Vector3<f64>, p_old: &Vector3<f64>, mix: f64) -> f64 {
+        if stiffness <= 0.0 {
+            return h * load;
+        }
+        let w = (self.wnn - mix).max(0.0);
+        let hk = h * h * stiffness;
+        let p = (h * load - hk * (rel.dot(normal) - w * p_old.dot(normal))) / (1.0 + hk * w);
+        if p.is_finite() { p.max(0.0) } else { 0.0 }
+    }
+
     /// `least`: the smallest normal impulse, N s (0 for a plain contact; a cushion's load times the step; with
     /// `want_n` minus infinity the normal impulse is `least`).
     #[allow(clippy::too_many_arguments)]
@@ -166,8 +182,8 @@ impl ConstraintRows {
                 let pn = p.dot(&normal).max(0.0);
                 normal * pn + clamp_norm(p - normal * p.dot(&normal), friction * pn)
             }
-            ConstraintKind::Cushion { normal, friction, load, depth } => {
-                let pn = if depth > 0.0 { p.dot(&normal).max(load * self.h) } else { load * self.h };
+            ConstraintKind::Cushion { normal, friction, .. } => {
+                let pn = p.dot(&normal).max(0.0);
                 normal * pn + clamp_norm(p - normal * p.dot(&normal), friction * pn)
             }
             ConstraintKind::Drag { max_force, .. } => clamp_norm(*p, max_force * self.h),
@@ -215,12 +231,13 @@ impl ConstraintRows {
                 let Rule::Contact(frame) = self.rule[c] else { return };
                 frame.update(&normal, friction, (beta * depth).min(v_max), &rel, &p, mix, 0.0)
             }
-            ConstraintKind::Cushion { normal, depth, friction, load } => {
+            ConstraintKind::Cushion { normal, depth, friction, load, stiffness } => {
                 let Rule::Contact(frame) = self.rule[c] else { return };
                 // Clear of the obstacle the point takes the layer's load alone; packed against it, the contact's
                 // non-penetration too.
+                let least = frame.spring(&normal, load, stiffness, self.h, &rel, &p, mix);
                 let want = if depth > 0.0 { (beta * depth).min(v_max) } else { f64::NEG_INFINITY };
-                frame.update(&normal, friction, want, &rel, &p, mix, load * self.h)
+                frame.update(&normal, friction, want, &rel, &p, mix, least)
             }
         };
         self.impulses[c] = if new.iter().all(|x| x.is_finite()) { new } else { Vector3::zeros() };

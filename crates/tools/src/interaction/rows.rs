@@ -113,11 +113,14 @@ impl LocalInteraction {
                         let parts = parting && entanglement.is_some_and(|e| e.parts(r_t));
                         let fibre_depth = c.depth - (reach - radius);
                         let cushion = match entanglement {
-                            Some(e) if parting && !parts => Some(crate::cushion::cushion_load(&e, ei, r_f, wisp_radius, reach - c.depth)),
+                            Some(e) if parting && !parts => {
+                                let gap = reach - c.depth;
+                                Some((crate::cushion::cushion_load(&e, ei, r_f, wisp_radius, gap), crate::cushion::cushion_stiffness(&e, ei, r_f, wisp_radius, gap)))
+                            }
                             _ => None,
                         };
-                        if let Some(load) = cushion.filter(|&l| l > 0.0 || fibre_depth > 0.0) {
-                            cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Cushion { normal: c.normal, depth: fibre_depth, friction, load }, velocity: c.tool_velocity });
+                        if let Some((load, stiffness)) = cushion.filter(|&(l, k)| l > 0.0 || k > 0.0 || fibre_depth > 0.0) {
+                            cons.push(PointConstraint { s: c.s, kind: ConstraintKind::Cushion { normal: c.normal, depth: fibre_depth, friction, load, stiffness }, velocity: c.tool_velocity });
                             levers.push(c.lever);
                             touching.push(Some(**c));
                             solid.push(fibre_depth > 0.0);

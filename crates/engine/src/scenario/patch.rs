@@ -90,7 +90,8 @@ pub struct PatchSpec {
     /// Standard deviation of the random tilt of the root tangents, rad (default 0.05).
     #[serde(default = "default_tilt")]
     pub tilt: f64,
-    /// Seed of the random layout (default 1).
+    /// Seed of the random layout (default 1): where the wisps are rooted, how their roots are tilted, and how each
+    /// wisp's section is turned about its root tangent ([`Scenario::build_patch`]).
     #[serde(default = "default_seed")]
     pub seed: u64,
     /// Real hairs each simulated strand stands for: forces are multiplied by it (default 1).
@@ -282,6 +283,11 @@ pub struct Summary {
     pub wall_time_s: f64,
 }
 
+/// Where the stream of the wisps' section orientations starts for a layout's seed: the seed xor this (an odd
+/// 64-bit constant, PCG's multiplier), so that the roots and tilts drawn from the seed's own stream stay the
+/// layouts they were.
+const ORIENTATION_STREAM: u64 = 0x5851_F42D_4C95_7F2D;
+
 /// splitmix64: a small deterministic generator for the patch layout.
 fn splitmix(state: &mut u64) -> f64 {
     *state = state.wrapping_add(0x9E3779B97F4A7C15);
@@ -369,6 +375,13 @@ impl Scenario {
     /// The strands of the patch, hanging at rest: each in its stable static equilibrium under gravity
     /// (`strand::statics::solve_equilibrium`), with the material of the tress's wetness (a wet curl hangs
     /// longer: its bending and torsion moduli are lower and it is heavier, `tools::wetness`).
+    ///
+    /// Each wisp's material frame is turned about its root tangent by its own angle, uniform in [0, 2 pi), drawn
+    /// from a second stream of the layout's seed ([`ORIENTATION_STREAM`]): the fibres of a real tress lie with
+    /// their elliptical sections turned every way about their axes, and a wavy or curly wisp's rest shape (a helix
+    /// of the preset's curvature and twist in the material frame) then waves in its own plane and phase. With one
+    /// frame for all (the major axis towards +x, before 2026-11-30) every wavy wisp waved in one plane and phase
+    /// and the whole tress leaned one way (docs/combing.md, "Why caucasian's force halves").
     pub fn build_patch(&self) -> Result<Vec<Strand>, ScenarioError> {
         let hair = self.validate()?;
         let p = &self.patch;
@@ -379,6 +392,7 @@ impl Scenario {
             .map_err(inv)?
             .with_uniform_rest(tw, bd, 0.0);
         let mut rng = p.seed;
+        let mut spin = p.seed ^ ORIENTATION_STREAM;
         (0..p.strands)
             .map(|_| {
                 let x = p.root[0] + (splitmix(&mut rng) - 0.5) * p.extent[0];
@@ -386,7 +400,10 @@ impl Scenario {
                 let ang = 2.0 * std::f64::consts::PI * splitmix(&mut rng);
                 let tilt = p.tilt * (-2.0 * splitmix(&mut rng).max(1e-300).ln()).sqrt() * 0.5f64.sqrt();
                 let tangent = Vector3::new(tilt * ang.cos(), tilt * ang.sin(), -1.0);
-                let root = RootFrame::new(Vector3::new(x, y, p.root[2]), tangent, Vector3::x()).map_err(inv)?;
+                let turn = 2.0 * std::f64::consts::PI * splitmix(&mut spin);
+                let n1 = (Vector3::x() - tangent * tangent.dot(&Vector3::x()) / tangent.norm_squared()).normalize();
+                let n2 = tangent.normalize().cross(&n1);
+                let root = RootFrame::new(Vector3::new(x, y, p.root[2]), tangent, n1 * turn.cos() + n2 * turn.sin()).map_err(inv)?;
                 let mut strand = Strand::new(model.clone(), root).map_err(inv)?;
                 // Hanging at rest: the stable static equilibrium under gravity of the wisp's model at its wetness
                 // (moduli and mass), as a tress hangs on a rig before the comb comes; its natural shape if the
@@ -575,6 +592,34 @@ mod tests {
         assert_eq!(s.patch.treatment, Treatment::Virgin);
         let e = ScenarioFile::from_toml(&SCENARIO.replace("segments = 8", "segments = 8\ntreatment = \"permed\"")).unwrap_err().to_string();
         assert!(e.contains("permed") && e.contains("bleached-twice"), "{e}");
+    }
+
+    #[test]
+    fn a_wavy_tress_hangs_centred_under_its_roots() {
+        // Each wisp's section is turned about its root tangent by its own angle (`build_patch`), so the wisps of a
+        // wavy tress wave in their own planes and phases: hanging at rest, each wisp's lower half leans off its root
+        // by the wave (caucasian: curl radius 4.4 cm, pitch 15 cm), every way, and the tress's mean stays near
+        // under the roots. One frame for all made every wisp lean the same way (the mean lean as large as each
+        // wisp's: the tress leaned 11 mm at 16 cm, out of the comb's teeth). Six layouts of the suite's tress.
+        for seed in 1..=6 {
+            let (mut s, _) = parse(SCENARIO);
+            s.patch = PatchSpec { hair_type: "caucasian".into(), strands: 24, length: 0.2, segments: 12, extent: [0.012, 0.004], seed, ..s.patch };
+            let strands = s.build_patch().unwrap();
+            // Each wisp's horizontal offset from its root averaged over the lower half of its length, m.
+            let leans: Vec<Vector3<f64>> = strands
+                .iter()
+                .map(|st| {
+                    let c = strand::kinematics::centerline(&st.model, &st.state, 21);
+                    let lower = &c[10..];
+                    let mean = lower.iter().map(|(_, x)| x - c[0].1).sum::<Vector3<f64>>() / lower.len() as f64;
+                    Vector3::new(mean.x, mean.y, 0.0)
+                })
+                .collect();
+            let each = leans.iter().map(|v| v.norm()).sum::<f64>() / leans.len() as f64;
+            let tress = (leans.iter().sum::<Vector3<f64>>() / leans.len() as f64).norm();
+            assert!(each > 5e-3, "layout {seed}: the wave leans each wisp off its root ({:.1} mm)", each * 1e3);
+            assert!(tress < 0.5 * each, "layout {seed}: the tress leans {:.1} mm, its wisps {:.1} mm each", tress * 1e3, each * 1e3);
+        }
     }
 
     #[test]

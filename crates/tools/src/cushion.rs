@@ -46,9 +46,7 @@ pub fn packed_deflection(a: f64, radius: f64) -> f64 {
         return -a;
     }
     let root = (r * r - a * a).max(0.0).sqrt();
-    // The disc's area beyond the chord at a, m^2.
-    let beyond = r * r * (std::f64::consts::FRAC_PI_2 - (a / r).clamp(-1.0, 1.0).asin()) - a * root;
-    (2.0 / 3.0 * root * root * root - a * beyond) / (std::f64::consts::PI * r * r)
+    (2.0 / 3.0 * root * root * root - a * area_beyond(a, r)) / (std::f64::consts::PI * r * r)
 }
 
 /// The load per fibre of a wisp pressed by a body too thick to part it, N (the module's law): fibres of flexural
@@ -73,9 +71,13 @@ pub fn reached_share(a: f64, radius: f64) -> f64 {
     if a <= -r {
         return 1.0;
     }
+    (area_beyond(a, r) / (std::f64::consts::PI * r * r)).clamp(0.0, 1.0)
+}
+
+/// Area of a disc of radius `r` (m) beyond the chord at `a` (m from its centre, `|a| < r`), m^2.
+fn area_beyond(a: f64, r: f64) -> f64 {
     let root = (r * r - a * a).max(0.0).sqrt();
-    let beyond = r * r * (std::f64::consts::FRAC_PI_2 - (a / r).clamp(-1.0, 1.0).asin()) - a * root;
-    (beyond / (std::f64::consts::PI * r * r)).clamp(0.0, 1.0)
+    r * r * (std::f64::consts::FRAC_PI_2 - (a / r).clamp(-1.0, 1.0).asin()) - a * root
 }
 
 /// How fast [`cushion_load`] grows as the body comes closer (`gap` falls), N/m: the fibre's lateral stiffness

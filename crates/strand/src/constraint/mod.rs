@@ -53,7 +53,7 @@ pub enum ConstraintKind {
         target: Vector3<f64>,
     },
     /// A contact through a compressible layer between the obstacle and the point (a wisp of many fibres pressed by
-    /// a body too thick to part it, the point being the wisp's centreline: `tools::entanglement::Entanglement::cushion_load`):
+    /// a body too thick to part it, the point being the wisp's centreline: `tools::cushion::cushion_load`):
     /// the layer pushes the point along `normal` with `load` (N) whatever its motion (the fibres the obstacle has
     /// reached, bent aside, press on the others), and where the point itself reaches the obstacle (`depth > 0`: the
     /// layer packed) the contact is also non-penetrating as [`ConstraintKind::Contact`], the normal force being then

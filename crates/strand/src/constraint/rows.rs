@@ -168,8 +168,8 @@ impl ConstraintRows {
 
     /// Starts the solve of row `c` from the impulse `p` (N s; e.g. the same contact's impulse at the last step)
     /// instead of zero, projected onto what the row allows now: a contact's normal part >= 0 and its tangential part
-    /// within the Coulomb cone (its current normal and friction; a cushion's normal part at least its load's, exactly
-    /// its load's while its point is clear of the obstacle), a drag's within its largest force. Ignored for a
+    /// within the Coulomb cone (its current normal and friction; a cushion's too: the solve then keeps its normal
+    /// part at least the layer's load, `ContactFrame::spring`), a drag's within its largest force. Ignored for a
     /// row the solve skips (no mobility), a non-finite `p` or a missing row. Call after the rows are built
     /// ([`Strand::fill_constraint_rows`](crate::integrator::Strand::fill_constraint_rows)) and before [`solve`](super::solve); a linked contact's second row must hold minus
     /// the first's.

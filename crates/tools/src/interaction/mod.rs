@@ -238,6 +238,21 @@ impl LocalInteraction {
         true
     }
 
+    /// Strand `k`'s rest shape for hair-hair contact, as set ([`LocalInteraction::set_rest_state`]; empty if none).
+    pub fn rest_shape(&self, k: usize) -> &[Piece] {
+        self.rest_shapes.get(k).map_or(&[], |r| r.as_slice())
+    }
+
+    /// Gives strand `k` the rest shape `pieces` (as [`LocalInteraction::rest_shape`] returned it for a strand of the
+    /// same guide, model and segments: a copy, renamed strand `k`), without evaluating its kinematics again.
+    pub fn set_rest_pieces(&mut self, k: usize, pieces: &[Piece]) {
+        if let Some(r) = self.rest_shapes.get_mut(k) {
+            r.clear();
+            r.extend(pieces.iter().map(|p| Piece { strand: k, ..*p }));
+            self.ws.rest_stale = true;
+        }
+    }
+
     /// Adds a point load (force in N, torque in N m, at arc length `load.s` m) on strand `strand` for the
     /// next step only, e.g. the air of a hair dryer. False (and nothing added) if there is no such strand
     /// or the load is not finite.

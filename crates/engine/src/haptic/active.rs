@@ -40,6 +40,7 @@
 //! [`tools::interaction::LocalInteraction::set_strands`]), and never happens while the clip holds a strand.
 
 use super::strands::samples_along;
+use super::rest_pieces::RestPieces;
 use super::HapticCore;
 use tools::geometry::point_segment_distance;
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
@@ -206,26 +207,6 @@ pub(crate) struct ActiveSet {
     /// Each guide's groomed rest pieces for the hair-hair contacts, kept from its first join on ([`RestPieces`]):
     /// at most one entry per guide (a few kB each: about 200 guides, under a megabyte).
     pub rest_pieces: Vec<Option<RestPieces>>,
-}
-
-/// A guide's groomed rest pieces for the hair-hair contacts (`HapticParams::groomed_overlap`), as
-/// `LocalInteraction::set_rest_state` computed them at its first join, with what they were computed from: the
-/// guide's groomed coordinates and root, and its strand's geometry (kind, length, segments, Gauss points). A guide
-/// joining again with all of these the same takes them as they are (the same bits), without its kinematics.
-#[derive(Debug, Clone)]
-pub(crate) struct RestPieces {
-    q: nalgebra::DVector<f64>,
-    root: (Vector3<f64>, Matrix3<f64>),
-    geometry: (strand::ModelKind, f64, usize),
-    nodes: Vec<(f64, f64)>,
-    pieces: Vec<tools::bvh::Piece>,
-}
-
-impl RestPieces {
-    /// Whether these were computed from the groomed `state` for strand `s`'s geometry.
-    fn matches(&self, state: &strand::StrandState, s: &Strand) -> bool {
-        self.geometry == (s.model.kind, s.model.length, s.model.segments) && self.root == (state.root.position, state.root.rotation) && self.q == state.q && self.nodes.as_slice() == s.dynamics.quadrature_nodes()
-    }
 }
 
 impl ActiveSet {
@@ -511,27 +492,7 @@ impl HapticCore {
                 let uncut = (self.interaction.strands[i].model.length - guide.model.length).abs() <= 1e-12;
                 if from[i].is_none() && uncut {
                     // Computed at the guide's first join, kept for its next ones (`ActiveSet::rest_pieces`).
-                    let s = &self.interaction.strands[i];
-                    match self.set.rest_pieces.get(g).and_then(Option::as_ref).filter(|r| r.matches(&guide.state, s)) {
-                        Some(r) => {
-                            self.interaction.set_rest_pieces(i, &r.pieces);
-                            if cfg!(debug_assertions) {
-                                let kept = self.interaction.rest_shape(i).to_vec();
-                                self.interaction.set_rest_state(i, &guide.state);
-                                assert!(kept == self.interaction.rest_shape(i), "guide {g}'s kept rest pieces are the ones its groomed state gives, bit for bit");
-                            }
-                        }
-                        None => {
-                            let (geometry, nodes) = ((s.model.kind, s.model.length, s.model.segments), s.dynamics.quadrature_nodes().to_vec());
-                            if self.interaction.set_rest_state(i, &guide.state) {
-                                if self.set.rest_pieces.len() <= g {
-                                    self.set.rest_pieces.resize(g + 1, None);
-                                }
-                                let (q, root, pieces) = (guide.state.q.clone(), (guide.state.root.position, guide.state.root.rotation), self.interaction.rest_shape(i).to_vec());
-                                self.set.rest_pieces[g] = Some(RestPieces { q, root, geometry, nodes, pieces });
-                            }
-                        }
-                    }
+                    RestPieces::give(&mut self.set.rest_pieces, g, &mut self.interaction, i, &guide.state);
                 }
             }
         }

@@ -38,6 +38,7 @@ pub mod actions;
 mod active;
 pub mod device_side;
 mod reference;
+mod rest_pieces;
 mod strands;
 mod wetness;
 

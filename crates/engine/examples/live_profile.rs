@@ -5,9 +5,10 @@
 //! each step stages a share of the viewer's snapshot (`HapticCore::stage_snapshot`) and every
 //! `SessionParams::publish_every`-th step writes it (`HapticCore::snapshot`), timed together as "publish" and
 //! counted in the step's wall time. Run:
-//! `cargo run --release -p coiffure-engine --example live_profile [-- [FILE.toml] [rt] [pace|pace=spin] [slowest=N] [hair=on|off] [max_active=N] [steps=FILE.csv]]`
+//! `cargo run --release -p coiffure-engine --example live_profile [-- [FILE.toml] [rt] [pace|pace=spin] [slowest=N] [hair=on|off] [entanglement=on|off] [max_active=N] [steps=FILE.csv]]`
 //! (`rt`: SCHED_FIFO priority 10 for this thread, needs root or CAP_SYS_NICE; `hair=`: `HapticParams::hair_contact`,
-//! default the scenario's `[live] hair_contact`; `max_active=`: `SessionParams::max_active`; `pace`: each step waits for
+//! default the scenario's `[live] hair_contact`; `entanglement=`: `HapticParams::entanglement`, default the
+//! scenario's `[live] entanglement`; `max_active=`: `SessionParams::max_active`; `pace`: each step waits for
 //! its period on the wall clock, as the live physics thread does, instead of running back to back; `pace=spin`: the same
 //! with a spin-wait instead of a sleep; `steps=`: every traced step's stages, counts, CPU time and page faults as CSV).
 //!
@@ -44,6 +45,10 @@ fn main() {
     params.haptic.hair_contact = s.live.hair_contact;
     if let Some(on) = args.iter().find_map(|a| a.strip_prefix("hair=")) {
         params.haptic.hair_contact = on == "on";
+    }
+    params.haptic.entanglement = s.live.entanglement;
+    if let Some(on) = args.iter().find_map(|a| a.strip_prefix("entanglement=")) {
+        params.haptic.entanglement = on == "on";
     }
     if args.iter().any(|a| a == "input=device") {
         params.input = engine::params::InputKind::Device;
@@ -133,7 +138,7 @@ fn main() {
     times.sort_by(f64::total_cmp);
     let q = |p: f64| times[((p * times.len() as f64).ceil() as usize).clamp(1, times.len()) - 1] * 1e6;
     let misses = times.iter().filter(|&&t| t > 1e-3).count();
-    println!("{file}: {} traced steps, real-time priority: {}, hair-hair contact: {}, at most {} strands simulated", times.len(), haptics::realtime::is_realtime(), params.haptic.hair_contact, params.max_active);
+    println!("{file}: {} traced steps, real-time priority: {}, hair-hair contact: {}, entanglement: {}, at most {} strands simulated", times.len(), haptics::realtime::is_realtime(), params.haptic.hair_contact, params.haptic.entanglement, params.max_active);
     println!("peak force {peak:.3} N, largest one-step change of |F| {jump:.3} N, fastest strand tip {tip:.2} m/s");
     println!("step: p50 {:.0} us, p99 {:.0} us, p99.9 {:.0} us, max {:.0} us, mean {:.0} us, {misses} steps over 1 ms", q(0.5), q(0.99), q(0.999), q(1.0), times.iter().sum::<f64>() / times.len() as f64 * 1e6);
     let n = rows.len() as f64;

@@ -158,14 +158,16 @@ impl Strand {
         // and for a pin the pseudo-inverse of the block itself (the post-stabilization's).
         for (c, pc) in constraints.iter().enumerate() {
             let w = rows.w[c * n + c];
-            let inverse = |projection: Matrix3<f64>| if mix > 0.0 { (w + Matrix3::identity() * mix).try_inverse().unwrap_or_else(|| pinv3(&w)) } else { projection };
+            // The pseudo-inverse (an SVD) only where it is used: a drag's inverse with force mixing is the
+            // regularized block's (the same numbers, no SVD thrown away).
+            let inverse = |projection: Option<Matrix3<f64>>| if mix > 0.0 { (w + Matrix3::identity() * mix).try_inverse().unwrap_or_else(|| pinv3(&w)) } else { projection.unwrap_or_else(|| pinv3(&w)) };
             rows.rule.push(match pc.kind {
                 ConstraintKind::Contact { normal, .. } | ConstraintKind::Cushion { normal, .. } => Rule::Contact(ContactFrame::new(&normal, &w, mix)),
                 ConstraintKind::Pin { .. } => {
                     let projection = pinv3(&w);
-                    Rule::Pin { inverse: inverse(projection), projection }
+                    Rule::Pin { inverse: inverse(Some(projection)), projection }
                 }
-                ConstraintKind::Drag { .. } => Rule::Drag { inverse: inverse(pinv3(&w)) },
+                ConstraintKind::Drag { .. } => Rule::Drag { inverse: inverse(None) },
             });
         }
         rows.impulses.resize(n, Vector3::zeros());

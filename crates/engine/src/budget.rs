@@ -87,19 +87,22 @@ pub struct BudgetParams {
     pub step: usize,
     /// The limit a session starts with, strands, > 0 (taken within [`BudgetParams::min_strands`,
     /// `SessionParams::max_active`]); from there it rises by `step` at most every `raise_after` while the steps
-    /// afford it (stage 4). Default 24, the floor: a session started at the full 56 strands met the comb's
-    /// entry into the hair with more strands than the host could afford, and its first slow steps came before
-    /// the budget could know (bench/HISTORY.md, 2026-11-29 night). A host that affords all 56 gets them after
-    /// (56 - 24) / `step` raises, `raise_after` apart.
+    /// afford it (stage 4), and the first slow steps bring it down towards the floor. Default 24: a session
+    /// started at the full 56 strands met the comb's entry into the hair with more strands than the host could
+    /// afford, and its first slow steps came before the budget could know (bench/HISTORY.md, 2026-11-29 night).
+    /// A host that affords all 56 gets them after (56 - 24) / `step` raises, `raise_after` apart.
     pub start: usize,
-    /// The least strands the budget leaves simulated, > 0 (at most `SessionParams::max_active`). Default 24:
-    /// the comb's teeth still meet hair along a stroke (bench/RESULTS.md).
+    /// The least strands the budget leaves simulated, > 0 (at most `SessionParams::max_active`). Default 16:
+    /// issue 12's live acceptance still holds with 16 strands near the tool, on caucasian and African hair, down
+    /// and up strokes (`live_comb_at_the_budgets_floor_meets_the_acceptance`), and on a slow hour of this
+    /// machine 24 strands alone left the step's 99.9th percentile over the period (bench/RESULTS.md, "strand
+    /// budget's floor").
     pub min_strands: usize,
 }
 
 impl Default for BudgetParams {
     fn default() -> Self {
-        Self { enabled: true, target: 0.45, tail_target: 0.75, tail_share: 0.01, tail_window: 1.0, margin: 0.1, time_constant: 0.05, hold: 0.1, settle: 0.01, raise_after: 1.0, step: 4, start: 24, min_strands: 24 }
+        Self { enabled: true, target: 0.45, tail_target: 0.75, tail_share: 0.01, tail_window: 1.0, margin: 0.1, time_constant: 0.05, hold: 0.1, settle: 0.01, raise_after: 1.0, step: 4, start: 24, min_strands: 16 }
     }
 }
 
@@ -400,10 +403,11 @@ mod tests {
         // no higher. A session allowing fewer than min_strands keeps its own maximum as the floor. A NaN time
         // counts as two periods.
         let params = full();
+        let floor = params.min_strands;
         let mut b = StrandBudget::new(params, 1e-3, 56);
-        assert!(run(&mut b, 5000, 2e-3, 0.0).iter().all(|&n| (24..=56).contains(&n)));
-        assert_eq!(b.limit(), 24);
-        assert!(run(&mut b, 10000, 1e-6, 0.0).iter().all(|&n| (24..=56).contains(&n)));
+        assert!(run(&mut b, 5000, 2e-3, 0.0).iter().all(|&n| (floor..=56).contains(&n)));
+        assert_eq!(b.limit(), floor);
+        assert!(run(&mut b, 10000, 1e-6, 0.0).iter().all(|&n| (floor..=56).contains(&n)));
         assert_eq!(b.limit(), 56);
         let mut small = StrandBudget::new(params, 1e-3, 12);
         for _ in 0..1000 {
@@ -449,8 +453,9 @@ mod tests {
         // `max_chosen`) under a limit of 56: the first change already binds (below 48). With a fixed part of 300 us
         // (1.42 ms at 56 strands) the first change, in proportion to the cost, leaves the steps still slow (880 us
         // at 29 strands): the tail lowers it again once 11 slow steps came after the change had settled (10 ms),
-        // before the 0.1 s hold, and the floor is reached within 50 steps of the comb's entry.
-        let params = full();
+        // before the 0.1 s hold, and the floor is reached within 50 steps of the comb's entry. (A floor of 24 here,
+        // where these costs put the host's affordable limit.)
+        let params = BudgetParams { min_strands: 24, ..full() };
         for (most, fixed, within) in [(56, 0.0, 350), (48, 0.0, 350), (56, 300e-6, 50)] {
             let mut b = StrandBudget::new(params, 1e-3, 56);
             let mut simulated = Vec::new();
@@ -472,7 +477,7 @@ mod tests {
     }
 
     #[test]
-    fn a_session_starts_at_the_floor_and_rises_as_far_as_the_host_affords() {
+    fn a_session_starts_at_24_strands_and_rises_as_far_as_the_host_affords() {
         // Default parameters: the limit starts at 24 of 56. Comb in the hair (the limit binds): a fast host (6 us a
         // strand + 50 us, 386 us at 56) gets all 56 in raises of 4 at least a second apart, within 9 s; a slow
         // host (10 us a strand + 30 us) rises while 4 more strands would stay under 0.9 x 450 us and stops there

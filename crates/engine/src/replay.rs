@@ -114,8 +114,8 @@ mod tests {
     #[test]
     fn the_strand_budgets_changes_are_recorded_and_replayed_to_the_same_forces() {
         // A live session whose strand budget finds every step too slow (target 0.1 % of the period, a change
-        // allowed every 20 ms) while the comb strokes down the back hair: its limit falls to the floor, 24
-        // strands, at once (lowered in proportion to the excess, hundreds of times; the limit then bound the
+        // allowed every 20 ms) while the comb strokes down the back hair: its limit falls to the floor
+        // (`BudgetParams::min_strands`) at once (lowered in proportion to the excess, hundreds of times; the limit then bound the
         // stroke), and the change is in the record as a LimitStrands command;
         // the record replayed in lockstep, where nothing is timed, gives every force again to the bit.
         use crate::budget::BudgetParams;
@@ -141,8 +141,9 @@ mod tests {
             _ => None,
         }).collect();
         eprintln!("budget {:?}, limits recorded {limits:?}", report.budget);
-        assert_eq!(limits, vec![24], "lowered to the floor at once");
-        assert_eq!((report.budget.changes, report.budget.lowest, report.budget.last), (1, 24, 24));
+        let floor = budget.min_strands;
+        assert_eq!(limits, vec![floor as u32], "lowered to the floor at once");
+        assert_eq!((report.budget.changes, report.budget.lowest, report.budget.last), (1, floor, floor));
         assert!(report.budget.limited_steps > 0 && report.budget.limited_steps < report.budget.steps);
         let back = Record::from_bytes(&rec.to_bytes()).unwrap();
         assert_eq!(back, rec);

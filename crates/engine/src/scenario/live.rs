@@ -528,7 +528,13 @@ mod tests {
     /// `live_comb_stroke_meets_the_acceptance`), the comb in the hair for more than `in_hair` steps; returns the
     /// metrics.
     fn meets_the_comb_acceptance(s: &LiveScenario, in_hair: usize) -> LiveSummary {
-        let (trace, m) = s.run().unwrap();
+        meets_the_comb_acceptance_with(s, in_hair, |_| {})
+    }
+
+    /// [`meets_the_comb_acceptance`] with the session's parameters changed by `change`.
+    fn meets_the_comb_acceptance_with(s: &LiveScenario, in_hair: usize, change: impl FnOnce(&mut SessionParams)) -> LiveSummary {
+        let scene = Arc::new(s.scene_in(std::path::Path::new(".")).unwrap());
+        let (trace, m, _) = s.run_with(scene, false, change).unwrap();
         eprintln!("{m:?}");
         assert_eq!(trace.len(), (s.run_time() / 1e-3).round() as usize);
         assert_eq!((m.rejected_readings, m.failed_steps), (0, 0));
@@ -585,6 +591,24 @@ mod tests {
         let s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-comb-updown.toml")).unwrap();
         let m = meets_the_comb_acceptance(&s, 4000);
         assert!(m.max_strand_speed_m_s < 1.0, "fastest strand tip {} m/s", m.max_strand_speed_m_s);
+    }
+
+    #[test]
+    fn live_comb_at_the_budgets_floor_meets_the_acceptance() {
+        // Issue 31: on a slow hour the live server's strand budget simulates as few as `BudgetParams::min_strands`
+        // strands near the tool (`crate::budget`); issue 12's acceptance (the bounds above) must hold there too,
+        // for the down stroke on caucasian and African hair and for the strokes up and down (tips under 1 m/s).
+        let floor = crate::budget::BudgetParams::default().min_strands;
+        let at_floor = |p: &mut SessionParams| {
+            p.max_active = floor;
+            p.max_chosen = p.max_chosen.min(floor);
+        };
+        for (file, hair, in_hair) in [(include_str!("../../../../examples/scenarios/live-comb.toml"), "caucasian", 500), (include_str!("../../../../examples/scenarios/live-comb.toml"), "african", 500), (include_str!("../../../../examples/scenarios/live-comb-updown.toml"), "caucasian", 4000)] {
+            let mut s: LiveScenario = toml::from_str(file).unwrap();
+            s.live.hair_type = hair.into();
+            let m = meets_the_comb_acceptance_with(&s, in_hair, at_floor);
+            assert!(m.max_strand_speed_m_s < 1.0, "{hair}: fastest strand tip {} m/s", m.max_strand_speed_m_s);
+        }
     }
 
     #[test]
@@ -853,3 +877,4 @@ mod tests {
         }
     }
 }
+

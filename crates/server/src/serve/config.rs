@@ -55,6 +55,11 @@ pub struct ServeArgs {
     /// up to 56 strands near the tool, however long the steps take on this machine (for benchmarks).
     #[arg(long)]
     pub no_strand_budget: bool,
+    /// The strand budget's floor, strands (`BudgetParams::min_strands`, default 16): the fewest strands near the
+    /// tool the budget leaves simulated on a slow host; the budget also starts here if `BudgetParams::start`
+    /// is below it.
+    #[arg(long)]
+    pub min_strands: Option<usize>,
     /// Haptic physics rate, Hz, in (0, 4000] (`SessionParams::haptic_rate_hz`): the local strands' step, which
     /// publishes the local force model the device loop renders.
     #[arg(long, default_value_t = 1000.0)]
@@ -153,7 +158,11 @@ impl Config {
             params.haptic.max_proxy_lag = lag;
         }
         params.budget.enabled = !args.no_strand_budget;
-        params.validate().context("--hairs-per-render-strand, --haptic-rate, --device-rate, --max-proxy-lag")?;
+        if let Some(n) = args.min_strands {
+            params.budget.min_strands = n;
+            params.budget.start = params.budget.start.max(n);
+        }
+        params.validate().context("--hairs-per-render-strand, --haptic-rate, --device-rate, --max-proxy-lag, --min-strands")?;
         let udp = match &args.device {
             Some(spec) => Some(bind_device(spec, args, &profile)?),
             None => None,

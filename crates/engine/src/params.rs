@@ -244,11 +244,11 @@ pub struct HapticParams {
     pub groomed_overlap: bool,
     /// The tool drags through the local strands against the fibres it parts (`tools::entanglement`, the tress
     /// scenarios' law: bending of the parted fibres and, wet, the water bridges on the tooth; each guide's
-    /// drag times the real hairs it stands for). Default false: on, the `[live]` down stroke
-    /// (examples/scenarios/live-comb.toml) meets issue 12's acceptance, but the strokes up and down
-    /// (live-comb-updown.toml) carry guides farther than the acceptance allows (a tooth drawn towards the roots
-    /// drags the parted fibres up with it), and the haptic step costs more (figures: docs/scenarios.md, "The
-    /// combing law since issue 29").
+    /// drag times the real hairs it stands for). Default false: on, the `[live]` strokes meet issue 12's
+    /// acceptance on caucasian and African hair (the strokes towards the roots within the bound of a drag, the
+    /// comb's travel: a tooth drawn towards the roots drags the parted fibres up with it), but a wisp hangs on the
+    /// comb pulled out of the hair, and issue 34's loaded groom is not back in place 1.2 s after the stroke; the
+    /// haptic step also costs more (figures: docs/combing.md, "Live session").
     pub entanglement: bool,
     /// The hold of the unsimulated neighbours on each local strand (`tools::interaction::LocalInteraction::
     /// hold_distance`): a spring per unit length towards the strand's place in the hair volume (its groom

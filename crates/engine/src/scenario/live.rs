@@ -533,19 +533,38 @@ mod tests {
 
     /// [`meets_the_comb_acceptance`] with the session's parameters changed by `change`.
     fn meets_the_comb_acceptance_with(s: &LiveScenario, in_hair: usize, change: impl FnOnce(&mut SessionParams)) -> LiveSummary {
+        comb_acceptance(s, in_hair, 0.08, change).0
+    }
+
+    /// [`meets_the_comb_acceptance_with`] with `stroke_bound` (m) for the guides' displacement while the comb is in
+    /// the hair instead of issue 12's 8 cm; also returns the guides' largest displacement from their settled places
+    /// (m) at each global step, with its time since the settling (s).
+    fn comb_acceptance(s: &LiveScenario, in_hair: usize, stroke_bound: f64, change: impl FnOnce(&mut SessionParams)) -> (LiveSummary, Vec<(f64, f64)>) {
         let scene = Arc::new(s.scene_in(std::path::Path::new(".")).unwrap());
-        let (trace, m, _) = s.run_with(scene, false, change).unwrap();
+        // The guide points as the run's meter measures them, settled at the first global step of the run.
+        let meter = Meter::new(&scene);
+        let (mut settled, mut moved) = (Vec::new(), Vec::new());
+        let mut observe = |ls: &Lockstep, t: f64| {
+            if t >= 0.0 {
+                let now = meter.points(ls);
+                if settled.is_empty() {
+                    settled = now.clone();
+                }
+                moved.push((t, now.iter().zip(&settled).map(|(a, b): (&Vector3<f64>, &Vector3<f64>)| (a - b).norm()).fold(0.0, f64::max)));
+            }
+        };
+        let (trace, m, _) = s.run_observed(scene.clone(), false, change, &mut observe).unwrap();
         eprintln!("{m:?}");
         assert_eq!(trace.len(), (s.run_time() / 1e-3).round() as usize);
         assert_eq!((m.rejected_readings, m.failed_steps), (0, 0));
         assert_eq!(m.clamp_steps, 0, "steps at the device's clamp");
         assert!(m.in_hair_steps > in_hair, "the comb must go through the hair: {} steps in it", m.in_hair_steps);
-        assert!(m.stroke_max_displacement_m <= 0.08, "stroke displacement {} m", m.stroke_max_displacement_m);
+        assert!(m.stroke_max_displacement_m <= stroke_bound, "stroke displacement {} m (bound {stroke_bound} m)", m.stroke_max_displacement_m);
         assert!(m.final_max_displacement_m <= 0.03, "displacement 1.2 s after the stroke {} m", m.final_max_displacement_m);
         assert!(m.in_hair_force_share >= 0.6, "share of in-hair steps above 5 mN {}", m.in_hair_force_share);
         assert!(m.stroke_force_share >= 0.6 && m.stroke_steps > in_hair / 2, "share of the {} stroke steps above 5 mN {}", m.stroke_steps, m.stroke_force_share);
         assert!(m.max_force_change_n <= 0.1, "largest one-step change {} N", m.max_force_change_n);
-        m
+        (m, moved)
     }
 
     #[test]
@@ -608,6 +627,44 @@ mod tests {
             s.live.hair_type = hair.into();
             let m = meets_the_comb_acceptance_with(&s, in_hair, at_floor);
             assert!(m.max_strand_speed_m_s < 1.0, "{hair}: fastest strand tip {} m/s", m.max_strand_speed_m_s);
+        }
+    }
+
+    #[test]
+    fn live_comb_strokes_with_the_combing_law_meet_the_acceptance() {
+        // Issue 29: the tress scenarios' combing law in the live session (`[live] entanglement = true`,
+        // `HapticParams::entanglement`). The down stroke (live-comb.toml) meets issue 12's acceptance unchanged on
+        // caucasian and African hair. Up and down (live-comb-updown.toml, caucasian): a tooth drawn towards the
+        // roots drags each parted fibre up with it (backcombing: the drag on a parted fibre beats what holds it
+        // down, the hair volume's hold and its bending above the tooth, which buckles), and the guides' ends ride
+        // up with the comb, 9.4 cm (docs/combing.md, "Live session"). So while the comb is in the hair the bound is
+        // the one a drag can give, not issue 12's 8 cm for strokes along the hair: a drag only opposes the motion
+        // of the fibres relative to the tooth, so it carries no guide point farther than the comb moves in one
+        // stroke (the path's longest leg, 11 cm; a point swings on by its own momentum only until the hold takes it
+        // back). The down strokes keep issue 12's bound: the first (live-comb.toml's stroke) moves no guide point
+        // more than 8 cm, and each later one, which starts from the hair the up stroke lifted, ends with every guide
+        // point within 8 cm of its place (the comb combs it back down). Every other bound of issue 12 as before.
+        for hair in ["caucasian", "african"] {
+            let mut s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-comb.toml")).unwrap();
+            (s.live.entanglement, s.live.hair_type) = (true, hair.into());
+            meets_the_comb_acceptance(&s, 500);
+        }
+        let mut s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-comb-updown.toml")).unwrap();
+        s.live.entanglement = true;
+        let leg = |w: &[LiveWaypoint]| (Vector3::from(w[1].position) - Vector3::from(w[0].position)).norm();
+        let stroke = s.tool.path.windows(2).map(leg).fold(0.0, f64::max);
+        assert!((stroke - 0.11).abs() < 1e-9, "the longest stroke {stroke} m");
+        let (m, moved) = comb_acceptance(&s, 4000, stroke, |_| {});
+        assert!(m.max_strand_speed_m_s < 1.0, "fastest strand tip {} m/s", m.max_strand_speed_m_s);
+        // The down strokes (towards the tips, -z in the head frame): until the first one ends, and at the end of
+        // each later one (the last global step before it), issue 12's 8 cm.
+        let downs: Vec<f64> = s.tool.path.windows(2).filter(|w| w[1].position[2] < w[0].position[2] - 0.05).map(|w| w[1].t).collect();
+        assert_eq!(downs.len(), 4, "{downs:?}");
+        let first = moved.iter().filter(|&&(t, _)| t <= downs[0]).map(|&(_, d)| d).fold(0.0, f64::max);
+        assert!(first <= 0.08, "the first down stroke moved a guide point {first} m");
+        for &end in &downs[1..] {
+            let &(t, d) = moved.iter().filter(|&&(t, _)| t <= end).last().unwrap();
+            assert!(end - t < 0.011 && d <= 0.08, "at the end of the down stroke at {end} s ({t} s) a guide point is {d} m from its place");
         }
     }
 

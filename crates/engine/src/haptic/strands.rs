@@ -160,8 +160,8 @@ impl HapticCore {
 /// The live session's constraint solver options for simulated fibres of flexural rigidity `ei` (N m^2): the
 /// defaults, with no constraint (tool, body or hair-hair contact, pin) stiffer than the fibre's lateral stiffness
 /// over the span between the neighbours that hold it sideways in the hair, `48 EI / span^3`
-/// (`tools::entanglement::Entanglement::fibre_stiffness`, the span of the tress calibration, 6.6 mm; caucasian
-/// dry 0.48 N/m, against the solver's default cap of 100 N/m). A simulated guide is a chain of rigid-curvature
+/// (`tools::entanglement::Entanglement::fibre_stiffness`, the span of the tress calibration, 7.3 mm; caucasian
+/// dry 0.35 N/m, against the solver's default cap of 100 N/m). A simulated guide is a chain of rigid-curvature
 /// segments (8 of 2.5 cm in the built-in hairstyle) and stands for hundreds of fibres, so a tooth pressing it near its
 /// root, or two teeth shearing it on opposite sides, met the whole segment's resistance and the solver's cap
 /// (newtons at the hand on issue 12's upward strokes). A real fibre there bends over one span.

@@ -122,7 +122,7 @@ pub struct PatchSpec {
     #[serde(default = "default_true")]
     pub entanglement: bool,
     /// Free length of a fibre between its entanglement points, m (default: `Entanglement::for_hair`'s for the hair
-    /// type, 6.6 mm for H1 scaled with the fibre's size).
+    /// type, 7.3 mm for H1 scaled with the fibre's size).
     pub entanglement_span: Option<f64>,
 }
 

@@ -221,6 +221,7 @@ impl PointConstraint {
 }
 
 mod rows;
+mod slide;
 mod solve;
 mod step;
 

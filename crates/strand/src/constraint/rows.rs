@@ -98,8 +98,9 @@ pub(super) enum Rule {
     /// A pin: the inverse of its regularized Delassus block `W + R I` (m/s per N s, inverted) and the
     /// pseudo-inverse of `W` itself (the post-stabilization's).
     Pin { inverse: Matrix3<f64>, projection: Matrix3<f64> },
-    /// A drag: the inverse of its regularized Delassus block.
-    Drag { inverse: Matrix3<f64> },
+    /// A drag: the inverse of its regularized Delassus block, and the block's eigenbasis and eigenvalues (the
+    /// sliding impulse's, `super::slide`).
+    Drag { inverse: Matrix3<f64>, axes: Matrix3<f64>, mobilities: Vector3<f64> },
 }
 
 /// One strand's constraints in its prepared step, as the projected Gauss-Seidel sweeps of [`solve`](super::solve) need them:
@@ -216,16 +217,19 @@ impl ConstraintRows {
                 p + inverse * (want - rel - p * mix)
             }
             ConstraintKind::Drag { max_force, slip_speed } => {
-                let Rule::Drag { inverse } = self.rule[c] else { return };
-                // Aim for no relative motion, then clamp to the drag's largest impulse, regularised by the relative
-                // speed the point would have without this drag.
-                let share = if slip_speed > 0.0 {
-                    let own = mul3(&self.w[c * self.len() + c], &p);
-                    ((rel - own).norm() / slip_speed).min(1.0)
+                let Rule::Drag { inverse, axes, mobilities } = self.rule[c] else { return };
+                // Aim for no relative motion; beyond the drag's largest impulse (regularised by the relative speed
+                // the point would have without this drag) slide: the impulse at the bound that opposes the relative
+                // velocity it leaves (`super::slide`), not the aim shortened.
+                let own = mul3(&self.w[c * self.len() + c], &p);
+                let share = if slip_speed > 0.0 { ((rel - own).norm() / slip_speed).min(1.0) } else { 1.0 };
+                let bound = max_force * self.h * share;
+                let aim = p + inverse * (-rel - p * mix);
+                if aim.norm() > bound {
+                    super::slide::sliding(&axes, &mobilities, mix, &(rel - own), bound)
                 } else {
-                    1.0
-                };
-                clamp_norm(p + inverse * (-rel - p * mix), max_force * self.h * share)
+                    aim
+                }
             }
             ConstraintKind::Contact { normal, depth, friction } => {
                 let Rule::Contact(frame) = self.rule[c] else { return };

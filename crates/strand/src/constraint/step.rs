@@ -167,7 +167,10 @@ impl Strand {
                     let projection = pinv3(&w);
                     Rule::Pin { inverse: inverse(Some(projection)), projection }
                 }
-                ConstraintKind::Drag { .. } => Rule::Drag { inverse: inverse(None) },
+                ConstraintKind::Drag { .. } => {
+                    let (axes, mobilities) = super::slide::eigenbasis(&w);
+                    Rule::Drag { inverse: inverse(None), axes, mobilities }
+                }
             });
         }
         rows.impulses.resize(n, Vector3::zeros());

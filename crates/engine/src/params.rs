@@ -246,9 +246,9 @@ pub struct HapticParams {
     /// scenarios' law: bending of the parted fibres and, wet, the water bridges on the tooth; each guide's
     /// drag times the real hairs it stands for). Default false: on, the `[live]` strokes meet issue 12's
     /// acceptance on caucasian and African hair (the strokes towards the roots within the bound of a drag, the
-    /// comb's travel: a tooth drawn towards the roots drags the parted fibres up with it), but a wisp hangs on the
-    /// comb pulled out of the hair, and issue 34's loaded groom is not back in place 1.2 s after the stroke; the
-    /// haptic step also costs more (figures: docs/combing.md, "Live session").
+    /// comb's travel: a tooth drawn towards the roots drags the parted fibres up with it), issue 34's loaded groom
+    /// too since the sliding drag; the haptic step costs more, and its wall-clock cost in the device loop (issue
+    /// 31) was not measured with the law on (figures: docs/combing.md, "Live session").
     pub entanglement: bool,
     /// The hold of the unsimulated neighbours on each local strand (`tools::interaction::LocalInteraction::
     /// hold_distance`): a spring per unit length towards the strand's place in the hair volume (its groom

@@ -28,7 +28,8 @@
 //!    running mean still remembers the strands before the change).
 //! 3. The step is over budget if the mean is above `target` periods, or if more than
 //!    [`BudgetParams::tail_share`] of a full window's steps (10 of 1,000 by default) in the tail window took
-//!    longer than [`BudgetParams::tail_target`] periods. Then the limit is lowered in proportion to the excess
+//!    longer than [`BudgetParams::tail_target`] periods, or (with [`BudgetParams::late_steps`] = `Some(k)`) more
+//!    than `k` of them longer than one period. Then the limit is lowered in proportion to the excess
 //!    (the cost taken as proportional to the strands): to `n / r` strands, `n` the most strands a step simulated
 //!    since the last change (at most the limit), `r` the largest of `mean / target`, the tail window's own mean
 //!    over `target`
@@ -39,7 +40,8 @@
 //!    bench/HISTORY.md, 2026-11-29 night.)
 //! 4. The limit rises by `step` (not above `SessionParams::max_active`) if the mean, scaled by the strands `step`
 //!    more would add, stays below `target (1 - margin)` periods and at most `tail_share` of the tail window's
-//!    steps, scaled the same way, are over `tail_target (1 - margin)` periods; but only
+//!    steps, scaled the same way, are over `tail_target (1 - margin)` periods (and, with `late_steps` = `Some(k)`,
+//!    at most `k` over `1 - margin` periods); but only
 //!    [`BudgetParams::raise_after`] after the last change and while the limit binds (as many strands simulated as
 //!    it allows): with the comb out of the hair the steps are cheap whatever the limit.
 
@@ -98,11 +100,17 @@ pub struct BudgetParams {
     /// machine 24 strands alone left the step's 99.9th percentile over the period (bench/RESULTS.md, "strand
     /// budget's floor").
     pub min_strands: usize,
+    /// The budget's hold on the 99.9th percentile, steps, if any: the limit is also lowered when more than this
+    /// many steps of the tail window took longer than one period, and raised only if at most this many of them,
+    /// scaled to the raised count, would take longer than `1 - margin` periods. Default None (off): measured only
+    /// with the combing law on in the live session (`HapticParams::entanglement`), where `Some(1)` kept the
+    /// physics step's 99.9th percentile under the period in every run (docs/combing.md, "Live session").
+    pub late_steps: Option<usize>,
 }
 
 impl Default for BudgetParams {
     fn default() -> Self {
-        Self { enabled: true, target: 0.45, tail_target: 0.75, tail_share: 0.01, tail_window: 1.0, margin: 0.1, time_constant: 0.05, hold: 0.1, settle: 0.01, raise_after: 1.0, step: 4, start: 24, min_strands: 16 }
+        Self { enabled: true, target: 0.45, tail_target: 0.75, tail_share: 0.01, tail_window: 1.0, margin: 0.1, time_constant: 0.05, hold: 0.1, settle: 0.01, raise_after: 1.0, step: 4, start: 24, min_strands: 16, late_steps: None }
     }
 }
 
@@ -169,6 +177,8 @@ pub struct StrandBudget {
     next: usize,
     /// Steps in the window over `tail_target` periods.
     slow: usize,
+    /// Steps in the window over one period (`BudgetParams::late_steps`).
+    late: usize,
     /// The most strands simulated in a step since the last change.
     most: usize,
     /// Scratch for the window's quantile when lowering (allocated once).
@@ -186,7 +196,7 @@ impl StrandBudget {
         let report = BudgetReport { enabled: true, lowest: limit, last: limit, ..BudgetReport::default() };
         let capacity = ((params.tail_window / period).round() as usize).max(1);
         let (window, scratch) = (Vec::with_capacity(capacity), Vec::with_capacity(capacity));
-        Self { params, period, max: max_active, limit, mean: None, since_change: 0.0, window, capacity, next: 0, slow: 0, most: 0, scratch, report }
+        Self { params, period, max: max_active, limit, mean: None, since_change: 0.0, window, capacity, next: 0, slow: 0, late: 0, most: 0, scratch, report }
     }
 
     /// Steps a full tail window may hold over `tail_target` periods.
@@ -197,14 +207,17 @@ impl StrandBudget {
     /// Stage 1's tail window: adds a step of `t` s.
     fn remember(&mut self, t: f64) {
         let over = |x: f32| (x as f64 > self.params.tail_target * self.period) as usize;
+        let late = |x: f32| (x as f64 > self.period) as usize;
         let t = t as f32;
         if self.window.len() < self.capacity {
             self.window.push(t);
         } else {
             self.slow -= over(self.window[self.next]);
+            self.late -= late(self.window[self.next]);
             self.window[self.next] = t;
         }
         self.slow += over(t);
+        self.late += late(t);
         self.next = (self.next + 1) % self.capacity;
     }
 
@@ -241,7 +254,7 @@ impl StrandBudget {
             self.since_change = 0.0;
             // The tail window holds the steps under the current limit only.
             self.window.clear();
-            (self.next, self.slow, self.most) = (0, 0, 0);
+            (self.next, self.slow, self.late, self.most) = (0, 0, 0, 0);
         }
         let r = &mut self.report;
         r.steps += 1;
@@ -259,7 +272,8 @@ impl StrandBudget {
         let floor = p.min_strands.min(self.max);
         let (target, tail) = (p.target * self.period, p.tail_target * self.period);
         let allowed = self.allowed();
-        let slow = self.slow > allowed && self.since_change > p.settle;
+        let late = p.late_steps.is_some_and(|k| self.late > k);
+        let slow = (self.slow > allowed || late) && self.since_change > p.settle;
         if (slow || (mean > target && self.since_change >= p.hold)) && self.limit > floor {
             // The excess: of the running mean, of the window's mean (the steps since the change, without the
             // running mean's memory of the strands before it) and of its tail.
@@ -286,7 +300,8 @@ impl StrandBudget {
         let mean_room = mean * scale <= target * (1.0 - p.margin);
         let over = (tail * (1.0 - p.margin) / scale) as f32;
         let tail_room = || self.window.iter().filter(|&&t| t > over).count() as f64 <= p.tail_share * self.window.len() as f64;
-        (mean_room && tail_room()).then(|| (self.limit + p.step).min(self.max))
+        let late_room = || p.late_steps.map_or(true, |k| self.window.iter().filter(|&&t| t as f64 * scale > self.period * (1.0 - p.margin)).count() <= k);
+        (mean_room && tail_room() && late_room()).then(|| (self.limit + p.step).min(self.max))
     }
 }
 
@@ -497,6 +512,26 @@ mod tests {
         assert!(limits.iter().all(|&n| 30e-6 + 10e-6 * n as f64 <= 0.45e-3));
         let mut idle = StrandBudget::new(params, 1e-3, 56);
         assert!((0..5000).all(|_| idle.observe(60e-6, 2).is_none()) && idle.limit() == 24);
+    }
+
+    #[test]
+    fn the_hold_on_the_999th_percentile_lowers_on_two_late_steps_and_raises_only_with_room() {
+        // 1 kHz, 10 us a strand (240 us at 24 strands: mean and 99th percentile far under their targets), and every
+        // 400th step 5x as long (1.2 ms at 24 strands, over the period: 0.25 % of the steps, under the 1 % the
+        // tail rule allows). Without `late_steps` the limit stays at 24, and rises to 28 once it may (the scaled
+        // late steps do not count). With `late_steps = Some(1)`: lowered once the window holds two late steps, and
+        // never raised while the scaled late steps would still be over 0.9 periods.
+        let cost = |i: usize, n: usize| 10e-6 * n as f64 * if i % 400 == 399 { 5.0 } else { 1.0 };
+        let mut off = StrandBudget::new(BudgetParams::default(), 1e-3, 56);
+        let limits = run_with(&mut off, 3000, cost);
+        assert!(limits[..799].iter().all(|&n| n == 24) && limits.iter().all(|&n| n >= 24), "{:?}", off.report());
+        assert!(*limits.last().unwrap() > 24, "raised without the hold: {:?}", off.report());
+        let mut on = StrandBudget::new(BudgetParams { late_steps: Some(1), ..BudgetParams::default() }, 1e-3, 56);
+        let limits = run_with(&mut on, 3000, cost);
+        assert!(limits[..799].iter().all(|&n| n == 24), "lowered before the second late step");
+        let first = limits.iter().position(|&n| n < 24).expect("lowered on two late steps");
+        assert_eq!(first, 799, "lowered at the second late step");
+        assert!(limits.iter().all(|&n| n <= 24), "raised though its late steps would be over the period: {:?}", on.report());
     }
 
     #[test]

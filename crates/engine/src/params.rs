@@ -244,11 +244,11 @@ pub struct HapticParams {
     pub groomed_overlap: bool,
     /// The tool drags through the local strands against the fibres it parts (`tools::entanglement`, the tress
     /// scenarios' law: bending of the parted fibres and, wet, the water bridges on the tooth; each guide's
-    /// drag times the real hairs it stands for). Default false: on, the `[live]` strokes meet issue 12's
-    /// acceptance on caucasian and African hair (the strokes towards the roots within the bound of a drag, the
-    /// comb's travel: a tooth drawn towards the roots drags the parted fibres up with it), issue 34's loaded groom
-    /// too since the sliding drag; the haptic step costs more, and its wall-clock cost in the device loop (issue
-    /// 31) was not measured with the law on (figures: docs/combing.md, "Live session").
+    /// drag times the real hairs it stands for). Default true: the `[live]` strokes meet issue 12's acceptance
+    /// with it on caucasian and African hair (strokes towards the roots within the bound of a drag, the comb's
+    /// travel: a tooth drawn towards the roots drags the parted fibres up with it, as backcombing does), and the
+    /// strand budget (`BudgetParams::late_steps`) holds its cost in the device loop (docs/combing.md, "Live
+    /// session"). False: the tool meets the strands by contact and friction only (issue 12's law).
     pub entanglement: bool,
     /// The hold of the unsimulated neighbours on each local strand (`tools::interaction::LocalInteraction::
     /// hold_distance`): a spring per unit length towards the strand's place in the hair volume (its groom
@@ -283,7 +283,7 @@ pub struct HapticParams {
 
 impl Default for HapticParams {
     fn default() -> Self {
-        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, handover_distance: 0.002, max_relax_time: 1.5, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: false, hold_distance: 0.03, hold_damping: 1.0, treatment: tools::treatment::Treatment::Virgin }
+        Self { max_proxy_lag: 0.2, reselect_distance: 0.01, choice_steps: 10, joins_per_step: 4, clip_reach: 0.01, max_displacement: 0.5, min_air_drag: 2e-5, combing_ease_reduction: 0.8, dryer_pieces: 8, snip_distance: 0.02, cut_pieces: 4, start: [0.0, -0.25, 0.0], lookahead: 0.1, rest_speed: 0.02, rest_time: 0.2, handover_distance: 0.002, max_relax_time: 1.5, rest_distance: 0.005, blend_time: 0.3, body_clearance: 0.004, hydrogen_share: 0.8, hair_contact: true, groomed_overlap: true, entanglement: true, hold_distance: 0.03, hold_damping: 1.0, treatment: tools::treatment::Treatment::Virgin }
     }
 }
 

@@ -193,9 +193,7 @@ impl HapticCore {
         let pose = ToolPose { position: start, rotation: Matrix3::identity() };
         let n = scene.guides.len();
         let shapes: Vec<tools::shape::ToolShape> = Tool::ALL.iter().map(|t| t.shape(params.global.nozzle_standoff)).collect();
-        let mut interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &hair)));
-        interaction.params.hold_distance = params.haptic.hold_distance;
-        interaction.params.hold_gravity = scene.guides.first().map(|g| g.model.gravity.norm());
+        let interaction = resting_on(&scene, LocalInteraction::new(Vec::new(), shapes[Tool::Comb as usize].clone(), pose, Self::force_model(&params.haptic, &hair)));
         let bounds = active::GuideBounds::new(&scene);
         let side = DeviceSide::new(params, shapes.clone(), (scene.head.clone(), scene.lattice.params.metaball.threshold));
         Ok(Self {
@@ -214,7 +212,16 @@ impl HapticCore {
             step: 0,
             head: nalgebra::Isometry3::identity(),
             stats: HapticStats::default(),
-        })
+        }
+        .with_interaction())
+    }
+
+    /// `self` with its interaction built as every viewer command builds it ([`HapticCore::renew_interaction`]:
+    /// the hold, the body's friction, the hair contact and the combing law): a session driven by a device
+    /// alone, with no viewer's command, runs the same laws as one whose viewer chose the tool.
+    fn with_interaction(mut self) -> Self {
+        self.renew_interaction(Vec::new());
+        self
     }
 
     /// Applies a viewer command.
@@ -723,6 +730,41 @@ mod tests {
         assert!(peak > 1e-3, "peak force {peak} N");
         assert!(peak <= 3.3 + 1e-12, "within the Omni's clamp: {peak} N");
         assert!(moved > 1e-3, "largest guide displacement {moved} m");
+    }
+
+    #[test]
+    fn a_device_alone_combs_with_the_laws_a_viewer_would_choose() {
+        // `coiffure serve --device` with no viewer: no command ever reaches the core, and its starting interaction
+        // lacked the combing law (`HapticParams::entanglement`), which only a viewer's command (tool, hair,
+        // treatment) put in. A comb stroke down and one up through the hair, with the law on and off: the core
+        // driven by the device alone gives, at every step, the force of one whose viewer chose the comb and the
+        // scene's hair first (bit for bit), and with the law on the stroke's mean force is above the law off's.
+        let scene = small_scene();
+        let snap = GlobalCore::new(scene.clone(), &SessionParams::default()).snapshot();
+        let rot = Matrix3::from_columns(&[Vector3::new(-1.0, 0.0, 0.0), Vector3::new(0.0, 0.0, -1.0), Vector3::new(0.0, -1.0, 0.0)]);
+        let hair = HairType::ALL.iter().position(|h| *h == scene.hair_type).unwrap() as u8;
+        for (from, to) in [(0.05, -0.01), (-0.01, 0.05)] {
+            let mut mean = [0.0; 2];
+            for (k, law) in [false, true].into_iter().enumerate() {
+                let mut params = SessionParams::default();
+                params.haptic.entanglement = law;
+                let mut alone = HapticCore::new(scene.clone(), params).unwrap();
+                let mut chosen = HapticCore::new(scene.clone(), params).unwrap();
+                chosen.apply(&Command::SelectTool(Tool::Comb));
+                chosen.apply(&Command::SetHair { hair_type: hair, curliness: 0.0, combing_ease: 0.0 });
+                let steps = 600;
+                for n in 0..steps {
+                    let t = n as f64 * 1e-3;
+                    let p = Vector3::new(0.0, -0.118, from + (to - from) * n as f64 / steps as f64);
+                    let r = DeviceReading { time: t, position: p, rotation: rot, buttons: 0 };
+                    let (a, c) = (alone.step(Some(r), &snap, 1e-3).force, chosen.step(Some(r), &snap, 1e-3).force);
+                    assert_eq!(a, c, "stroke {from} to {to} m, law {law}, step {n}: a device alone {a:?} N, after a viewer's choice {c:?} N");
+                    mean[k] += a.norm() / steps as f64;
+                }
+            }
+            eprintln!("stroke {from} to {to} m: mean force law off {:.4} N, on {:.4} N", mean[0], mean[1]);
+            assert!(mean[1] > mean[0], "stroke {from} to {to} m: the combing law acts on a device alone: {mean:?} N");
+        }
     }
 
     #[test]

@@ -45,6 +45,10 @@ pub struct RecordSettings {
     pub global_rate_hz: f64,
     /// Device loop rate, Hz (`SessionParams::device_rate_hz`: the length of the recorded device steps).
     pub device_rate_hz: f64,
+    /// `HapticParams::entanglement`: the combing law. False when missing: records written before it was on by
+    /// default (2026-11-30) combed without it.
+    #[serde(default)]
+    pub entanglement: bool,
 }
 
 impl Default for RecordSettings {
@@ -77,6 +81,7 @@ impl RecordSettings {
             max_proxy_lag: params.haptic.max_proxy_lag,
             global_rate_hz: params.global_rate_hz,
             device_rate_hz: params.device_rate_hz,
+            entanglement: params.haptic.entanglement,
         }
     }
 
@@ -111,6 +116,7 @@ impl RecordSettings {
         p.haptic.max_proxy_lag = self.max_proxy_lag;
         p.global_rate_hz = self.global_rate_hz;
         p.device_rate_hz = self.device_rate_hz;
+        p.haptic.entanglement = self.entanglement;
         p.haptic_rate_hz = rate_hz;
         Ok(p)
     }
@@ -143,7 +149,17 @@ mod tests {
         assert_eq!((o.render_strands, o.guides, o.hair_type.as_str(), o.seed), (5000, 60, "asian", 7));
         let p = back.session_params(2000.0).unwrap();
         assert_eq!(p, SessionParams { haptic_rate_hz: 2000.0, ..params });
-        assert_eq!(RecordSettings::from_text("").unwrap(), RecordSettings::default());
+        assert_eq!(RecordSettings::from_text("").unwrap(), RecordSettings { entanglement: false, ..RecordSettings::default() });
+        // The combing law comes back both ways; a record written before the field existed combed without it.
+        for law in [false, true] {
+            let mut q = params;
+            q.haptic.entanglement = law;
+            let text = RecordSettings::of(&scene, &q).to_text();
+            assert!(text.contains(&format!("entanglement = {law}")), "{text}");
+            assert_eq!(RecordSettings::from_text(&text).unwrap().session_params(1000.0).unwrap().haptic.entanglement, law);
+        }
+        let old: String = s.to_text().lines().filter(|l| !l.starts_with("entanglement")).map(|l| format!("{l}\n")).collect();
+        assert!(!RecordSettings::from_text(&old).unwrap().session_params(1000.0).unwrap().haptic.entanglement);
         // Every device profile comes back by its name.
         for profile in [DeviceProfile::PHANTOM_OMNI, DeviceProfile::PHANTOM_DESKTOP, DeviceProfile::OMEGA3, DeviceProfile::PHANTOM_PREMIUM_6DOF, DeviceProfile::MOUSE] {
             let s = RecordSettings::of(&scene, &SessionParams { profile, ..params });

@@ -246,9 +246,9 @@ pub struct HapticParams {
     /// scenarios' law: bending of the parted fibres and, wet, the water bridges on the tooth; each guide's
     /// drag times the real hairs it stands for). Default true: the `[live]` strokes meet issue 12's acceptance
     /// with it on caucasian and African hair (strokes towards the roots within the bound of a drag, the comb's
-    /// travel: a tooth drawn towards the roots drags the parted fibres up with it, as backcombing does), and the
-    /// strand budget (`BudgetParams::late_steps`) holds its cost in the device loop (docs/combing.md, "Live
-    /// session"). False: the tool meets the strands by contact and friction only (issue 12's law).
+    /// travel: a tooth drawn towards the roots drags the parted fibres up with it, as backcombing does); its cost in
+    /// the device loop, with the strand budget's `late_steps`: bench/RESULTS.md. False: the tool meets the strands
+    /// by contact and friction only (issue 12's law).
     pub entanglement: bool,
     /// The hold of the unsimulated neighbours on each local strand (`tools::interaction::LocalInteraction::
     /// hold_distance`): a spring per unit length towards the strand's place in the hair volume (its groom

@@ -528,15 +528,15 @@ mod tests {
     /// `live_comb_stroke_meets_the_acceptance`), the comb in the hair for more than `in_hair` steps; returns the
     /// metrics.
     fn meets_the_comb_acceptance(s: &LiveScenario, in_hair: usize) -> LiveSummary {
-        meets_the_comb_acceptance_with(s, in_hair, |_| {})
+        comb_acceptance(s, in_hair, 0.08, |_| {}).0
     }
 
-    /// [`meets_the_comb_acceptance`] with the session's parameters changed by `change`.
-    fn meets_the_comb_acceptance_with(s: &LiveScenario, in_hair: usize, change: impl FnOnce(&mut SessionParams)) -> LiveSummary {
-        comb_acceptance(s, in_hair, 0.08, change).0
+    /// The longest straight leg of the tool's path, m: the farthest a drag can carry a guide point in one stroke.
+    fn longest_stroke(s: &LiveScenario) -> f64 {
+        s.tool.path.windows(2).map(|w| (Vector3::from(w[1].position) - Vector3::from(w[0].position)).norm()).fold(0.0, f64::max)
     }
 
-    /// [`meets_the_comb_acceptance_with`] with `stroke_bound` (m) for the guides' displacement while the comb is in
+    /// [`meets_the_comb_acceptance`] with `stroke_bound` (m) for the guides' displacement while the comb is in
     /// the hair instead of issue 12's 8 cm; also returns the guides' largest displacement from their settled places
     /// (m) at each global step, with its time since the settling (s).
     fn comb_acceptance(s: &LiveScenario, in_hair: usize, stroke_bound: f64, change: impl FnOnce(&mut SessionParams)) -> (LiveSummary, Vec<(f64, f64)>) {
@@ -627,9 +627,10 @@ mod tests {
             p.max_active = floor;
             p.max_chosen = p.max_chosen.min(floor);
         };
-        for (file, hair, in_hair, bound) in [(include_str!("../../../../examples/scenarios/live-comb.toml"), "caucasian", 500, 0.08), (include_str!("../../../../examples/scenarios/live-comb.toml"), "african", 500, 0.08), (include_str!("../../../../examples/scenarios/live-comb-updown.toml"), "caucasian", 4000, 0.11)] {
+        for (file, hair, in_hair, updown) in [(include_str!("../../../../examples/scenarios/live-comb.toml"), "caucasian", 500, false), (include_str!("../../../../examples/scenarios/live-comb.toml"), "african", 500, false), (include_str!("../../../../examples/scenarios/live-comb-updown.toml"), "caucasian", 4000, true)] {
             let mut s: LiveScenario = toml::from_str(file).unwrap();
             s.live.hair_type = hair.into();
+            let bound = if updown { longest_stroke(&s) } else { 0.08 };
             let m = comb_acceptance(&s, in_hair, bound, at_floor).0;
             assert!(m.max_strand_speed_m_s < 1.0, "{hair}: fastest strand tip {} m/s", m.max_strand_speed_m_s);
         }
@@ -657,8 +658,7 @@ mod tests {
         }
         let mut s: LiveScenario = toml::from_str(include_str!("../../../../examples/scenarios/live-comb-updown.toml")).unwrap();
         s.live.entanglement = true;
-        let leg = |w: &[LiveWaypoint]| (Vector3::from(w[1].position) - Vector3::from(w[0].position)).norm();
-        let stroke = s.tool.path.windows(2).map(leg).fold(0.0, f64::max);
+        let stroke = longest_stroke(&s);
         assert!((stroke - 0.11).abs() < 1e-9, "the longest stroke {stroke} m");
         let (m, moved) = comb_acceptance(&s, 4000, stroke, |_| {});
         assert!(m.max_strand_speed_m_s < 1.0, "fastest strand tip {} m/s", m.max_strand_speed_m_s);

@@ -113,6 +113,28 @@ impl Aabb {
     pub fn center(&self) -> Vector3<f64> {
         (self.min + self.max) * 0.5
     }
+
+    /// Whether the segment from `a` to `b` (m) has a point in the box (touching counts): the slab test, the
+    /// segment's parameter range clipped by each axis's pair of planes.
+    pub fn meets_segment(&self, a: &Vector3<f64>, b: &Vector3<f64>) -> bool {
+        let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
+        for i in 0..3 {
+            let d = b[i] - a[i];
+            if d == 0.0 {
+                if a[i] < self.min[i] || a[i] > self.max[i] {
+                    return false;
+                }
+                continue;
+            }
+            let (u, v) = ((self.min[i] - a[i]) / d, (self.max[i] - a[i]) / d);
+            t0 = t0.max(u.min(v));
+            t1 = t1.min(u.max(v));
+            if t0 > t1 {
+                return false;
+            }
+        }
+        true
+    }
 }
 
 #[cfg(test)]
@@ -120,13 +142,36 @@ mod tests {
     use super::*;
 
     #[test]
-    fn point_segment_distance_inside_beyond_and_degenerate() {
-        let (a, b) = (Vector3::new(0.0, 0.0, 0.0), Vector3::new(2.0, 0.0, 0.0));
-        // Beside the interior (foot at t = 0.25), beyond b (nearest b), and a point-like segment; exact to 1e-15 m.
-        assert!((closest_point_param(&Vector3::new(0.5, 1.0, 0.0), &a, &b) - 0.25).abs() < 1e-15);
-        assert!((point_segment_distance(&Vector3::new(0.5, 1.0, 0.0), &a, &b) - 1.0).abs() < 1e-15);
-        assert!((point_segment_distance(&Vector3::new(5.0, 4.0, 0.0), &a, &b) - 5.0).abs() < 1e-15);
-        assert!((point_segment_distance(&Vector3::new(0.0, 3.0, 4.0), &a, &a) - 5.0).abs() < 1e-15);
+    fn a_segment_meets_a_box_where_a_sampled_point_of_it_lies_inside() {
+        // Against an independent answer: 2,001 points sampled along each of 900 segments (through the box, beside
+        // it, ending inside, parallel to a face, degenerate). The slab test must say "meets" where a sample lies
+        // in the box shrunk by 1 mm (of a 1 m box) and "misses" where none lies in the box grown by 1 mm; the few
+        // segments that graze it within that margin are counted, not judged.
+        let bx = Aabb { min: Vector3::new(0.0, 0.0, 0.0), max: Vector3::new(1.0, 1.0, 1.0) };
+        let sampled = |a: &Vector3<f64>, b: &Vector3<f64>, grow: f64| {
+            (0..=2000).any(|i| {
+                let p = a + (b - a) * (i as f64 / 2000.0);
+                (0..3).all(|k| p[k] >= bx.min[k] - grow && p[k] <= bx.max[k] + grow)
+            })
+        };
+        let grid: Vec<f64> = (-10..20).map(|k| 0.05 + 0.1 * k as f64).collect();
+        let (mut met, mut missed, mut grazing) = (0, 0, 0);
+        for (n, &x) in grid.iter().enumerate() {
+            let a = Vector3::new(x, grid[(n * 7) % grid.len()], grid[(n * 13) % grid.len()]);
+            for (m, &y) in grid.iter().enumerate() {
+                let b = if m % 5 == 0 { a } else { Vector3::new(grid[(m * 3) % grid.len()], y, grid[(m * 11 + n) % grid.len()]) };
+                if sampled(&a, &b, -1e-3) {
+                    assert!(bx.meets_segment(&a, &b), "{a:?} to {b:?} passes through the box");
+                    met += 1;
+                } else if !sampled(&a, &b, 1e-3) {
+                    assert!(!bx.meets_segment(&a, &b), "{a:?} to {b:?} passes beside the box");
+                    missed += 1;
+                } else {
+                    grazing += 1;
+                }
+            }
+        }
+        assert!(met > 50 && missed > 50 && grazing < 30, "{met} meet, {missed} miss, {grazing} graze of 900");
     }
 
     fn brute(p0: &Vector3<f64>, p1: &Vector3<f64>, q0: &Vector3<f64>, q1: &Vector3<f64>) -> f64 {

@@ -37,6 +37,8 @@ impl LocalInteraction {
         let mut resting: Vec<PointConstraint> = Vec::new();
         let mut cons: Vec<PointConstraint> = Vec::new();
         self.piles.resize(self.strands.len(), None);
+        // The box the parting teeth fill: a wisp out of every tooth's reach keeps its pile while it passes through.
+        let teeth = entanglement.and_then(|e| super::pile::Teeth::new(self.shape.capsules.iter().filter(|c| e.parts(c.radius)), reach));
         for (k, strand) in self.strands.iter_mut().enumerate() {
             let t_strand = frame.clock.elapsed().as_secs_f64();
             // A clip's jaws hold the strands it pins rather than pushing them.
@@ -104,10 +106,12 @@ impl LocalInteraction {
                     let hair_friction = self.params.hair_contact.map_or(0.0, |hc| hc.friction);
                     // The wisps' packing: the density of the neighbours a curled parted fibre hooks.
                     let packing = self.params.hair_contact.unwrap_or_default().packing;
-                    // Where the comb entered the wisp: kept while a tooth drags through it, else this step's
-                    // shallowest contact.
+                    // Where the comb's travel along the wisp counts from (`Pile`): kept while the wisp passes
+                    // through the comb, else this step's shallowest contact.
                     let span = entanglement.map_or(0.0, |e| e.span);
-                    let entry = Pile::entry(&mut self.piles[k], mine.iter().map(|c| c.s), span);
+                    let pieces = &self.pieces[first_piece[k]..first_piece[k + 1]];
+                    let threaded = || teeth.is_some_and(|t| t.thread(&pose, pieces));
+                    let entry = Pile::entry(&mut self.piles[k], mine.iter().map(|c| c.s), span, threaded);
                     for (i, c) in mine.iter().enumerate() {
                         let r_t = self.shape.capsules.get(c.primitive).map_or(0.0, |cap| cap.radius);
                         let parts = parting && entanglement.is_some_and(|e| e.parts(r_t));

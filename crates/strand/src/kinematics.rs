@@ -65,12 +65,17 @@ pub fn frame_at(model: &StrandModel, q: &DVector<f64>, frames: &[Frame], s: f64)
 
 /// `samples` centreline points evenly spaced from root to tip, as `(s, position)`; at least 2 samples.
 pub fn centerline(model: &StrandModel, state: &StrandState, samples: usize) -> Vec<(f64, Vector3<f64>)> {
-    let frames = segment_frames(model, state);
+    centerline_from(model, &state.q, &segment_frames(model, state), samples)
+}
+
+/// [`centerline`] from the strand's segment frames `frames` ([`segment_frames`] of the state whose coordinates are
+/// `q`), for a caller that needs the frames too.
+pub fn centerline_from(model: &StrandModel, q: &DVector<f64>, frames: &[Frame], samples: usize) -> Vec<(f64, Vector3<f64>)> {
     let n = samples.max(2);
     (0..n)
         .map(|j| {
             let s = model.length * j as f64 / (n - 1) as f64;
-            (s, frame_at(model, &state.q, &frames, s).position)
+            (s, frame_at(model, q, frames, s).position)
         })
         .collect()
 }

@@ -39,7 +39,7 @@
 //! joining one is taken out of the store, a leaving one put back; the interaction keeps its workspaces,
 //! [`tools::interaction::LocalInteraction::set_strands`]), and never happens while the clip holds a strand.
 
-use super::strands::samples_along;
+use super::strands::{samples_along, samples_and_tip, Sampled};
 use super::rest_pieces::RestPieces;
 use super::HapticCore;
 use tools::geometry::point_segment_distance;
@@ -118,6 +118,19 @@ pub(crate) struct Choice {
     rotation: Matrix3<f64>,
     next: usize,
     near: Vec<(f64, usize)>,
+}
+
+/// The least of `d` and the distances from `q` to the capsules `caps` (ends and radius, m, with their segments' boxes
+/// `boxes`), m: a capsule whose box is farther than `d` cannot lower it and is passed over (the slack, 1e-12 m, is far
+/// above the rounding of either distance), the same number as taking every capsule.
+fn nearer(q: &Vector3<f64>, caps: &[(Vector3<f64>, Vector3<f64>, f64)], boxes: &[(Vector3<f64>, Vector3<f64>)], mut d: f64) -> f64 {
+    for ((a, b, rad), (lo, hi)) in caps.iter().zip(boxes) {
+        if (lo - q).sup(&(q - hi)).sup(&Vector3::zeros()).norm() - rad > d + 1e-12 {
+            continue;
+        }
+        d = d.min(point_segment_distance(q, a, b) - rad);
+    }
+    d
 }
 
 /// Each guide's carried shape bounded, so that the choice's scan passes over the guides far from the tool
@@ -226,7 +239,7 @@ impl HapticCore {
         let members = std::mem::take(&mut self.set.members);
         for (i, (s, g)) in strands.into_iter().zip(guides).enumerate() {
             let member = members.get(i).map(|m| Member { early: true, ..*m });
-            self.hand_over(g, s, member);
+            self.hand_over(g, s, member, None);
         }
         self.interaction.set_strands(Vec::new(), &[]);
         self.set.choice = None;
@@ -272,6 +285,8 @@ impl HapticCore {
             lo = lo.inf(&(a.inf(b) - Vector3::repeat(*rad)));
             hi = hi.sup(&(a.sup(b) + Vector3::repeat(*rad)));
         }
+        // Each capsule's segment's box: a point farther than d + rad from it is farther than d from the capsule.
+        let boxes: Vec<_> = caps.iter().map(|(a, b, _)| (a.inf(b), a.sup(b))).collect();
         let (tool, ahead, rotation) = (c.tool, c.ahead, c.rotation);
         let poses = [tool, (tool + ahead) * 0.5, ahead];
         let end = (c.next + count).min(self.model.scene.guides.len());
@@ -300,9 +315,7 @@ impl HapticCore {
                     if outside.norm() >= r.min(d) {
                         continue;
                     }
-                    for (a, b, rad) in &caps {
-                        d = d.min(point_segment_distance(&q, a, b) - rad);
-                    }
+                    d = nearer(&q, &caps, &boxes, d);
                 }
             }
             if d < r {
@@ -361,8 +374,8 @@ impl HapticCore {
             }
         }
         // Beyond the strand limit relaxing strands are let go, those nearest their place first (after a lowered
-        // limit, also when no guide joins).
-        self.let_go_beyond(self.set.strand_limit, &mut members);
+        // limit, also when no guide joins); their samples, taken to rank them, serve their hand-over.
+        let sampled = self.let_go_beyond(self.set.strand_limit, &mut members);
         // (The simulated strands' members come first, in order: what the rebuild measures of a leaving one.)
         for (m, new) in self.set.members.iter_mut().zip(&members) {
             m.early = new.early;
@@ -379,7 +392,7 @@ impl HapticCore {
         }
         if guides != self.set.active {
             let clock = std::time::Instant::now();
-            self.rebuild(guides, members);
+            self.rebuild(guides, members, sampled);
             self.stats.timings.rebuild = clock.elapsed().as_secs_f64();
         } else {
             self.set.members = members;
@@ -418,44 +431,52 @@ impl HapticCore {
     /// While more than `limit` strands (`max_active`, or the strand limit) would stay simulated, relaxing ones are
     /// let go (marked Fading): those whose hair drawn is nearest its carried place first (the least for the
     /// global layer to take over and bring back; [`HapticCore::shown_offset`]), then those that left first. Chosen strands are never let go here: a
-    /// choice takes at most [`HapticCore::chosen_limit`] <= `limit`.
-    fn let_go_beyond(&self, limit: usize, members: &mut [Member]) {
+    /// choice takes at most [`HapticCore::chosen_limit`] <= `limit`. Returns the let-go strands' samples (by slot).
+    fn let_go_beyond(&self, limit: usize, members: &mut [Member]) -> Vec<(usize, Sampled)> {
         let mut over = members.iter().filter(|m| m.phase != Phase::Fading).count().saturating_sub(limit);
         if over == 0 {
-            return;
+            return Vec::new();
         }
-        let mut relaxing: Vec<(f64, f64, usize)> = members.iter().enumerate().filter_map(|(i, m)| match m.phase {
-            Phase::Relaxing { since, .. } => Some((self.shown_offset(i), since, i)),
+        let mut relaxing: Vec<(f64, f64, usize, Option<Sampled>)> = members.iter().enumerate().filter_map(|(i, m)| match m.phase {
+            Phase::Relaxing { since, .. } => {
+                let (offset, sampled) = self.shown_offset(i);
+                Some((offset, since, i, sampled))
+            }
             _ => None,
         }).collect();
         relaxing.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.total_cmp(&a.1)).then(a.2.cmp(&b.2)));
-        for (_, _, i) in relaxing {
+        let mut gone = Vec::with_capacity(over);
+        for (_, _, i, sampled) in relaxing {
             if over == 0 {
                 break;
             }
             members[i].phase = Phase::Fading;
             members[i].early = true;
             over -= 1;
+            gone.extend(sampled.map(|x| (i, x)));
         }
+        gone
     }
 
     /// How far the hair drawn for simulated strand `slot` is from where the global layer carries its guide (at the
-    /// nodes last seen, the hold's cache), m: what its hand-over would move it by; infinite for a slot not
-    /// simulated yet.
-    fn shown_offset(&self, slot: usize) -> f64 {
-        let (Some(&g), Some(s)) = (self.set.active.get(slot), self.interaction.strands.get(slot)) else { return f64::INFINITY };
+    /// nodes last seen, the hold's cache), m: what its hand-over would move it by, with the samples it is measured
+    /// at; infinite for a slot not simulated yet.
+    fn shown_offset(&self, slot: usize) -> (f64, Option<Sampled>) {
+        let (Some(&g), Some(s)) = (self.set.active.get(slot), self.interaction.strands.get(slot)) else { return (f64::INFINITY, None) };
         let weight = self.set.members.get(slot).map_or(1.0, |m| m.weight);
         let guide = &self.model.scene.guides[g];
-        let pts = samples_along(s, guide.model.length, self.model.scene.samples());
+        let sampled = samples_and_tip(s, guide.model.length, self.model.scene.samples());
         let mut cache = self.shown.references.borrow_mut();
         let ok = cache.has_nodes(self.model.scene.lattice.node_count());
-        pts.iter().zip(cache.bases(&self.model.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max)
+        let offset = sampled.points.iter().zip(cache.bases(&self.model.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max);
+        (offset, Some(sampled))
     }
 
     /// Moves the strands to the new membership `guides` (`members` parallel): the staying strands move over,
     /// the joining ones come from the store at rest, the leaving ones are handed over to the global layer
-    /// ([`HapticCore::hand_over`]) and go back to the store let go.
-    fn rebuild(&mut self, guides: Vec<usize>, members: Vec<Member>) {
+    /// ([`HapticCore::hand_over`], with their `sampled` samples by slot where this step took them) and go back to the
+    /// store let go.
+    fn rebuild(&mut self, guides: Vec<usize>, members: Vec<Member>, mut sampled: Vec<(usize, Sampled)>) {
         let old_guides = std::mem::take(&mut self.set.active);
         let old_members = std::mem::take(&mut self.set.members);
         let mut old: Vec<Option<Strand>> = std::mem::take(&mut self.interaction.strands).into_iter().map(Some).collect();
@@ -478,7 +499,8 @@ impl HapticCore {
         let (guides, members) = (kept, kept_members);
         for (i, s) in old.into_iter().enumerate() {
             if let Some(s) = s {
-                self.hand_over(old_guides[i], s, old_members.get(i).copied());
+                let taken = sampled.iter().position(|x| x.0 == i).map(|j| sampled.swap_remove(j).1);
+                self.hand_over(old_guides[i], s, old_members.get(i).copied(), taken);
             }
         }
         self.set.active = guides;
@@ -504,12 +526,14 @@ impl HapticCore {
     /// the guide's offset there ([`HandedOver`], added to what it still carried), so the hair drawn does not move;
     /// the hold then brings it back. Counted: what the hand-over carries over, the largest sample's (for a strand
     /// found back in place, as measured then, [`Member::in_place`]), apart for early hand-overs. The strand goes
-    /// back to the store let go ([`HapticCore::let_go`]).
-    fn hand_over(&mut self, g: usize, s: Strand, m: Option<Member>) {
+    /// back to the store let go ([`HapticCore::let_go`]). `sampled`: the strand's samples and tip as it is, if this
+    /// step already took them (else taken here).
+    fn hand_over(&mut self, g: usize, s: Strand, m: Option<Member>, sampled: Option<Sampled>) {
         let weight = m.map_or(0.0, |m| m.weight);
         let early = m.is_some_and(|m| m.early);
+        let tip = sampled.as_ref().map(|x| x.tip);
         if weight > 0.0 {
-            let pts = samples_along(&s, self.model.scene.guides[g].model.length, self.model.scene.samples());
+            let pts = sampled.map_or_else(|| samples_along(&s, self.model.scene.guides[g].model.length, self.model.scene.samples()), |x| x.points);
             let mut cache = self.shown.references.borrow_mut();
             let ok = cache.has_nodes(self.model.scene.lattice.node_count());
             let to_head = cache.head().rotation.inverse();
@@ -539,7 +563,7 @@ impl HapticCore {
                 }
             }
         }
-        self.set.strands[g] = Some(self.let_go(g, s));
+        self.set.strands[g] = Some(self.let_go(g, s, tip));
     }
 
     /// Stage 8's relaxation of the handed-over guides' offsets over a step `dt` (s) by the hold's law
@@ -577,14 +601,15 @@ impl HapticCore {
     }
 
     /// A strand of guide `g` leaving the simulation: velocities zeroed; back to its groomed shape if its tip is
-    /// farther than `rest_distance` from the groomed tip (an uncut strand; a cut one keeps its shape).
-    fn let_go(&self, g: usize, mut s: Strand) -> Strand {
+    /// farther than `rest_distance` from the groomed tip (an uncut strand; a cut one keeps its shape). `at`: its tip,
+    /// if known.
+    fn let_go(&self, g: usize, mut s: Strand, at: Option<Vector3<f64>>) -> Strand {
         s.state.qdot.fill(0.0);
         let guide = &self.model.scene.guides[g];
         let uncut = s.state.q.len() == guide.state.q.len() && (s.model.length - guide.model.length).abs() < 1e-12;
         if uncut {
             let groomed = guide.reference.last().copied().unwrap_or(guide.state.root.position);
-            if (tip(&s) - groomed).norm() > self.model.params.haptic.rest_distance {
+            if (at.unwrap_or_else(|| tip(&s)) - groomed).norm() > self.model.params.haptic.rest_distance {
                 s.state.q.copy_from(&guide.state.q);
             }
         }
@@ -943,5 +968,32 @@ mod tests {
             }
         }
         assert!(compared > 20, "the tools met guides: {compared}");
+    }
+
+    #[test]
+    fn the_capsules_passed_over_change_no_distance() {
+        // `nearer` against the least over every capsule of the comb, bit for bit, at points all around it (inside
+        // the capsules too) and from every starting distance the scan may hold (none yet, the activation radius,
+        // near, inside a capsule).
+        let core = HapticCore::new(small_scene(), SessionParams::default()).unwrap();
+        let caps = core.reach();
+        let boxes: Vec<_> = caps.iter().map(|(a, b, _)| (a.inf(b), a.sup(b))).collect();
+        let (lo, hi) = boxes.iter().fold((Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY)), |(l, h), (a, b)| (l.inf(a), h.sup(b)));
+        let (mut passed, mut n) = (0, 0);
+        for i in 0..=24 {
+            for j in 0..=24 {
+                for k in 0..=24 {
+                    let t = Vector3::new(i as f64, j as f64, k as f64) / 24.0;
+                    let q = (lo - Vector3::repeat(0.03)) + (hi - lo + Vector3::repeat(0.06)).component_mul(&t);
+                    for d0 in [f64::INFINITY, 0.03, 0.004, 1e-4, -3e-4] {
+                        let all = caps.iter().fold(d0, |d, (a, b, rad)| d.min(point_segment_distance(&q, a, b) - rad));
+                        assert_eq!(nearer(&q, &caps, &boxes, d0).to_bits(), all.to_bits(), "at {q:?} from {d0}");
+                        passed += caps.iter().zip(&boxes).filter(|((_, _, rad), (l, h))| (l - q).sup(&(q - h)).sup(&Vector3::zeros()).norm() - rad > all + 1e-12).count();
+                        n += caps.len();
+                    }
+                }
+            }
+        }
+        assert!(caps.len() > 20 && passed > n / 2, "the comb's capsules, most passed over: {passed} of {n}");
     }
 }

@@ -170,21 +170,38 @@ pub(crate) fn contact_options(ei: f64) -> ConstraintOptions {
 }
 
 /// `samples` centreline points of a strand evenly in arc length, root to tip, m.
+#[cfg(test)]
 pub(crate) fn centreline(s: &Strand, samples: usize) -> Vec<Vector3<f64>> {
     strand::kinematics::centerline(&s.model, &s.state, samples).into_iter().map(|(_, p)| p).collect()
 }
 
 /// `samples` centreline points of a strand at the arc lengths of its uncut guide (`length`, m, evenly from root
-/// to tip); past the end of a cut strand, its tip. Equal to [`centreline`] for an uncut strand.
+/// to tip); past the end of a cut strand, its tip. Equal to `centreline` for an uncut strand.
 pub(crate) fn samples_along(s: &Strand, length: f64, samples: usize) -> Vec<Vector3<f64>> {
-    if s.model.length >= length - 1e-12 {
-        return centreline(s, samples);
-    }
+    samples_and_tip(s, length, samples).points
+}
+
+/// A strand's [`samples_along`] and its tip (the last of its segment frames), m, from one evaluation of its frames.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Sampled {
+    pub points: Vec<Vector3<f64>>,
+    pub tip: Vector3<f64>,
+}
+
+/// [`samples_along`] with the strand's tip, its frames evaluated once (the same numbers as each alone).
+pub(crate) fn samples_and_tip(s: &Strand, length: f64, samples: usize) -> Sampled {
     let frames = strand::kinematics::segment_frames(&s.model, &s.state);
-    (0..samples).map(|k| {
-        let at = (k as f64 / (samples - 1).max(1) as f64 * length).min(s.model.length);
-        strand::kinematics::frame_at(&s.model, &s.state.q, &frames, at).position
-    }).collect()
+    let tip = frames.last().map_or(s.state.root.position, |f| f.position);
+    let points = if s.model.length >= length - 1e-12 {
+        // As `centreline`.
+        strand::kinematics::centerline_from(&s.model, &s.state.q, &frames, samples).into_iter().map(|(_, p)| p).collect()
+    } else {
+        (0..samples).map(|k| {
+            let at = (k as f64 / (samples - 1).max(1) as f64 * length).min(s.model.length);
+            strand::kinematics::frame_at(&s.model, &s.state.q, &frames, at).position
+        }).collect()
+    };
+    Sampled { points, tip }
 }
 
 #[cfg(test)]

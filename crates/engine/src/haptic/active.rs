@@ -39,6 +39,8 @@
 //! joining one is taken out of the store, a leaving one put back; the interaction keeps its workspaces,
 //! [`tools::interaction::LocalInteraction::set_strands`]), and never happens while the clip holds a strand.
 
+use super::bounds::nearer;
+pub(crate) use super::bounds::GuideBounds;
 use super::strands::{samples_along, samples_and_tip, Sampled};
 use super::rest_pieces::RestPieces;
 use super::HapticCore;
@@ -118,61 +120,6 @@ pub(crate) struct Choice {
     rotation: Matrix3<f64>,
     next: usize,
     near: Vec<(f64, usize)>,
-}
-
-/// The least of `d` and the distances from `q` to the capsules `caps` (ends and radius, m, with their segments' boxes
-/// `boxes`), m: a capsule whose box is farther than `d` cannot lower it and is passed over (the slack, 1e-12 m, is far
-/// above the rounding of either distance), the same number as taking every capsule.
-fn nearer(q: &Vector3<f64>, caps: &[(Vector3<f64>, Vector3<f64>, f64)], boxes: &[(Vector3<f64>, Vector3<f64>)], mut d: f64) -> f64 {
-    for ((a, b, rad), (lo, hi)) in caps.iter().zip(boxes) {
-        if (lo - q).sup(&(q - hi)).sup(&Vector3::zeros()).norm() - rad > d + 1e-12 {
-            continue;
-        }
-        d = d.min(point_segment_distance(q, a, b) - rad);
-    }
-    d
-}
-
-/// Each guide's carried shape bounded, so that the choice's scan passes over the guides far from the tool
-/// without carrying their samples by the head and the lattice. The carried hair keeps its rest segment lengths
-/// with its root where the head holds it (`scene::carry_strand`), so every carried sample of guide g lies
-/// within the guide's length `radii[g]` of its root `centres[g]` carried by the head.
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct GuideBounds {
-    /// Each guide's root (head frame), m.
-    centres: Vec<Vector3<f64>>,
-    /// Its reference's length (rounding allowance included), m.
-    radii: Vec<f64>,
-    /// Per guide, per reference sample: the reference's length from that sample to the tip (rounding allowance
-    /// included), m. Carried sample k lies within it of every carried sample before it, so a scan that finds a
-    /// sample farther than that from the tool's reach passes over the rest of the guide.
-    beyond: Vec<Vec<f64>>,
-}
-
-impl GuideBounds {
-    /// Rounding allowance on each radius, m: the ball test must never pass over a guide the samples' own test
-    /// would choose.
-    const ROUNDING: f64 = 1e-9;
-
-    /// The bounds of the scene's guides.
-    pub fn new(scene: &crate::scene::Scene) -> Self {
-        let centres = scene.guides.iter().map(|g| g.reference.first().copied().unwrap_or_default()).collect();
-        let radii = scene.guides.iter().map(|g| g.reference.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>() * (1.0 + 1e-12) + Self::ROUNDING).collect();
-        let beyond = scene
-            .guides
-            .iter()
-            .map(|g| {
-                let mut left: Vec<f64> = g.reference.windows(2).rev().scan(0.0, |sum, w| {
-                    *sum += (w[1] - w[0]).norm();
-                    Some(*sum)
-                }).collect();
-                left.reverse();
-                left.push(0.0);
-                left.iter().map(|l| l * (1.0 + 1e-12) + Self::ROUNDING).collect()
-            })
-            .collect();
-        Self { centres, radii, beyond }
-    }
 }
 
 /// The tip of a strand, m.
@@ -289,6 +236,10 @@ impl HapticCore {
         let boxes: Vec<_> = caps.iter().map(|(a, b, _)| (a.inf(b), a.sup(b))).collect();
         let (tool, ahead, rotation) = (c.tool, c.ahead, c.rotation);
         let poses = [tool, (tool + ahead) * 0.5, ahead];
+        // The viewer's cache serves the guides it holds if its bases are for these nodes and this head (it is not
+        // moved to them here: what the step measures against the nodes last seen stays so).
+        let mut cache = self.shown.references.borrow_mut();
+        let cached = nodes.len() == self.model.scene.lattice.node_count() && cache.is_for(nodes, head);
         let end = (c.next + count).min(self.model.scene.guides.len());
         for g in c.next..end {
             // The guide's ball farther than the radius from the swept shape: none of its samples is nearer.
@@ -297,17 +248,17 @@ impl HapticCore {
                 continue;
             }
             let mut d = f64::INFINITY;
-            let weights = self.model.scene.guide_hold_weights(g);
-            for (k, x) in self.model.scene.guide_points_each(nodes, head, g, &weights).enumerate() {
+            // One carried sample k at x; true once the rest of the guide cannot come nearer.
+            let mut visit = |k: usize, x: &Vector3<f64>| {
                 // Cheap rejection by the shape's bounding sphere swept along the way; the samples after this one
                 // lie within `beyond` of it: if they are all as far, none is carried (the same choice).
                 let limit = r.min(d);
-                let far = point_segment_distance(&x, &tool, &ahead) - reach;
+                let far = point_segment_distance(x, &tool, &ahead) - reach;
                 if far - self.model.bounds.beyond[g].get(k).copied().unwrap_or(f64::INFINITY) >= limit {
-                    break;
+                    return true;
                 }
                 if far >= limit {
-                    continue;
+                    return false;
                 }
                 for o in &poses {
                     let q = rotation.transpose() * (x - o);
@@ -316,6 +267,23 @@ impl HapticCore {
                         continue;
                     }
                     d = nearer(&q, &caps, &boxes, d);
+                }
+                false
+            };
+            // A guide the viewer's cache holds (a simulated or handed-over one) has its carried samples there, the
+            // same numbers (`reference::ReferenceCache::bases`), mapped once per lattice for the hold and the viewer.
+            if cached && cache.holds(g) {
+                for (k, x) in cache.bases(&self.model.scene, g, true).iter().enumerate() {
+                    if visit(k, x) {
+                        break;
+                    }
+                }
+            } else {
+                let weights = self.model.scene.guide_hold_weights(g);
+                for (k, x) in self.model.scene.guide_points_each(nodes, head, g, &weights).enumerate() {
+                    if visit(k, &x) {
+                        break;
+                    }
                 }
             }
             if d < r {
@@ -968,6 +936,34 @@ mod tests {
             }
         }
         assert!(compared > 20, "the tools met guides: {compared}");
+    }
+
+    #[test]
+    fn the_scan_reads_the_cached_guides_samples_as_it_would_carry_them() {
+        // The comb held in the hair: once guides are simulated the viewer's cache holds their carried samples; a scan
+        // reading them finds the same guides at the same distances (exactly) as one carrying every sample itself.
+        let scene = small_scene();
+        let params = SessionParams::default();
+        let mut core = HapticCore::new(scene.clone(), params).unwrap();
+        let snap = GlobalCore::new(scene.clone(), &params).snapshot();
+        let at = Vector3::new(0.0, -0.118, 0.0);
+        let reading = DeviceReading { time: 0.0, position: at, rotation: test_rot(), buttons: 0 };
+        for _ in 0..40 {
+            core.step(Some(reading), &snap, 1e-3);
+            core.stage_snapshot(&snap);
+        }
+        let scan = |core: &HapticCore| {
+            let mut c = Choice { tool: at, ahead: at + Vector3::new(0.0, 0.0, -0.015), rotation: test_rot(), next: 0, near: Vec::new() };
+            core.scan(&mut c, scene.guides.len(), &snap.positions, &snap.head);
+            c.near
+        };
+        let held = core.active().iter().filter(|&&g| core.shown.references.borrow().holds(g)).count();
+        assert!(held > 3 && core.shown.references.borrow().is_for(&snap.positions, &snap.head), "{held} guides cached");
+        let with = scan(&core);
+        *core.shown.references.borrow_mut() = Default::default();
+        let without = scan(&core);
+        assert!(with.len() > 3, "found {}", with.len());
+        assert_eq!(with, without);
     }
 
     #[test]

@@ -36,6 +36,7 @@
 
 pub mod actions;
 mod active;
+mod bounds;
 pub mod device_side;
 mod reference;
 mod rest_pieces;

@@ -106,6 +106,17 @@ impl ReferenceCache {
         &e.bases
     }
 
+    /// Whether its bases are for the nodes `nodes` and the head at `head` (those last given to
+    /// [`use_nodes`](Self::use_nodes)).
+    pub fn is_for(&self, nodes: &[Point3<f64>], head: &Isometry3<f64>) -> bool {
+        self.nodes.as_slice() == nodes && self.head == *head
+    }
+
+    /// Whether it holds `guide`'s stencils (a shown guide's).
+    pub fn holds(&self, guide: usize) -> bool {
+        self.entries.iter().any(|e| e.guide == guide)
+    }
+
     /// The head pose the bases are carried by (the one last given to [`use_nodes`](Self::use_nodes)).
     pub fn head(&self) -> &Isometry3<f64> {
         &self.head

@@ -39,7 +39,7 @@
 //! joining one is taken out of the store, a leaving one put back; the interaction keeps its workspaces,
 //! [`tools::interaction::LocalInteraction::set_strands`]), and never happens while the clip holds a strand.
 
-use super::bounds::nearer;
+use super::bounds::{nearer, segment_boxes};
 pub(crate) use super::bounds::GuideBounds;
 use super::strands::{samples_along, samples_and_tip, Sampled};
 use super::rest_pieces::RestPieces;
@@ -233,7 +233,7 @@ impl HapticCore {
             hi = hi.sup(&(a.sup(b) + Vector3::repeat(*rad)));
         }
         // Each capsule's segment's box: a point farther than d + rad from it is farther than d from the capsule.
-        let boxes: Vec<_> = caps.iter().map(|(a, b, _)| (a.inf(b), a.sup(b))).collect();
+        let boxes = segment_boxes(&caps);
         let (tool, ahead, rotation) = (c.tool, c.ahead, c.rotation);
         let poses = [tool, (tool + ahead) * 0.5, ahead];
         // The viewer's cache serves the guides it holds if its bases are for these nodes and this head (it is not
@@ -973,8 +973,9 @@ mod tests {
         // near, inside a capsule).
         let core = HapticCore::new(small_scene(), SessionParams::default()).unwrap();
         let caps = core.reach();
-        let boxes: Vec<_> = caps.iter().map(|(a, b, _)| (a.inf(b), a.sup(b))).collect();
-        let (lo, hi) = boxes.iter().fold((Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY)), |(l, h), (a, b)| (l.inf(a), h.sup(b)));
+        let boxes = segment_boxes(&caps);
+        let union = boxes.iter().fold(tools::geometry::Aabb::empty(), |u, b| u.merge(b));
+        let (lo, hi) = (union.min, union.max);
         let (mut passed, mut n) = (0, 0);
         for i in 0..=24 {
             for j in 0..=24 {
@@ -984,7 +985,7 @@ mod tests {
                     for d0 in [f64::INFINITY, 0.03, 0.004, 1e-4, -3e-4] {
                         let all = caps.iter().fold(d0, |d, (a, b, rad)| d.min(point_segment_distance(&q, a, b) - rad));
                         assert_eq!(nearer(&q, &caps, &boxes, d0).to_bits(), all.to_bits(), "at {q:?} from {d0}");
-                        passed += caps.iter().zip(&boxes).filter(|((_, _, rad), (l, h))| (l - q).sup(&(q - h)).sup(&Vector3::zeros()).norm() - rad > all + 1e-12).count();
+                        passed += caps.iter().zip(&boxes).filter(|((_, _, rad), bx)| bx.distance_to(&q) - rad > all + 1e-12).count();
                         n += caps.len();
                     }
                 }

@@ -2,14 +2,19 @@
 //! guide's carried shape bounded ([`GuideBounds`]) and the capsules farther than the distance found ([`nearer`]).
 
 use nalgebra::Vector3;
-use tools::geometry::point_segment_distance;
+use tools::geometry::{point_segment_distance, Aabb};
+
+/// Each capsule's segment's box ([`Aabb::of_segment`], no margin), for [`nearer`].
+pub(crate) fn segment_boxes(caps: &[(Vector3<f64>, Vector3<f64>, f64)]) -> Vec<Aabb> {
+    caps.iter().map(|(a, b, _)| Aabb::of_segment(a, b, 0.0)).collect()
+}
 
 /// The least of `d` and the distances from `q` to the capsules `caps` (ends and radius, m, with their segments' boxes
-/// `boxes`), m: a capsule whose box is farther than `d` cannot lower it and is passed over (the slack, 1e-12 m, is far
-/// above the rounding of either distance), the same number as taking every capsule.
-pub(crate) fn nearer(q: &Vector3<f64>, caps: &[(Vector3<f64>, Vector3<f64>, f64)], boxes: &[(Vector3<f64>, Vector3<f64>)], mut d: f64) -> f64 {
-    for ((a, b, rad), (lo, hi)) in caps.iter().zip(boxes) {
-        if (lo - q).sup(&(q - hi)).sup(&Vector3::zeros()).norm() - rad > d + 1e-12 {
+/// `boxes`, [`segment_boxes`]), m: a capsule whose box is farther than `d` cannot lower it and is passed over (the
+/// slack, 1e-12 m, is far above the rounding of either distance), the same number as taking every capsule.
+pub(crate) fn nearer(q: &Vector3<f64>, caps: &[(Vector3<f64>, Vector3<f64>, f64)], boxes: &[Aabb], mut d: f64) -> f64 {
+    for ((a, b, rad), bx) in caps.iter().zip(boxes) {
+        if bx.distance_to(q) - rad > d + 1e-12 {
             continue;
         }
         d = d.min(point_segment_distance(q, a, b) - rad);

@@ -7,9 +7,14 @@ use super::*;
 use hairstyle::fit::{Axis, FitOptions};
 use proptest::prelude::*;
 
+/// The client message types, in type-byte order from 0x01: the names their malformed-message errors carry.
+const NAMES: [&str; 11] = ["POSE", "TAKE_CONTROL", "SELECT_TOOL", "SET_HAIR", "RESET", "LOAD", "SAVE", "PING", "HEAD", "SET_TREATMENT", "FRAME_ACK"];
+/// The last known client type byte.
+const LAST: u8 = NAMES.len() as u8;
+
 /// Known types (and a few unknown ones) with the right version most of the time.
 fn header() -> impl Strategy<Value = (u8, u8)> {
-    let kind = prop_oneof![9 => 0x01u8..=0x0A, 1 => any::<u8>()];
+    let kind = prop_oneof![9 => 0x01u8..=LAST, 1 => any::<u8>()];
     let version = prop_oneof![9 => Just(VERSION), 1 => any::<u8>()];
     (kind, version)
 }
@@ -23,6 +28,16 @@ fn message() -> impl Strategy<Value = Vec<u8>> {
         b.truncate(b.len().saturating_sub(extra));
         b
     })
+}
+
+/// The table above is the protocol's: its last entry is client::FRAME_ACK's name, and the next type byte is
+/// unknown, so a type added to the protocol fails here every run, not only when the random bytes find it.
+#[test]
+fn the_known_types_are_the_protocols() {
+    assert_eq!(LAST, client::FRAME_ACK);
+    let e = parse_client(&[client::FRAME_ACK, VERSION]).unwrap_err();
+    assert!(e.code == code::MALFORMED && e.message.contains(NAMES[LAST as usize - 1]), "{}", e.message);
+    assert_eq!(parse_client(&[LAST + 1, VERSION]).unwrap_err().code, code::UNKNOWN_TYPE);
 }
 
 fn f32s(kind: u8, v: &[f32]) -> Vec<u8> {
@@ -43,10 +58,9 @@ proptest! {
         match parse_client(&b) {
             Err(e) => {
                 prop_assert!(!e.message.is_empty());
-                let want = if b.len() < 2 { code::MALFORMED } else if b[1] != VERSION { code::BAD_VERSION } else if !(0x01..=0x0A).contains(&b[0]) { code::UNKNOWN_TYPE } else { code::MALFORMED };
+                let want = if b.len() < 2 { code::MALFORMED } else if b[1] != VERSION { code::BAD_VERSION } else if !(0x01..=LAST).contains(&b[0]) { code::UNKNOWN_TYPE } else { code::MALFORMED };
                 prop_assert_eq!(e.code, want, "{}", e.message);
                 // A malformed message's error names its type (the others name the version or the type byte).
-                const NAMES: [&str; 10] = ["POSE", "TAKE_CONTROL", "SELECT_TOOL", "SET_HAIR", "RESET", "LOAD", "SAVE", "PING", "HEAD", "SET_TREATMENT"];
                 if want == code::MALFORMED && b.len() >= 2 {
                     prop_assert!(e.message.contains(NAMES[b[0] as usize - 1]), "{}", e.message);
                 }

@@ -11,6 +11,11 @@
 #   COIFFURE_BIN=path/to/coiffure SERVE_ARGS="--haptic-priority 0" SIM_ARGS="--loss 0.01" bench/device_loop.sh
 #   RECORD=1 bench/device_loop.sh    also records each session and prints the force quality at the device rate
 #                                    (the record replayed: bench/out/replay-RATE/device_force.csv)
+# The baseline, in the same minutes: where `cyclictest` is installed (Debian `rt-tests`), before each run it
+# measures the host's wake-up latency for 6 s at the device loop's period and real-time priority, nothing of
+# ours running, and prints the share of wake-ups late enough to be a device-loop miss (later than the period
+# plus the loop's spin margin, haptics::haptic_loop::SPIN_MARGIN, less a 10 us step): the floor the host sets
+# under the loop's own "late starts" (the server's report splits its misses by cause).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BIN=${COIFFURE_BIN:-target/release/coiffure}
@@ -18,7 +23,20 @@ if [ $# -gt 0 ]; then RATES=("$@"); else RATES=(4000 10000); fi
 mkdir -p bench/out
 web=$(mktemp -d)
 echo '<!doctype html><title>bench</title>' > "$web/index.html"
+host_floor() {
+    # Priority 10: the server's default --haptic-priority, the device loop's.
+    local rate=$1 period=$((1000000 / $1)) out
+    command -v cyclictest > /dev/null || { echo "== host: cyclictest not installed (apt-get install rt-tests): no baseline"; return; }
+    out=$(cyclictest -m -p 10 -i "$period" -t 1 -D 6 -q -h 2000 2>&1) || { echo "== host: cyclictest failed: $out" | head -3; return; }
+    echo "$out" | awk -v lim=$((period + 60 - 10)) -v rate="$rate" '
+        /^#/ { if ($0 ~ /Overflows/) over = $NF + 0; if ($0 ~ /Max Latencies/) max = $NF + 0; next }
+        { n += $2; if ($1 + 0 > lim) late += $2; h[$1 + 0] = $2 }
+        END { n += over; late += over; acc = 0; p = -1
+              for (i = 0; i < 2000; i++) { acc += h[i]; if (p < 0 && acc >= 0.999 * n) p = i }
+              printf "== host (cyclictest at %d Hz, nothing of ours running): %d wake-ups, later than %d us (a miss): %d (%.3f %%), p99.9 %s us, max %d us\n", rate, n, lim, late, 100 * late / n, (p < 0 ? ">2000" : p), max }'
+}
 for rate in "${RATES[@]}"; do
+    host_floor "$rate"
     log=$(mktemp)
     rec=()
     [ -n "${RECORD:-}" ] && rec=(--record "bench/out/device-$rate.rec")

@@ -44,6 +44,19 @@ pub struct LoopStats {
     /// (`n * period`) is continuous. (A step function that keeps the wall clock's pace itself, as the live
     /// session's device loop does, then never sees a tick come early.)
     pub skipped: u64,
+    /// The misses by cause (they add up to `misses`): the step started late by more than it then took (the
+    /// thread woke late: the kernel or, on a virtual machine, the host did not run it in time; see `wake_p999`).
+    pub misses_late_start: u64,
+    /// Misses that started in time but whose step was off its CPU for more than half its wall time (preempted
+    /// by an interrupt or a thread of higher priority, the virtual CPU taken by the host, or the step blocked).
+    pub misses_preempted: u64,
+    /// Misses whose step took that long on its CPU: the step function's own cost.
+    pub misses_slow: u64,
+    /// How late the loop's sleeps woke against the time asked for, 99.9th percentile and longest, s: the host's
+    /// wake-up latency the spin margin ([`SPIN_MARGIN`]) absorbs up to its length (as `cyclictest` measures it).
+    pub wake_p999: f64,
+    /// Latest wake-up, s.
+    pub wake_max: f64,
     /// Steps whose step function panicked: the device got zero force for them and the loop went on.
     pub panics: u64,
     /// True if the loop thread ran with real-time priority ([`HapticLoop::spawn_with_priority`]).
@@ -149,7 +162,8 @@ impl<D: HapticDevice + 'static> HapticLoop<D> {
                 crate::realtime::precise_sleep();
                 let period = Duration::from_secs_f64(1.0 / rate_hz);
                 let dt = period.as_secs_f64();
-                let (mut steps_h, mut periods_h) = (Histogram::new(), Histogram::new());
+                let (mut steps_h, mut periods_h, mut wakes_h) = (Histogram::new(), Histogram::new(), Histogram::new());
+                let (mut late_start, mut preempted, mut slow) = (0u64, 0u64, 0u64);
                 // The schedule: step `k` of the current run of on-time steps starts at `epoch + k period`.
                 let mut epoch = Instant::now();
                 let mut k = 0u32;
@@ -161,12 +175,15 @@ impl<D: HapticDevice + 'static> HapticLoop<D> {
                     let now = Instant::now();
                     let margin = Duration::from_secs_f64(SPIN_MARGIN);
                     if deadline > now + margin + margin / 2 {
-                        std::thread::sleep(deadline - now - margin);
+                        let wake = deadline - margin;
+                        std::thread::sleep(wake - now);
+                        wakes_h.add(Instant::now().saturating_duration_since(wake).as_secs_f64());
                     }
                     while Instant::now() < deadline {
                         std::hint::spin_loop();
                     }
                     let t0 = Instant::now();
+                    let cpu0 = crate::realtime::thread_cpu_time();
                     if let Some(l) = last_start {
                         periods_h.add((t0 - l).as_secs_f64());
                     }
@@ -184,9 +201,19 @@ impl<D: HapticDevice + 'static> HapticLoop<D> {
                     };
                     device.write(&cmd);
                     let t1 = Instant::now();
-                    steps_h.add((t1 - t0).as_secs_f64());
+                    let took = (t1 - t0).as_secs_f64();
+                    steps_h.add(took);
                     let due = epoch + period * (k + 1);
                     if t1 > due {
+                        // Why: a late start, a step off its CPU, or the step's own time.
+                        let cpu = crate::realtime::thread_cpu_time().zip(cpu0).map(|(b, a)| (b - a).max(0.0));
+                        if t0.saturating_duration_since(deadline).as_secs_f64() > took {
+                            late_start += 1;
+                        } else if cpu.is_some_and(|c| took - c > 0.5 * took) {
+                            preempted += 1;
+                        } else {
+                            slow += 1;
+                        }
                         // Late (started late, or overran): counted, and the schedule starts again from this
                         // step's end: the next one period after it (see `LoopStats::skipped`).
                         misses += 1;
@@ -208,6 +235,11 @@ impl<D: HapticDevice + 'static> HapticLoop<D> {
                     period_p999: periods_h.quantile(0.999),
                     misses,
                     skipped,
+                    misses_late_start: late_start,
+                    misses_preempted: preempted,
+                    misses_slow: slow,
+                    wake_p999: wakes_h.quantile(0.999),
+                    wake_max: wakes_h.max,
                     panics,
                     realtime,
                 };
@@ -271,6 +303,9 @@ mod tests {
         };
         let (stats, _) = HapticLoop::spawn(1000.0, ScriptedDevice::new(|_| None), step, Some(120)).unwrap().join();
         assert!(stats.misses >= 1 && stats.skipped >= 15, "{} misses, {} skipped", stats.misses, stats.skipped);
+        // The 20 ms step slept: a miss off its CPU, not the step's own time; the causes add up to the misses.
+        assert!(stats.misses_preempted >= 1, "{stats:?}");
+        assert_eq!(stats.misses_late_start + stats.misses_preempted + stats.misses_slow, stats.misses);
         let starts = starts.lock().unwrap();
         let gaps: Vec<u64> = starts.windows(2).map(|w| (w[1] - w[0]).as_micros() as u64).collect();
         // Runs of consecutive starts closer than half a period: a catch-up is one run of ~20; on schedule a
@@ -281,6 +316,32 @@ mod tests {
             longest = longest.max(run);
         }
         assert!(longest <= 1, "{longest} steps in a row started less than half a period apart: gaps {gaps:?} us");
+    }
+
+    #[test]
+    fn a_step_that_computes_past_its_period_is_a_slow_miss() {
+        // Every tenth step of a 1 kHz loop computes for 3 ms of its CPU time: five misses (at least; a loaded
+        // machine may add others), of which at least one (on CI's busy cores, a step may be off its CPU for half
+        // its time) counted as the step's own time where the thread CPU clock exists; every miss has one cause.
+        let mut k = 0;
+        let step = move |_: Option<DeviceReading>, _: f64, _: f64| {
+            k += 1;
+            if k % 10 == 0 {
+                let (t, c) = (Instant::now(), crate::realtime::thread_cpu_time());
+                while t.elapsed() < Duration::from_millis(3) || crate::realtime::thread_cpu_time().zip(c).is_some_and(|(b, a)| b - a < 3e-3) {
+                    std::hint::spin_loop();
+                }
+            }
+            DeviceCommand::default()
+        };
+        let (stats, _) = HapticLoop::spawn(1000.0, ScriptedDevice::new(|_| None), step, Some(50)).unwrap().join();
+        assert!(stats.misses >= 5, "{stats:?}");
+        assert_eq!(stats.misses_late_start + stats.misses_preempted + stats.misses_slow, stats.misses);
+        if crate::realtime::thread_cpu_time().is_some() {
+            assert!(stats.misses_slow >= 1, "every computing step off its CPU for half its time: {stats:?}");
+        }
+        // (The quantile is to the 1 us bin above.)
+        assert!(stats.wake_p999 <= stats.wake_max + 1e-6 && stats.wake_p999 > 0.0, "{stats:?}");
     }
 
     #[test]

@@ -15,7 +15,8 @@
 # measures the host's wake-up latency for 6 s at the device loop's period and real-time priority, nothing of
 # ours running, and prints the share of wake-ups late enough to be a device-loop miss (later than the period
 # plus the loop's spin margin, haptics::haptic_loop::SPIN_MARGIN, less a 10 us step): the floor the host sets
-# under the loop's own "late starts" (the server's report splits its misses by cause).
+# under the loop's own "late starts" (the server's report splits its misses by cause). Both hold the CPUs' wake-up
+# latency at 0 (PM QoS), or neither (SERVE_ARGS="--no-cpu-latency-hold").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BIN=${COIFFURE_BIN:-target/release/coiffure}
@@ -27,7 +28,10 @@ host_floor() {
     # Priority 10: the server's default --haptic-priority, the device loop's.
     local rate=$1 period=$((1000000 / $1)) out
     command -v cyclictest > /dev/null || { echo "== host: cyclictest not installed (apt-get install rt-tests): no baseline"; return; }
-    out=$(cyclictest -m -p 10 -i "$period" -t 1 -D 6 -q -h 2000 2>&1) || { echo "== host: cyclictest failed: $out" | head -3; return; }
+    # cyclictest holds the CPUs' wake-up latency at 0 as the server does (PM QoS), unless the server is told not to.
+    local qos=()
+    [[ "${SERVE_ARGS:-}" == *--no-cpu-latency-hold* ]] && qos=(--laptop)
+    out=$(cyclictest -m -p 10 -i "$period" -t 1 -D 6 -q -h 2000 "${qos[@]}" 2>&1) || { echo "== host: cyclictest failed: $out" | head -3; return; }
     echo "$out" | awk -v lim=$((period + 60 - 10)) -v rate="$rate" '
         /^#/ { if ($0 ~ /Overflows/) over = $NF + 0; if ($0 ~ /Max Latencies/) max = $NF + 0; next }
         { n += $2; if ($1 + 0 > lim) late += $2; h[$1 + 0] = $2 }
@@ -50,7 +54,7 @@ for rate in "${RATES[@]}"; do
     sim=$("$BIN" device-sim --server "udp:$addr" --path bench/device-comb.toml --rate 1000 --duration 6.2 --out "bench/out/device-$rate.csv" ${SIM_ARGS:-})
     wait "$pid"
     echo "== device loop $rate Hz (physics 1000 Hz); load $(cut -d' ' -f1-3 /proc/loadavg)"
-    grep -o "haptic loop:.*real-time priority: [a-z]*" "$log"
+    grep -o "haptic loop:.*CPU wake-up latency held at 0: [a-z]*" "$log"
     grep "^strand budget:" "$log" || true
     grep "^device:" "$log"
     echo "$sim"

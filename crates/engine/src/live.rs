@@ -77,6 +77,8 @@ pub struct SessionReport {
     pub global_recoveries: u64,
     /// What the record holds, if the session was recorded.
     pub record: Option<RecordReport>,
+    /// True if the CPUs' wake-up latency was held at 0 while the session ran (`SessionParams::cpu_latency_hold`).
+    pub cpu_latency_held: bool,
     /// What the haptic thread's strand budget did (`crate::budget`).
     pub budget: BudgetReport,
 }
@@ -91,6 +93,8 @@ pub struct Session {
     haptic: Option<DeviceLoop>,
     record: Option<RecordWriter>,
     budget: Arc<std::sync::Mutex<BudgetReport>>,
+    /// The CPUs' wake-up latency held at 0 while the session runs (`SessionParams::cpu_latency_hold`).
+    cpu_latency: Option<haptics::realtime::CpuLatencyHold>,
 }
 
 impl Session {
@@ -245,9 +249,10 @@ impl Session {
             }
         };
         let on_refused = |why: String| tracing::warn!("haptic thread: {why}");
+        let cpu_latency = params.cpu_latency_hold.then(haptics::realtime::hold_cpu_latency).and_then(|r| r.map_err(|why| tracing::warn!("device loop: {why}")).ok());
         let haptic = DeviceLoop::spawn(dev, side, first_model, dt, params.device_steps(), params.haptic_priority, physics, on_refused)
             .map_err(SessionError::Start)?;
-        let session = Session { scene, params, stop, reset_epoch, global: Some(global_thread), haptic: Some(haptic), record: writer, budget: budget_report };
+        let session = Session { scene, params, stop, reset_epoch, global: Some(global_thread), haptic: Some(haptic), record: writer, budget: budget_report, cpu_latency };
         Ok((session, SessionIo { device: handle, commands: cmd_tx, lattice: lat_v_out, haptic: hap_out }))
     }
 
@@ -275,7 +280,8 @@ impl Session {
         let g = self.global.take().expect("running").join().expect("the global thread panicked");
         let record = self.record.take().map(RecordWriter::finish);
         let budget = self.budget.lock().map(|b| *b).unwrap_or_default();
-        SessionReport { haptic, physics, global_steps: g.steps, global_step_mean: g.mean, global_recoveries: g.recoveries, record, budget }
+        let cpu_latency_held = self.cpu_latency.take().is_some();
+        SessionReport { haptic, physics, global_steps: g.steps, global_step_mean: g.mean, global_recoveries: g.recoveries, record, budget, cpu_latency_held }
     }
 }
 

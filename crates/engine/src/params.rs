@@ -84,6 +84,11 @@ pub struct SessionParams {
     /// for normal priority. A refusal (no permission) is logged and the loop runs at normal priority.
     /// Default None (`coiffure serve` asks for 10).
     pub haptic_priority: Option<i32>,
+    /// Hold every CPU's wake-up latency at 0 while the session runs (`haptics::realtime::hold_cpu_latency`, Linux PM
+    /// QoS): idle CPUs poll instead of halting, so that the device loop's timer wakes it on time. A refusal (no
+    /// permission) is logged and the session runs without it. Default false (`coiffure serve` holds it unless
+    /// `--no-cpu-latency-hold`).
+    pub cpu_latency_hold: bool,
     /// Constants of the haptic step. Default [`HapticParams::default`].
     pub haptic: HapticParams,
     /// Constants of the global step. Default [`GlobalParams::default`].
@@ -96,7 +101,7 @@ pub struct SessionParams {
 
 impl Default for SessionParams {
     fn default() -> Self {
-        Self { haptic_rate_hz: 1000.0, device_rate_hz: 4000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 56, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams::default(), input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: RecordParams::default(), wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, haptic: HapticParams::default(), global: GlobalParams::default(), budget: BudgetParams::default() }
+        Self { haptic_rate_hz: 1000.0, device_rate_hz: 4000.0, global_rate_hz: 100.0, max_chosen: 48, max_active: 56, activation_radius: 0.03, profile: DeviceProfile::PHANTOM_OMNI, pointer: TargetParams::default(), input: InputKind::Pointer, device_follow: DEVICE_FOLLOW, publish_every: 5, record: RecordParams::default(), wetting_rate: 1.0, drying_rate: 0.05, hairs_per_render_strand: 1.0, haptic_priority: None, cpu_latency_hold: false, haptic: HapticParams::default(), global: GlobalParams::default(), budget: BudgetParams::default() }
     }
 }
 

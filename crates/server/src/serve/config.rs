@@ -51,6 +51,11 @@ pub struct ServeArgs {
     /// at normal priority and a warning says so.
     #[arg(long, default_value_t = 10)]
     pub haptic_priority: i32,
+    /// Do not hold the CPUs' wake-up latency at 0 while serving (`SessionParams::cpu_latency_hold`, Linux PM QoS
+    /// through /dev/cpu_dma_latency, root only): by default idle CPUs poll instead of halting, so that the device
+    /// loop's timer wakes it on time (bench/RESULTS.md); this flag saves an idle CPU's power instead.
+    #[arg(long)]
+    pub no_cpu_latency_hold: bool,
     /// Run the haptic loop without its strand budget (`SessionParams::budget`, docs/protocol.md "Strand budget"): always
     /// up to 56 strands near the tool, however long the steps take on this machine (for benchmarks).
     #[arg(long)]
@@ -153,7 +158,7 @@ impl Config {
         let haptic_priority = (args.haptic_priority != 0).then_some(args.haptic_priority);
         let profile = device_profile(&args.device_profile)?;
         let input = if args.device.is_some() { InputKind::Device } else { InputKind::Pointer };
-        let mut params = SessionParams { haptic_priority, hairs_per_render_strand: args.hairs_per_render_strand, haptic_rate_hz: args.haptic_rate, device_rate_hz: args.device_rate, profile, input, ..SessionParams::default() };
+        let mut params = SessionParams { haptic_priority, hairs_per_render_strand: args.hairs_per_render_strand, haptic_rate_hz: args.haptic_rate, device_rate_hz: args.device_rate, profile, input, cpu_latency_hold: !args.no_cpu_latency_hold, ..SessionParams::default() };
         if let Some(lag) = args.max_proxy_lag {
             params.haptic.max_proxy_lag = lag;
         }

@@ -405,11 +405,12 @@ impl HapticCore {
         if over == 0 {
             return Vec::new();
         }
+        // A slot not simulated yet has no samples: last in the order (infinitely far), let go without them.
         let mut relaxing: Vec<(f64, f64, usize, Option<Sampled>)> = members.iter().enumerate().filter_map(|(i, m)| match m.phase {
-            Phase::Relaxing { since, .. } => {
-                let (offset, sampled) = self.shown_offset(i);
-                Some((offset, since, i, sampled))
-            }
+            Phase::Relaxing { since, .. } => Some(match self.shown_offset(i) {
+                Some((offset, sampled)) => (offset, since, i, Some(sampled)),
+                None => (f64::INFINITY, since, i, None),
+            }),
             _ => None,
         }).collect();
         relaxing.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.total_cmp(&a.1)).then(a.2.cmp(&b.2)));
@@ -428,16 +429,16 @@ impl HapticCore {
 
     /// How far the hair drawn for simulated strand `slot` is from where the global layer carries its guide (at the
     /// nodes last seen, the hold's cache), m: what its hand-over would move it by, with the samples it is measured
-    /// at; infinite for a slot not simulated yet.
-    fn shown_offset(&self, slot: usize) -> (f64, Option<Sampled>) {
-        let (Some(&g), Some(s)) = (self.set.active.get(slot), self.interaction.strands.get(slot)) else { return (f64::INFINITY, None) };
+    /// at; None for a slot not simulated yet.
+    fn shown_offset(&self, slot: usize) -> Option<(f64, Sampled)> {
+        let (Some(&g), Some(s)) = (self.set.active.get(slot), self.interaction.strands.get(slot)) else { return None };
         let weight = self.set.members.get(slot).map_or(1.0, |m| m.weight);
         let guide = &self.model.scene.guides[g];
         let sampled = samples_and_tip(s, guide.model.length, self.model.scene.samples());
         let mut cache = self.shown.references.borrow_mut();
         let ok = cache.has_nodes(self.model.scene.lattice.node_count());
         let offset = sampled.points.iter().zip(cache.bases(&self.model.scene, g, ok)).map(|(p, b)| (p - b).norm() * weight).fold(0.0, f64::max);
-        (offset, Some(sampled))
+        Some((offset, sampled))
     }
 
     /// Moves the strands to the new membership `guides` (`members` parallel): the staying strands move over,

@@ -34,11 +34,6 @@ impl Case {
         Self { hair, wetness, mass, length, speed, treatment: "virgin", seed: 1 }
     }
 
-    /// The comb-h1 tress (4.75 g, 20 cm, combed at 0.25 m/s) of `hair` at `wetness`.
-    fn standard(hair: &'static str, wetness: f64) -> Self {
-        Self::new(hair, wetness, 4.75e-3, 0.2, 0.25)
-    }
-
     fn label(&self) -> String {
         format!("{} {} {:.2} g {:.0} cm {:.2} m/s {}", self.hair, if self.wetness > 0.0 { "wet" } else { "dry" }, self.mass * 1e3, self.length * 100.0, self.speed, self.treatment)
     }

@@ -249,7 +249,14 @@ impl Session {
             }
         };
         let on_refused = |why: String| tracing::warn!("haptic thread: {why}");
-        let cpu_latency = params.cpu_latency_hold.then(haptics::realtime::hold_cpu_latency).and_then(|r| r.map_err(|why| tracing::warn!("device loop: {why}")).ok());
+        let cpu_latency = match params.cpu_latency_hold.then(haptics::realtime::hold_cpu_latency) {
+            Some(Ok(hold)) => Some(hold),
+            Some(Err(why)) => {
+                tracing::warn!("device loop: {why}");
+                None
+            }
+            None => None,
+        };
         let haptic = DeviceLoop::spawn(dev, side, first_model, dt, params.device_steps(), params.haptic_priority, physics, on_refused)
             .map_err(SessionError::Start)?;
         let session = Session { scene, params, stop, reset_epoch, global: Some(global_thread), haptic: Some(haptic), record: writer, budget: budget_report, cpu_latency };

@@ -50,7 +50,8 @@ pub struct LoopStats {
     /// Misses that started in time but whose step was off its CPU for more than half its wall time (preempted
     /// by an interrupt or a thread of higher priority, the virtual CPU taken by the host, or the step blocked).
     pub misses_preempted: u64,
-    /// Misses whose step took that long on its CPU: the step function's own cost.
+    /// Misses whose step took that long on its CPU: the step function's own cost. (Telling these from the preempted
+    /// ones reads the thread's CPU clock at each step's start: a system call, not served by the vDSO.)
     pub misses_slow: u64,
     /// How late the loop's sleeps woke against the time asked for, 99.9th percentile and longest, s: the host's
     /// wake-up latency the spin margin ([`SPIN_MARGIN`]) absorbs up to its length (as `cyclictest` measures it).

@@ -32,7 +32,7 @@ pub fn precise_sleep() {
 /// While alive, holds every CPU's wake-up latency at 0 (Linux PM QoS, `/dev/cpu_dma_latency`): an idle CPU polls
 /// instead of entering an idle state it takes time to leave. On a virtual machine that state is the virtual CPU
 /// halted, which the host then has to run again when a timer fires: a real-time loop sleeping between its periods
-/// wakes late by as much (bench/RESULTS.md: the device loop's late starts, halved with the hold). Costs an idle
+/// wakes late by as much (bench/RESULTS.md: the device loop's misses with and without it). Costs an idle
 /// CPU's power while held; the kernel restores the default when it is dropped (the file closed).
 #[derive(Debug)]
 pub struct CpuLatencyHold {

@@ -40,6 +40,7 @@
 //! [`tools::interaction::LocalInteraction::set_strands`]), and never happens while the clip holds a strand.
 
 use super::bounds::{nearer, segment_boxes};
+use tools::geometry::Aabb;
 pub(crate) use super::bounds::GuideBounds;
 use super::strands::{samples_along, samples_and_tip, Sampled};
 use super::rest_pieces::RestPieces;
@@ -227,11 +228,7 @@ impl HapticCore {
         let caps = self.reach();
         let reach = caps.iter().map(|(a, b, rad)| a.norm().max(b.norm()) + rad).fold(0.0, f64::max);
         // The shape's box in its own frame: a point farther than d from it is farther than d from every capsule.
-        let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
-        for (a, b, rad) in &caps {
-            lo = lo.inf(&(a.inf(b) - Vector3::repeat(*rad)));
-            hi = hi.sup(&(a.sup(b) + Vector3::repeat(*rad)));
-        }
+        let shape = caps.iter().fold(Aabb::empty(), |u, (a, b, rad)| u.merge(&Aabb::of_segment(a, b, *rad)));
         // Each capsule's segment's box: a point farther than d + rad from it is farther than d from the capsule.
         let boxes = segment_boxes(&caps);
         let (tool, ahead, rotation) = (c.tool, c.ahead, c.rotation);
@@ -262,8 +259,7 @@ impl HapticCore {
                 }
                 for o in &poses {
                     let q = rotation.transpose() * (x - o);
-                    let outside = (lo - q).sup(&(q - hi)).sup(&Vector3::zeros());
-                    if outside.norm() >= r.min(d) {
+                    if shape.distance_to(&q) >= r.min(d) {
                         continue;
                     }
                     d = nearer(&q, &caps, &boxes, d);

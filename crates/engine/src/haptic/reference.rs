@@ -64,7 +64,7 @@ impl ReferenceCache {
     /// Maps through `nodes` and the head at `head` from now on: the bases become stale if either changed
     /// (compared exactly, so a cached base is never from other nodes).
     pub fn use_nodes(&mut self, nodes: &[Point3<f64>], head: &Isometry3<f64>) {
-        if self.nodes.as_slice() != nodes || self.head != *head {
+        if !self.is_for(nodes, head) {
             self.head = *head;
             self.nodes.clear();
             self.nodes.extend_from_slice(nodes);

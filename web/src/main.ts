@@ -28,6 +28,8 @@ interface Status {
   keptVersion: number; // changes of the strands' kept points on the server (cuts, resets)
   chainPoints: number; // points of the falling chains in the last frame
   tool: number;
+  readonly toolPressed: boolean; // the tool's button as the page last handled it (the mouse's left button, or a test's releaseButton)
+  readonly toolTarget: [number, number, number]; // where the mouse puts the device (m, world): the tool proxy follows it
   errors: P.ErrorMsg[];
   recordStopped: string | null; // why `serve --record` stopped recording (ERROR 7), kept in the status bar
   frameTimes: number[];
@@ -75,6 +77,8 @@ const status: Status = {
   connected: false, closeReason: null, sceneLoaded: false, framesReceived: 0, framesRendered: 0, youControl: false, viewers: 0,
   runaways: 0, treatment: '', toolFriction: NaN, lastForce: 0, peakForce: 0, contacts: 0, maxDisplacement: 0, wetnessMean: 0, cutMin: 1, keptMean: 0, segmentsDrawn: 0, keptVersion: 0, chainPoints: 0, tool: 0, errors: [], recordStopped: null, frameTimes: [], strands: 0,
   gpuFrameMs: null, gpuTimer: view.gpuTimer.available, hairColour: DEFAULT_HAIR_COLOUR,
+  get toolPressed() { return device.pressed; },
+  get toolTarget() { return device.target.toArray(); },
   get hairDrawCalls() { return view.hairDrawCalls; },
   get hairSegmentsPerCall() { return view.hairSegmentsPerCall; },
   hairTypes: [], strandWidth: () => ({ width: view.hair?.material.uniforms.strandWidth.value ?? 0, fibreWidth: view.hair?.fibreWidth ?? 0, hairsPerStrand: view.hair?.hairsPerStrand ?? 0 }),

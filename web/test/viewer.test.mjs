@@ -246,46 +246,68 @@ describe('interaction (5k render strands for speed in software rendering)', () =
     await page.waitForTimeout(1500);
     const rest = await motion();
     const at = await page.evaluate(() => window.coiffureDebug.project(0.0, -0.02, 0.1));
-    await page.mouse.move(at[0], at[1]);
-    await page.mouse.down();
-    await page.waitForTimeout(2000);
-    const during = await motion();
-    // The hair drawn is carried by one law (engine::scene::carry_strand; carriedHair.ts on the GPU): roots held by
-    // the head, every segment at its rest length, however far the lattice carries the rest.
-    // The state of one frame (the lattice the jet deforms, the head pose) and 400 strands' carried vertices (the
-    // 100 the lattice moves most among them), read back from the GPU in the same task, against the engine's
-    // Scene::render_vertex on that state (POST /debug/carried): point by point within 1e-5 m (float32 on the
-    // GPU; the chain of follow the leader sums its rounding over a strand's vertices).
-    const carried = await page.evaluate(() => window.coiffureDebug.carriedHair(400));
-    const state = carried.state;
-    delete carried.state;
-    const answer = await fetch(new URL('debug/carried', server.url), {
-      method: 'POST', headers: { 'content-type': 'application/json' },
-      body: JSON.stringify({ nodes: state.nodes, head_rotation: state.headRotation, head_translation: state.headTranslation, vertices: state.vertices }),
-    });
-    assert.equal(answer.status, 200, await answer.clone().text());
-    const engine = (await answer.json()).positions;
-    let engineGap = 0, worstVertex = -1;
-    for (let k = 0; k < state.vertices.length; k++) {
-      const d = Math.hypot(engine[3 * k] - state.positions[3 * k], engine[3 * k + 1] - state.positions[3 * k + 1], engine[3 * k + 2] - state.positions[3 * k + 2]);
-      if (d > engineGap) { engineGap = d; worstVertex = state.vertices[k]; }
+    // The viewer draws nothing while the dryer blows (the session, its FRAMEs and the poses go on): a
+    // software-rendered frame holds the page for seconds. In the project's CI of e73d08e (2026-11-30, 1 run of 8
+    // on record) the lattice did not move at all (6 um during, 4 um after, against 5 cm in the others); the cause
+    // was not found (a 3 s stall of the page before the press, or frames held across the view change, did not
+    // reproduce it). The dryer is now brought over the crown before it is switched on (it used to blow all the
+    // way there from where the last test left it, behind the head), and the 2 s count from the hair's first
+    // move after the press the page has handled.
+    await page.evaluate(() => window.coiffureDebug.holdFrames(true));
+    try {
+      // Over the crown first, as a hand brings the dryer there before switching it on: the tool proxy (FRAME)
+      // within 1 cm of where the mouse puts the device.
+      await page.mouse.move(at[0], at[1]);
+      await page.waitForFunction(() => { const c = window.coiffure, p = c.toolPosition, q = c.toolTarget; return Math.hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]) < 0.01; }, null, { polling: 20, timeout: 10_000 });
+      await page.mouse.down();
+      await page.waitForFunction(() => window.coiffure.toolPressed, null, { polling: 10 });
+      // The jet moves the hair within a few global steps of the press; up to 10 s are allowed for a loaded host,
+      // and what the page knows is printed (the tool the FRAMEs show and its target, the button, the control).
+      const t0 = Date.now();
+      const moved = await page.waitForFunction((r) => window.coiffure.latticeMotion() > r + 0.003, rest, { polling: 20, timeout: 10_000 }).then(() => true, () => false);
+      const pageState = () => page.evaluate(() => { const c = window.coiffure; return { tool: c.tool, toolPosition: c.toolPosition, toolTarget: c.toolTarget, pressed: c.toolPressed, youControl: c.youControl, framesReceived: c.framesReceived, errors: c.errors.slice(-3) }; });
+      console.log('dryer from above: the jet moved the hairstyle', moved ? `${Date.now() - t0} ms after the press` : 'not within 10 s', await pageState());
+      await page.waitForTimeout(2000);
+      const during = await motion();
+      // The hair drawn is carried by one law (engine::scene::carry_strand; carriedHair.ts on the GPU): roots held by
+      // the head, every segment at its rest length, however far the lattice carries the rest.
+      // The state of one frame (the lattice the jet deforms, the head pose) and 400 strands' carried vertices (the
+      // 100 the lattice moves most among them), read back from the GPU in the same task, against the engine's
+      // Scene::render_vertex on that state (POST /debug/carried): point by point within 1e-5 m (float32 on the
+      // GPU; the chain of follow the leader sums its rounding over a strand's vertices).
+      const carried = await page.evaluate(() => window.coiffureDebug.carriedHair(400));
+      const state = carried.state;
+      delete carried.state;
+      const answer = await fetch(new URL('debug/carried', server.url), {
+        method: 'POST', headers: { 'content-type': 'application/json' },
+        body: JSON.stringify({ nodes: state.nodes, head_rotation: state.headRotation, head_translation: state.headTranslation, vertices: state.vertices }),
+      });
+      assert.equal(answer.status, 200, await answer.clone().text());
+      const engine = (await answer.json()).positions;
+      let engineGap = 0, worstVertex = -1;
+      for (let k = 0; k < state.vertices.length; k++) {
+        const d = Math.hypot(engine[3 * k] - state.positions[3 * k], engine[3 * k + 1] - state.positions[3 * k + 1], engine[3 * k + 2] - state.positions[3 * k + 2]);
+        if (d > engineGap) { engineGap = d; worstVertex = state.vertices[k]; }
+      }
+      console.log('GPU carried hair vs the engine\'s render_vertex on the same lattice', { vertices: state.vertices.length, largestGap: engineGap, worstVertex });
+      assert.ok(state.vertices.length >= 400 * 2, `vertices compared: ${state.vertices.length}`);
+      assert.ok(engineGap < 1e-5, `the viewer's carried hair is the engine's: vertex ${worstVertex} ${engineGap} m apart`);
+      await screenshotDrawn(page, join(artifacts, 'dryer-above-blowing.png'));
+      await page.evaluate(() => window.coiffureDebug.releaseButton());
+      await page.waitForTimeout(2300);
+      const after = await motion();
+      await screenshotDrawn(page, join(artifacts, 'dryer-above-2.3s-after.png'));
+      await page.mouse.up();
+      console.log('dryer from above: lattice motion relative to the head (m)', { rest, during, after });
+      console.log('the carried hair read back from the GPU while the dryer blows', carried);
+      assert.ok(carried.rootError < 1e-5, `roots on the head: ${carried.rootError} m from their rest roots`);
+      assert.ok(carried.lengthError < 1e-3, `segments at their rest lengths: worst relative change ${carried.lengthError}`);
+      assert.ok(carried.largestMove > 0.005, `the lattice carries the hair: largest vertex move ${carried.largestMove} m`);
+      assert.ok(during > rest + 0.003, `the jet moves the hairstyle: ${during} m (before ${rest} m)`);
+      assert.ok(after < during, `it falls back: ${after} m after, ${during} m during`);
+    } finally {
+      await page.evaluate(() => window.coiffureDebug.holdFrames(false));
     }
-    console.log('GPU carried hair vs the engine\'s render_vertex on the same lattice', { vertices: state.vertices.length, largestGap: engineGap, worstVertex });
-    assert.ok(state.vertices.length >= 400 * 2, `vertices compared: ${state.vertices.length}`);
-    assert.ok(engineGap < 1e-5, `the viewer's carried hair is the engine's: vertex ${worstVertex} ${engineGap} m apart`);
-    await page.screenshot({ path: join(artifacts, 'dryer-above-blowing.png') });
-    await page.evaluate(() => window.coiffureDebug.releaseButton());
-    await page.waitForTimeout(2300);
-    const after = await motion();
-    await page.screenshot({ path: join(artifacts, 'dryer-above-2.3s-after.png') });
-    await page.mouse.up();
-    console.log('dryer from above: lattice motion relative to the head (m)', { rest, during, after });
-    console.log('the carried hair read back from the GPU while the dryer blows', carried);
-    assert.ok(carried.rootError < 1e-5, `roots on the head: ${carried.rootError} m from their rest roots`);
-    assert.ok(carried.lengthError < 1e-3, `segments at their rest lengths: worst relative change ${carried.lengthError}`);
-    assert.ok(carried.largestMove > 0.005, `the lattice carries the hair: largest vertex move ${carried.largestMove} m`);
-    assert.ok(during > rest + 0.003, `the jet moves the hairstyle: ${during} m (before ${rest} m)`);
-    assert.ok(after < during, `it falls back: ${after} m after, ${during} m during`);
     await page.evaluate(() => { const v = document.getElementById('view-select'); v.value = 'back'; v.dispatchEvent(new Event('change')); });
   });
 

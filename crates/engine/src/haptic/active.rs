@@ -268,8 +268,8 @@ impl HapticCore {
             };
             // A guide the viewer's cache holds (a simulated or handed-over one) has its carried samples there, the
             // same numbers (`reference::ReferenceCache::bases`), mapped once per lattice for the hold and the viewer.
-            if cached && cache.holds(g) {
-                for (k, x) in cache.bases(&self.model.scene, g, true).iter().enumerate() {
+            if let Some(bases) = cached.then(|| cache.held_bases(&self.model.scene, g)).flatten() {
+                for (k, x) in bases.iter().enumerate() {
                     if visit(k, x) {
                         break;
                     }
@@ -668,16 +668,23 @@ mod tests {
     use crate::testing::{small_scene, test_rot};
     use haptics::device::DeviceReading;
 
+    /// The tests' fixture: the small scene, the default parameters, a haptic core on them and the lattice's
+    /// snapshot at rest.
+    fn core_at_rest() -> (std::sync::Arc<crate::scene::Scene>, SessionParams, HapticCore, crate::snapshot::LatticeSnapshot) {
+        let scene = small_scene();
+        let params = SessionParams::default();
+        let core = HapticCore::new(scene.clone(), params).unwrap();
+        let snap = GlobalCore::new(scene.clone(), &params).snapshot();
+        (scene, params, core, snap)
+    }
+
     #[test]
     fn the_choice_spread_over_steps_is_the_whole_scan() {
         // The comb held still in the hair at the back of the head: after `choice_steps` steps the scan has found
         // exactly the guides the whole scan at once chooses (same set, nearest first), and none has joined
         // before (the scan is spread: the set is empty until then). They then join `joins_per_step` a step,
         // nearest first, until all have. At most `max_active` are simulated.
-        let scene = small_scene();
-        let params = SessionParams::default();
-        let mut core = HapticCore::new(scene.clone(), params).unwrap();
-        let snap = GlobalCore::new(scene, &params).snapshot();
+        let (_, params, mut core, snap) = core_at_rest();
         let at = Vector3::new(0.0, -0.118, 0.0);
         let reading = DeviceReading { time: 0.0, position: at, rotation: test_rot(), buttons: 0 };
         let steps = params.haptic.choice_steps;
@@ -713,10 +720,7 @@ mod tests {
         // while it is not simulated, the interaction while it is), and a strand that left is in the store let
         // go (finite coordinates, at rest).
         use crate::command::Command;
-        let scene = small_scene();
-        let params = SessionParams::default();
-        let mut core = HapticCore::new(scene.clone(), params).unwrap();
-        let snap = GlobalCore::new(scene.clone(), &params).snapshot();
+        let (scene, _, mut core, snap) = core_at_rest();
         let n = scene.guides.len();
         let check = |core: &HapticCore, when: &str| {
             assert_eq!(core.interaction.strands.len(), core.active().len(), "{when}");
@@ -939,10 +943,7 @@ mod tests {
     fn the_scan_reads_the_cached_guides_samples_as_it_would_carry_them() {
         // The comb held in the hair: once guides are simulated the viewer's cache holds their carried samples; a scan
         // reading them finds the same guides at the same distances (exactly) as one carrying every sample itself.
-        let scene = small_scene();
-        let params = SessionParams::default();
-        let mut core = HapticCore::new(scene.clone(), params).unwrap();
-        let snap = GlobalCore::new(scene.clone(), &params).snapshot();
+        let (scene, _, mut core, snap) = core_at_rest();
         let at = Vector3::new(0.0, -0.118, 0.0);
         let reading = DeviceReading { time: 0.0, position: at, rotation: test_rot(), buttons: 0 };
         for _ in 0..40 {

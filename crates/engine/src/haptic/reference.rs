@@ -77,16 +77,29 @@ impl ReferenceCache {
     /// The reference samples of `guide` carried by the head and the nodes given to [`use_nodes`](Self::use_nodes)
     /// (`ok`: they are the lattice's nodes; otherwise the references carried by the head alone), m.
     pub fn bases<'a>(&'a mut self, scene: &'a Scene, guide: usize, ok: bool) -> &'a [Vector3<f64>] {
-        let reference = &scene.guides[guide].reference;
-        let ffd: &FfdLattice = &scene.lattice.ffd;
         let i = match self.entries.iter().position(|e| e.guide == guide) {
             Some(i) => i,
             None => {
+                let reference = &scene.guides[guide].reference;
+                let ffd: &FfdLattice = &scene.lattice.ffd;
                 let stencils = reference.iter().map(|p| ffd.weights_clamped(&Point3::from(*p)).ok()).collect();
                 self.entries.push(Entry { guide, stencils, weights: scene.guide_hold_weights(guide), bases: Vec::new(), fresh: false });
                 self.entries.len() - 1
             }
         };
+        self.entry_bases(i, scene, ok)
+    }
+
+    /// As [`bases`](Self::bases) with `ok`, for a guide it already holds (a shown guide's), or None: one search
+    /// of the entries, and no entry made for a guide it does not hold.
+    pub fn held_bases<'a>(&'a mut self, scene: &'a Scene, guide: usize) -> Option<&'a [Vector3<f64>]> {
+        let i = self.entries.iter().position(|e| e.guide == guide)?;
+        Some(self.entry_bases(i, scene, true))
+    }
+
+    /// Entry `i`'s bases, mapped again if stale.
+    fn entry_bases<'a>(&'a mut self, i: usize, scene: &'a Scene, ok: bool) -> &'a [Vector3<f64>] {
+        let reference = &scene.guides[self.entries[i].guide].reference;
         let e = &mut self.entries[i];
         if !e.fresh {
             e.bases.clear();

@@ -267,7 +267,7 @@ impl HapticCore {
                 false
             };
             // A guide the viewer's cache holds (a simulated or handed-over one) has its carried samples there, the
-            // same numbers (`reference::ReferenceCache::bases`), mapped once per lattice for the hold and the viewer.
+            // same numbers (`reference::ReferenceCache::held_bases`), mapped once per lattice for the hold and the viewer.
             if let Some(bases) = cached.then(|| cache.held_bases(&self.model.scene, g)).flatten() {
                 for (k, x) in bases.iter().enumerate() {
                     if visit(k, x) {

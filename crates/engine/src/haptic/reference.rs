@@ -125,7 +125,9 @@ impl ReferenceCache {
         self.nodes.as_slice() == nodes && self.head == *head
     }
 
-    /// Whether it holds `guide`'s stencils (a shown guide's).
+    /// Whether it holds `guide`'s stencils (a shown guide's). The scan asks [`held_bases`](Self::held_bases);
+    /// this is for the tests.
+    #[cfg(test)]
     pub fn holds(&self, guide: usize) -> bool {
         self.entries.iter().any(|e| e.guide == guide)
     }
